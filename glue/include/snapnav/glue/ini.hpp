@@ -1,0 +1,54 @@
+#pragma once
+// INI configuration: one section per concern, `key = value`, `#` or `;` comments.
+// A missing key, a malformed value and a key nobody asked for are errors that
+// name the file and line.
+
+#include <iosfwd>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace snapnav::glue {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+class IniFile {
+ public:
+  static IniFile Load(const std::string& path);
+  static IniFile Parse(const std::string& text, const std::string& origin);
+
+  const std::string& origin() const { return origin_; }
+  bool Has(const std::string& section, const std::string& key) const;
+  std::vector<std::string> Sections() const;
+
+  // Getters mark the key as used; a missing key or a bad value throws ConfigError.
+  std::string GetString(const std::string& section, const std::string& key) const;
+  double GetDouble(const std::string& section, const std::string& key) const;
+  int GetInt(const std::string& section, const std::string& key) const;
+  bool GetBool(const std::string& section, const std::string& key) const;
+  std::vector<double> GetDoubleList(const std::string& section, const std::string& key) const;
+
+  // Throws ConfigError listing every key that was never read (a typo, or an option this
+  // version does not have).
+  void CheckAllUsed() const;
+
+ private:
+  struct Entry {
+    std::string value;
+    int line = 0;
+  };
+  const Entry& Find(const std::string& section, const std::string& key) const;
+  [[noreturn]] void Fail(const Entry& e, const std::string& section, const std::string& key,
+                         const std::string& why) const;
+
+  std::string origin_;
+  std::map<std::string, std::map<std::string, Entry>> sections_;
+  mutable std::set<std::pair<std::string, std::string>> used_;
+};
+
+}  // namespace snapnav::glue

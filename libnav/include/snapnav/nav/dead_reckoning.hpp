@@ -1,0 +1,37 @@
+#pragma once
+// Dead reckoning: integrates odometry increments into a pose and propagates
+// its covariance with a motion noise that grows with distance and rotation.
+
+#include <Eigen/Core>
+
+#include "snapnav/nav/pose2.hpp"
+
+namespace snapnav::nav {
+
+struct DeadReckoningOptions {
+  double translation_noise_m_per_m = 0.05;      // std. dev. of translation per metre driven
+  double rotation_noise_rad_per_rad = 0.05;     // std. dev. of heading per radian turned
+  double rotation_noise_rad_per_m = 0.0052;     // heading drift per metre (thesis 5.3.1: 0.3 deg)
+  void Validate() const;                        // throws std::invalid_argument
+};
+
+class DeadReckoning {
+ public:
+  explicit DeadReckoning(const DeadReckoningOptions& options, const Pose2& start = {});
+
+  // Applies one odometry increment given in the robot frame of the current pose.
+  // Throws std::invalid_argument on a non-finite increment (the pose is unchanged).
+  void AddOdometry(const Pose2& delta);
+
+  const Pose2& pose() const { return pose_; }
+  const Eigen::Matrix3d& covariance() const { return covariance_; }
+  double distance_m() const { return distance_m_; }
+
+ private:
+  DeadReckoningOptions options_;
+  Pose2 pose_;
+  Eigen::Matrix3d covariance_ = Eigen::Matrix3d::Zero();
+  double distance_m_ = 0.0;
+};
+
+}  // namespace snapnav::nav

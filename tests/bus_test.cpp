@@ -1,0 +1,112 @@
+// The glue bus on the real LCM with memq://: typed round trips, and bad
+// payloads or throwing handlers counted instead of crashing.
+#include <gtest/gtest.h>
+
+#include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/lcm_url.hpp"
+#include "snapnav/pose_t.hpp"
+#include "snapnav/laser_scan_t.hpp"
+
+namespace snapnav::glue {
+namespace {
+
+pose_t SamplePose(int64_t utime) {
+  pose_t p{};
+  p.utime = utime;
+  p.estimator = "test";
+  p.frame = "map";
+  p.x_m = 1.0 * utime;
+  return p;
+}
+
+void HandleAll(Bus& bus) {
+  while (bus.HandleOnce(0)) {
+  }
+}
+
+TEST(Bus, TypedPublishSubscribeRoundTrip) {
+  Bus bus("memq://");
+  std::vector<pose_t> got;
+  bus.Subscribe<pose_t>("TEST_BUS_ROUNDTRIP", [&](const pose_t& p) { got.push_back(p); });
+  bus.Publish("TEST_BUS_ROUNDTRIP", SamplePose(1));
+  bus.Publish("TEST_BUS_ROUNDTRIP", SamplePose(2));
+  HandleAll(bus);
+  ASSERT_EQ(got.size(), 2u);
+  EXPECT_EQ(got[1].utime, 2);
+  EXPECT_DOUBLE_EQ(got[1].x_m, 2.0);
+  EXPECT_EQ(bus.stats().at("TEST_BUS_ROUNDTRIP").received, 2u);
+  EXPECT_EQ(bus.total_errors(), 0u);
+}
+
+TEST(Bus, WrongTypeIsCountedAndTheProcessGoesOn) {
+  Bus bus("memq://");
+  int handled = 0;
+  bus.Subscribe<laser_scan_t>("TEST_BUS_WRONG_TYPE", [&](const laser_scan_t&) { ++handled; });
+  bus.Publish("TEST_BUS_WRONG_TYPE", SamplePose(1));
+  const char junk[3] = {1, 2, 3};
+  bus.PublishRaw("TEST_BUS_WRONG_TYPE", junk, sizeof junk);
+  HandleAll(bus);
+  EXPECT_EQ(handled, 0);
+  const auto& s = bus.stats().at("TEST_BUS_WRONG_TYPE");
+  EXPECT_EQ(s.decode_errors, 2u);
+  EXPECT_NE(s.last_error.find("shorter than a type fingerprint"), std::string::npos) << s.last_error;
+}
+
+TEST(Bus, HandlerExceptionIsCountedNotPropagated) {
+  Bus bus("memq://");
+  int calls = 0;
+  bus.Subscribe<pose_t>("TEST_BUS_THROW", [&](const pose_t& p) {
+    ++calls;
+    if (p.utime == 1) throw std::invalid_argument("bad pose");
+  });
+  bus.Publish("TEST_BUS_THROW", SamplePose(1));
+  bus.Publish("TEST_BUS_THROW", SamplePose(2));
+  EXPECT_NO_THROW(HandleAll(bus));
+  EXPECT_EQ(calls, 2);
+  const auto& s = bus.stats().at("TEST_BUS_THROW");
+  EXPECT_EQ(s.handler_errors, 1u);
+  EXPECT_EQ(s.last_error, "bad pose");
+  std::ostringstream report;
+  bus.ReportStats(report);
+  EXPECT_NE(report.str().find("TEST_BUS_THROW"), std::string::npos);
+  EXPECT_NE(report.str().find("handler errors 1"), std::string::npos) << report.str();
+}
+
+TEST(Bus, CurrentMessageInfoInsideHandler) {
+  Bus bus("memq://");
+  std::string channel;
+  size_t size = 0;
+  bus.Subscribe<pose_t>("TEST_BUS_INFO", [&](const pose_t&) {
+    channel = bus.current().channel;
+    size = bus.current().size_bytes;
+  });
+  const auto p = SamplePose(3);
+  bus.Publish("TEST_BUS_INFO", p);
+  HandleAll(bus);
+  EXPECT_EQ(channel, "TEST_BUS_INFO");
+  EXPECT_EQ(size, static_cast<size_t>(p.getEncodedSize()));
+}
+
+TEST(Bus, MissingLogFileIsExplained) {
+  try {
+    Bus bus("file:///nonexistent/dir/run.lcmlog?speed=0");
+    FAIL() << "expected BusError";
+  } catch (const BusError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/run.lcmlog"), std::string::npos) << e.what();
+  }
+}
+
+TEST(LcmUrl, DefaultStaysOnHostWithLargeReceiveBuffer) {
+  const std::string url = kDefaultLcmUrl;
+  EXPECT_NE(url.find("ttl=0"), std::string::npos);
+  EXPECT_NE(url.find("recv_buf_size="), std::string::npos);
+}
+
+TEST(LcmUrl, DiagnosisNamesTheFix) {
+  const std::string d = DiagnoseLcmFailure("udpm://239.255.76.67:7667?ttl=0");
+  EXPECT_NE(d.find("ip route add 224.0.0.0/4 dev lo"), std::string::npos) << d;
+  EXPECT_NE(d.find("./snapnav bus --"), std::string::npos) << d;
+}
+
+}  // namespace
+}  // namespace snapnav::glue

@@ -1,0 +1,35 @@
+// Every shipped config file parses with its program's parser: a broken config fails CI.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "dead_reckoning_node.hpp"
+#include "snapnav/glue/ini.hpp"
+
+namespace snapnav {
+namespace {
+
+const std::filesystem::path kConfigDir = SNAPNAV_CONFIG_DIR;
+
+TEST(ConfigFiles, DeadReckoning) {
+  EXPECT_NO_THROW(processes::DeadReckoningConfig::FromIni(glue::IniFile::Load(kConfigDir / "dead_reckoning.ini"), ""));
+}
+
+TEST(ConfigFiles, BusCheck) {
+  const auto ini = glue::IniFile::Load(kConfigDir / "bus_check.ini");
+  for (const char* key : {"probe", "ping", "pong"}) EXPECT_FALSE(ini.GetString("channels", key).empty());
+  EXPECT_NO_THROW(ini.CheckAllUsed());
+}
+
+// Every .ini under config/ is covered by a test above.
+TEST(ConfigFiles, EveryShippedIniIsKnown) {
+  const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini"};
+  for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
+    if (entry.path().extension() == ".ini") {
+      EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace snapnav

@@ -1,0 +1,78 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "snapnav/nav/dead_reckoning.hpp"
+#include "snapnav/nav/pose2.hpp"
+
+namespace snapnav::nav {
+namespace {
+
+TEST(Pose2, WrapAngle) {
+  EXPECT_NEAR(WrapAngle(3 * M_PI / 2), -M_PI / 2, 1e-12);
+  EXPECT_NEAR(WrapAngle(-3 * M_PI / 2), M_PI / 2, 1e-12);
+  EXPECT_NEAR(WrapAngle(0.3), 0.3, 1e-12);
+}
+
+TEST(Pose2, ComposeInverseBetween) {
+  const Pose2 a{1, 2, M_PI / 2};
+  const Pose2 d{1, 0, 0};
+  const Pose2 b = a.Compose(d);
+  EXPECT_NEAR(b.x_m, 1, 1e-12);  // one metre forward when facing +y
+  EXPECT_NEAR(b.y_m, 3, 1e-12);
+  const Pose2 id = a.Compose(a.Inverse());
+  EXPECT_NEAR(id.x_m, 0, 1e-12);
+  EXPECT_NEAR(id.y_m, 0, 1e-12);
+  EXPECT_NEAR(id.theta_rad, 0, 1e-12);
+  const Pose2 back = a.Compose(a.Between(b));
+  EXPECT_NEAR(back.x_m, b.x_m, 1e-12);
+  EXPECT_NEAR(back.y_m, b.y_m, 1e-12);
+  const auto p = a.Transform({1, 0});
+  EXPECT_NEAR(p.x(), 1, 1e-12);
+  EXPECT_NEAR(p.y(), 3, 1e-12);
+}
+
+TEST(DeadReckoning, SquareClosesAndCovarianceGrows) {
+  DeadReckoning dr(DeadReckoningOptions{});
+  double last_heading_var = 0;
+  double first_side_trace = 0;
+  for (int side = 0; side < 4; ++side) {
+    for (int i = 0; i < 10; ++i) {
+      dr.AddOdometry({0.1, 0, 0});
+      // Heading uncertainty only grows; position uncertainty may shrink when the robot
+      // drives back towards where an earlier heading error was made.
+      EXPECT_GT(dr.covariance()(2, 2), last_heading_var);
+      last_heading_var = dr.covariance()(2, 2);
+    }
+    if (side == 0) first_side_trace = dr.covariance().trace();
+    dr.AddOdometry({0, 0, M_PI / 2});
+  }
+  EXPECT_GT(dr.covariance().trace(), first_side_trace);
+  EXPECT_NEAR(dr.pose().x_m, 0, 1e-9);
+  EXPECT_NEAR(dr.pose().y_m, 0, 1e-9);
+  EXPECT_NEAR(dr.distance_m(), 4.0, 1e-9);
+}
+
+TEST(DeadReckoning, CovarianceOfAStraightLineMatchesHandComputation) {
+  DeadReckoningOptions o;
+  o.translation_noise_m_per_m = 0.1;
+  o.rotation_noise_rad_per_rad = 0;
+  o.rotation_noise_rad_per_m = 0;
+  DeadReckoning dr(o);
+  dr.AddOdometry({1, 0, 0});
+  EXPECT_NEAR(dr.covariance()(0, 0), 0.01, 1e-12);
+  EXPECT_NEAR(dr.covariance()(1, 1), 0.01, 1e-12);
+  EXPECT_NEAR(dr.covariance()(2, 2), 0, 1e-12);
+}
+
+TEST(DeadReckoning, RejectsNonFiniteIncrementAndBadOptions) {
+  DeadReckoning dr(DeadReckoningOptions{});
+  EXPECT_THROW(dr.AddOdometry({NAN, 0, 0}), std::invalid_argument);
+  EXPECT_EQ(dr.pose().x_m, 0);
+  DeadReckoningOptions bad;
+  bad.translation_noise_m_per_m = -1;
+  EXPECT_THROW(DeadReckoning{bad}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace snapnav::nav
