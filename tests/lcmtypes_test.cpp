@@ -34,7 +34,10 @@ omni_frame_t SampleFrame() {
   m.mirror_center_y_px = 1.5f;
   m.mirror_inner_radius_px = 0.5f;
   m.mirror_outer_radius_px = 1.5f;
+  m.mirror_elevation_inner_rad = -0.7f;
+  m.mirror_elevation_outer_rad = 0.5f;
   m.bearing_col0_rad = 0.0f;
+  m.elevation_top_rad = m.elevation_bottom_rad = 0.0f;
   m.data_size = 12;
   m.data.resize(12);
   for (int i = 0; i < 12; ++i) m.data[i] = static_cast<uint8_t>(i * 20);
@@ -77,6 +80,7 @@ TEST(LcmTypes, OmniFrameRoundTrip) {
   EXPECT_EQ(r.width, 4);
   EXPECT_EQ(r.encoding, omni_frame_t::GRAY8);
   EXPECT_FLOAT_EQ(r.mirror_outer_radius_px, 1.5f);
+  EXPECT_FLOAT_EQ(r.mirror_elevation_outer_rad, 0.5f);
   EXPECT_EQ(r.data, m.data);
 }
 

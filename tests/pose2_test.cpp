@@ -76,3 +76,42 @@ TEST(DeadReckoning, RejectsNonFiniteIncrementAndBadOptions) {
 
 }  // namespace
 }  // namespace snapnav::nav
+
+#include "snapnav/nav/trajectory.hpp"
+
+namespace snapnav::nav {
+namespace {
+
+TEST(Trajectory, AlignmentRecoversARigidTransformAndAteIsZero) {
+  const Pose2 t{1.5, -2.0, 0.7};
+  std::vector<std::pair<Pose2, Pose2>> pairs;
+  for (int i = 0; i < 20; ++i) {
+    const Pose2 ref{0.3 * i, std::sin(0.4 * i), 0.1 * i};
+    pairs.emplace_back(t.Inverse().Compose(ref), ref);  // estimate lives in a rotated frame
+  }
+  const Pose2 a = AlignSE2(pairs);
+  EXPECT_NEAR(a.x_m, t.x_m, 1e-9);
+  EXPECT_NEAR(a.y_m, t.y_m, 1e-9);
+  EXPECT_NEAR(a.theta_rad, t.theta_rad, 1e-9);
+  EXPECT_NEAR(ComputeAte(pairs, a).rmse_m, 0.0, 1e-9);
+  EXPECT_GT(ComputeAte(pairs).rmse_m, 1.0);  // unaligned
+  EXPECT_THROW(AlignSE2({pairs[0]}), std::invalid_argument);
+}
+
+TEST(Trajectory, AssociatesNearestInTimeWithinBound) {
+  std::vector<StampedPose> ref, est;
+  for (int i = 0; i < 10; ++i) ref.push_back({i * 1000, {double(i), 0, 0}});
+  est.push_back({2100, {0, 0, 0}});
+  est.push_back({5900, {0, 0, 0}});
+  est.push_back({50000, {0, 0, 0}});  // no reference near it
+  const auto pairs = AssociateByTime(est, ref, 200);
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].second.x_m, 2);
+  EXPECT_EQ(pairs[1].second.x_m, 6);
+  const AteResult r = ComputeAte(pairs);
+  EXPECT_NEAR(r.max_m, 6, 1e-12);
+  EXPECT_NEAR(r.final_m, 6, 1e-12);
+}
+
+}  // namespace
+}  // namespace snapnav::nav

@@ -26,7 +26,8 @@ omni_frame_t MakeProbeFrame(int64_t seq, int size_bytes) {
   f.encoding = omni_frame_t::GRAY8;
   f.mirror_center_x_px = f.mirror_center_y_px = 0;
   f.mirror_inner_radius_px = f.mirror_outer_radius_px = 0;
-  f.bearing_col0_rad = 0;
+  f.mirror_elevation_inner_rad = f.mirror_elevation_outer_rad = 0;
+  f.bearing_col0_rad = f.elevation_top_rad = f.elevation_bottom_rad = 0;
   f.data_size = size_bytes;
   f.data.resize(size_bytes);
   uint32_t state = static_cast<uint32_t>(seq) * 2654435761u + 1u;  // xorshift, seeded by seq

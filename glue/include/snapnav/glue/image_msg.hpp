@@ -1,0 +1,33 @@
+#pragma once
+// Conversions between omni_frame_t messages and OpenCV images
+// (library snapnav_glue_image, so only image processes link OpenCV's codecs).
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/omni_frame_t.hpp"
+
+namespace snapnav::glue {
+
+// "gray8" | "rgb8" | "jpeg" | "png" -> omni_frame_t::GRAY8 ...; throws std::invalid_argument.
+int8_t ParseFrameEncoding(const std::string& name);
+
+// A frame holding `image` (8-bit: CV_8UC1 grey, CV_8UC3 BGR or CV_8UC4 BGRA, whose alpha is
+// dropped; a padded ROI is fine) in `encoding` (omni_frame_t::GRAY8, RGB8 in R,G,B order, JPEG
+// or PNG). Geometry fields are zero, kind RAW_OMNI, utime 0: set them after.
+// Throws std::invalid_argument on an empty or unsupported image or an unknown encoding,
+// std::runtime_error when the encoder fails.
+omni_frame_t ImageToFrame(const cv::Mat& image, int8_t encoding, int jpeg_quality = 90);
+
+// The frame's pixels as CV_8UC3 BGR (RGB8, colour JPEG/PNG) or CV_8UC1 (GRAY8, grey JPEG/PNG).
+// Throws std::invalid_argument when sizes, stride or encoding do not add up, or decoding fails.
+cv::Mat FrameToImage(const omni_frame_t& frame);
+
+void SetMirror(const nav::MirrorModel& mirror, omni_frame_t* frame);
+void SetPanorama(const nav::PanoramaModel& panorama, omni_frame_t* frame);
+nav::MirrorModel MirrorOf(const omni_frame_t& frame);
+nav::PanoramaModel PanoramaOf(const omni_frame_t& frame);
+
+}  // namespace snapnav::glue

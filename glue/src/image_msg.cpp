@@ -1,0 +1,138 @@
+#include "snapnav/glue/image_msg.hpp"
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace snapnav::glue {
+
+int8_t ParseFrameEncoding(const std::string& name) {
+  if (name == "gray8") return omni_frame_t::GRAY8;
+  if (name == "rgb8") return omni_frame_t::RGB8;
+  if (name == "jpeg") return omni_frame_t::JPEG;
+  if (name == "png") return omni_frame_t::PNG;
+  throw std::invalid_argument("unknown encoding '" + name + "' (gray8, rgb8, jpeg or png)");
+}
+
+omni_frame_t ImageToFrame(const cv::Mat& input, int8_t encoding, int jpeg_quality) {
+  if (input.empty()) throw std::invalid_argument("cannot make a frame from an empty image");
+  if (input.depth() != CV_8U || (input.channels() != 1 && input.channels() != 3 && input.channels() != 4)) {
+    throw std::invalid_argument("frames hold 8-bit grey, BGR or BGRA images (got depth " +
+                                std::to_string(input.depth()) + ", " + std::to_string(input.channels()) + " channels)");
+  }
+  cv::Mat image = input;
+  if (input.channels() == 4) cv::cvtColor(input, image, cv::COLOR_BGRA2BGR);  // alpha is dropped
+  omni_frame_t f{};
+  f.utime = 0;
+  f.kind = omni_frame_t::RAW_OMNI;
+  f.width = image.cols;
+  f.height = image.rows;
+  f.encoding = encoding;
+  cv::Mat pixels;
+  switch (encoding) {
+    case omni_frame_t::GRAY8:
+      if (image.channels() == 3) cv::cvtColor(image, pixels, cv::COLOR_BGR2GRAY); else pixels = image;
+      f.row_stride = image.cols;
+      break;
+    case omni_frame_t::RGB8:
+      if (image.channels() == 1) cv::cvtColor(image, pixels, cv::COLOR_GRAY2RGB); else cv::cvtColor(image, pixels, cv::COLOR_BGR2RGB);
+      f.row_stride = 3 * image.cols;
+      break;
+    case omni_frame_t::JPEG:
+    case omni_frame_t::PNG: {
+      std::vector<uint8_t> bytes;
+      const std::vector<int> params = encoding == omni_frame_t::JPEG
+                                          ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, jpeg_quality}
+                                          : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, 1};
+      if (!cv::imencode(encoding == omni_frame_t::JPEG ? ".jpg" : ".png", image, bytes, params) || bytes.empty()) {
+        throw std::runtime_error("OpenCV could not encode a " + std::to_string(image.cols) + "x" +
+                                 std::to_string(image.rows) + " image as " +
+                                 (encoding == omni_frame_t::JPEG ? "JPEG" : "PNG"));
+      }
+      f.row_stride = 0;
+      f.data = std::move(bytes);
+      f.data_size = static_cast<int32_t>(f.data.size());
+      return f;
+    }
+    default:
+      throw std::invalid_argument("unknown frame encoding " + std::to_string(encoding));
+  }
+  f.data.resize(static_cast<size_t>(f.row_stride) * f.height);
+  for (int y = 0; y < f.height; ++y) std::memcpy(&f.data[static_cast<size_t>(y) * f.row_stride], pixels.ptr(y), f.row_stride);
+  f.data_size = static_cast<int32_t>(f.data.size());
+  return f;
+}
+
+cv::Mat FrameToImage(const omni_frame_t& f) {
+  if (f.width <= 0 || f.height <= 0) throw std::invalid_argument("frame has no pixels (" + std::to_string(f.width) + "x" + std::to_string(f.height) + ")");
+  if (static_cast<size_t>(f.data_size) != f.data.size()) throw std::invalid_argument("frame data_size does not match its data");
+  switch (f.encoding) {
+    case omni_frame_t::GRAY8:
+    case omni_frame_t::RGB8: {
+      const int channels = f.encoding == omni_frame_t::GRAY8 ? 1 : 3;
+      if (f.row_stride < channels * f.width) throw std::invalid_argument("frame row_stride smaller than a row of pixels");
+      if (static_cast<int64_t>(f.row_stride) * f.height > f.data_size) {
+        throw std::invalid_argument("frame holds " + std::to_string(f.data_size) + " bytes, its size needs " +
+                                    std::to_string(static_cast<int64_t>(f.row_stride) * f.height));
+      }
+      const cv::Mat view(f.height, f.width, channels == 1 ? CV_8UC1 : CV_8UC3, const_cast<uint8_t*>(f.data.data()),
+                         f.row_stride);
+      cv::Mat out;
+      if (channels == 3) cv::cvtColor(view, out, cv::COLOR_RGB2BGR); else out = view.clone();
+      return out;
+    }
+    case omni_frame_t::JPEG:
+    case omni_frame_t::PNG: {
+      cv::Mat out = cv::imdecode(f.data, cv::IMREAD_UNCHANGED);
+      if (out.empty()) throw std::invalid_argument("frame: compressed image does not decode");
+      if (out.cols != f.width || out.rows != f.height) throw std::invalid_argument("frame: decoded size differs from width/height");
+      if (out.depth() != CV_8U) out.convertTo(out, CV_8U, 1.0 / 256);
+      if (out.channels() == 4) cv::cvtColor(out, out, cv::COLOR_BGRA2BGR);
+      return out;
+    }
+    default:
+      throw std::invalid_argument("frame has unknown encoding " + std::to_string(f.encoding));
+  }
+}
+
+void SetMirror(const nav::MirrorModel& m, omni_frame_t* f) {
+  f->mirror_center_x_px = static_cast<float>(m.center_x_px);
+  f->mirror_center_y_px = static_cast<float>(m.center_y_px);
+  f->mirror_inner_radius_px = static_cast<float>(m.inner_radius_px);
+  f->mirror_outer_radius_px = static_cast<float>(m.outer_radius_px);
+  f->mirror_elevation_inner_rad = static_cast<float>(m.elevation_inner_rad);
+  f->mirror_elevation_outer_rad = static_cast<float>(m.elevation_outer_rad);
+}
+
+void SetPanorama(const nav::PanoramaModel& p, omni_frame_t* f) {
+  f->bearing_col0_rad = static_cast<float>(p.bearing_col0_rad);
+  f->elevation_top_rad = static_cast<float>(p.elevation_top_rad);
+  f->elevation_bottom_rad = static_cast<float>(p.elevation_bottom_rad);
+}
+
+nav::MirrorModel MirrorOf(const omni_frame_t& f) {
+  nav::MirrorModel m;
+  m.center_x_px = f.mirror_center_x_px;
+  m.center_y_px = f.mirror_center_y_px;
+  m.inner_radius_px = f.mirror_inner_radius_px;
+  m.outer_radius_px = f.mirror_outer_radius_px;
+  m.elevation_inner_rad = f.mirror_elevation_inner_rad;
+  m.elevation_outer_rad = f.mirror_elevation_outer_rad;
+  return m;
+}
+
+nav::PanoramaModel PanoramaOf(const omni_frame_t& f) {
+  nav::PanoramaModel p;
+  p.width_px = f.width;
+  p.height_px = f.height;
+  p.bearing_col0_rad = f.bearing_col0_rad;
+  p.elevation_top_rad = f.elevation_top_rad;
+  p.elevation_bottom_rad = f.elevation_bottom_rad;
+  return p;
+}
+
+}  // namespace snapnav::glue

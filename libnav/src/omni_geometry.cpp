@@ -1,0 +1,65 @@
+#include "snapnav/nav/omni_geometry.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "snapnav/nav/pose2.hpp"
+
+namespace snapnav::nav {
+
+void MirrorModel::Validate() const {
+  if (!(inner_radius_px >= 0) || !(outer_radius_px > inner_radius_px)) {
+    throw std::invalid_argument("mirror: need 0 <= inner_radius_px < outer_radius_px");
+  }
+  if (!(elevation_outer_rad != elevation_inner_rad) || std::abs(elevation_inner_rad) >= M_PI / 2 ||
+      std::abs(elevation_outer_rad) >= M_PI / 2) {
+    throw std::invalid_argument("mirror: elevations must differ and lie within (-90, 90) degrees");
+  }
+  if (!std::isfinite(center_x_px) || !std::isfinite(center_y_px)) {
+    throw std::invalid_argument("mirror: centre must be finite");
+  }
+}
+
+void PanoramaModel::Validate() const {
+  if (width_px < 8 || height_px < 2) throw std::invalid_argument("panorama: need width_px >= 8 and height_px >= 2");
+  if (!(elevation_top_rad > elevation_bottom_rad) || std::abs(elevation_top_rad) >= M_PI / 2 ||
+      std::abs(elevation_bottom_rad) >= M_PI / 2) {
+    throw std::invalid_argument("panorama: need -90 < elevation_bottom < elevation_top < 90 degrees");
+  }
+}
+
+double PanoramaModel::BearingOfColumn(double col) const {
+  return WrapAngle(bearing_col0_rad - col * 2.0 * M_PI / width_px);
+}
+
+double PanoramaModel::ColumnOfBearing(double bearing_rad) const {
+  double c = (bearing_col0_rad - bearing_rad) * width_px / (2.0 * M_PI);
+  c = std::fmod(c, static_cast<double>(width_px));
+  if (c < 0) c += width_px;
+  return c;
+}
+
+double PanoramaModel::ElevationOfRow(double row) const {
+  return elevation_top_rad + row * (elevation_bottom_rad - elevation_top_rad) / (height_px - 1);
+}
+
+double PanoramaModel::RowOfElevation(double elevation_rad) const {
+  return (elevation_rad - elevation_top_rad) * (height_px - 1) / (elevation_bottom_rad - elevation_top_rad);
+}
+
+std::optional<Eigen::Vector2d> MirrorPixel(const MirrorModel& m, double bearing_rad, double elevation_rad) {
+  const double f = (elevation_rad - m.elevation_inner_rad) / (m.elevation_outer_rad - m.elevation_inner_rad);
+  if (f < 0 || f > 1) return std::nullopt;
+  const double r = m.inner_radius_px + f * (m.outer_radius_px - m.inner_radius_px);
+  return Eigen::Vector2d(m.center_x_px - r * std::sin(bearing_rad), m.center_y_px - r * std::cos(bearing_rad));
+}
+
+std::optional<Eigen::Vector2d> MirrorDirection(const MirrorModel& m, double u_px, double v_px) {
+  const double dx = m.center_x_px - u_px, dy = m.center_y_px - v_px;
+  const double r = std::hypot(dx, dy);
+  if (r < m.inner_radius_px || r > m.outer_radius_px) return std::nullopt;
+  const double f = (r - m.inner_radius_px) / (m.outer_radius_px - m.inner_radius_px);
+  return Eigen::Vector2d(std::atan2(dx, dy), m.elevation_inner_rad + f * (m.elevation_outer_rad - m.elevation_inner_rad));
+}
+
+}  // namespace snapnav::nav

@@ -1,0 +1,149 @@
+#include "snapnav/nav/sim/world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace snapnav::nav::sim {
+
+void DriveOptions::Validate() const {
+  if (!(max_linear_mps > 0) || !(max_angular_radps > 0) || !(robot_radius_m > 0)) {
+    throw std::invalid_argument("drive: speeds and robot radius must be positive");
+  }
+  if (!(linear_noise_frac >= 0) || !(angular_noise_radps >= 0) || !(odometry_linear_noise_frac >= 0) ||
+      !(odometry_angular_noise_frac >= 0) || !std::isfinite(heading_drift_deg_per_m)) {
+    throw std::invalid_argument("drive: noise parameters must be finite and non-negative");
+  }
+}
+
+void LaserOptions::Validate() const {
+  if (beams < 2 || !(angle_max_rad > angle_min_rad) || !(range_min_m >= 0) || !(range_max_m > range_min_m) ||
+      !(range_noise_m >= 0) || !(mount_height_m >= 0)) {
+    throw std::invalid_argument("laser: need beams >= 2, angle_max > angle_min, 0 <= range_min < range_max, noise >= 0");
+  }
+}
+
+World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& laser, uint64_t seed)
+    : scene_(scene), drive_(drive), laser_(laser), rng_(seed) {
+  scene_.Validate();
+  drive_.Validate();
+  laser_.Validate();
+  true_pose_ = {scene.start_pose.x(), scene.start_pose.y(), scene.start_pose.z()};
+  odom_pose_ = true_pose_;
+  odom_at_last_take_ = odom_pose_;
+  const PeopleSpec& p = scene.people;
+  std::uniform_real_distribution<double> ux(p.area_min.x(), p.area_max.x()), uy(p.area_min.y(), p.area_max.y());
+  for (int i = 0; i < p.count; ++i) {
+    Cylinder c;
+    c.center = {ux(rng_), uy(rng_)};
+    c.radius_m = p.radius_m;
+    c.height_m = p.height_m;
+    c.texture = p.textures[i % p.textures.size()];
+    people_.push_back(c);
+    people_goals_.push_back({ux(rng_), uy(rng_)});
+  }
+}
+
+void World::MovePeople(double dt_s) {
+  const PeopleSpec& p = scene_.people;
+  std::uniform_real_distribution<double> ux(p.area_min.x(), p.area_max.x()), uy(p.area_min.y(), p.area_max.y());
+  for (size_t i = 0; i < people_.size(); ++i) {
+    Eigen::Vector2d to_goal = people_goals_[i] - people_[i].center;
+    const double step = p.speed_mps * dt_s;
+    if (to_goal.norm() <= step) {
+      people_[i].center = people_goals_[i];
+      people_goals_[i] = {ux(rng_), uy(rng_)};
+    } else {
+      const Eigen::Vector2d next = people_[i].center + to_goal.normalized() * step;
+      // People do not walk through the robot.
+      if ((next - true_pose_.Transform({0, 0})).norm() > p.radius_m + drive_.robot_radius_m) people_[i].center = next;
+    }
+  }
+}
+
+void World::Step(double linear_mps, double angular_radps, double dt_s) {
+  if (!(dt_s > 0)) throw std::invalid_argument("world step needs dt_s > 0");
+  const double v = std::clamp(linear_mps, -drive_.max_linear_mps, drive_.max_linear_mps);
+  const double w = std::clamp(angular_radps, -drive_.max_angular_radps, drive_.max_angular_radps);
+  std::normal_distribution<double> n01(0.0, 1.0);
+
+  // True motion: the command plus control error (a heading drift per metre and noise).
+  const double v_true = v * (1.0 + drive_.linear_noise_frac * n01(rng_));
+  const double d_true = v_true * dt_s;
+  const double w_true = w + (v != 0 || w != 0 ? drive_.angular_noise_radps * n01(rng_) : 0.0);
+  const double dtheta_true = w_true * dt_s + drive_.heading_drift_deg_per_m * M_PI / 180.0 * std::abs(d_true);
+  const Pose2 candidate = true_pose_.Compose({d_true, 0, dtheta_true});
+  const double clearance = ClearanceAt(scene_, people_, candidate.Transform({0, 0}), drive_.obstacle_min_height_m);
+  if (clearance > drive_.robot_radius_m) {
+    true_pose_ = candidate;
+    distance_m_ += std::abs(d_true);
+  } else {
+    ++collisions_;  // blocked: turn in place only
+    true_pose_ = true_pose_.Compose({0, 0, w_true * dt_s});
+  }
+
+  // Wheel odometry: what the wheels report of the command, with its own noise
+  // (it does not see the heading drift nor a blocked robot).
+  const double d_odo = v * dt_s * (1.0 + drive_.odometry_linear_noise_frac * n01(rng_));
+  const double dtheta_odo = w * dt_s * (1.0 + drive_.odometry_angular_noise_frac * n01(rng_));
+  odom_pose_ = odom_pose_.Compose({d_odo, 0, dtheta_odo});
+
+  MovePeople(dt_s);
+  time_s_ += dt_s;
+}
+
+OdometryReading World::TakeOdometry() {
+  OdometryReading r;
+  r.delta = odom_at_last_take_.Between(odom_pose_);
+  r.cumulative = odom_pose_;
+  r.dt_s = time_s_ - time_at_last_take_;
+  odom_at_last_take_ = odom_pose_;
+  time_at_last_take_ = time_s_;
+  return r;
+}
+
+std::vector<float> World::Scan() {
+  std::vector<float> ranges(laser_.beams);
+  const Eigen::Vector2d origin = true_pose_.Transform({laser_.mount_x_m, 0});
+  const double inc = laser_.AngleIncrement();
+  std::normal_distribution<double> noise(0.0, laser_.range_noise_m);
+  for (int i = 0; i < laser_.beams; ++i) {
+    const double a = true_pose_.theta_rad + laser_.angle_min_rad + i * inc;
+    const auto hit = NearestHit(scene_, people_, origin, {std::cos(a), std::sin(a)}, laser_.mount_height_m);
+    double r = laser_.range_max_m;
+    if (hit && hit->distance_m < laser_.range_max_m) {
+      r = std::clamp(hit->distance_m + (laser_.range_noise_m > 0 ? noise(rng_) : 0.0), laser_.range_min_m,
+                     laser_.range_max_m);
+    }
+    ranges[i] = static_cast<float>(r);
+  }
+  return ranges;
+}
+
+RouteDriver::RouteDriver(std::vector<Eigen::Vector2d> route, double speed_mps, double tolerance_m, bool loop)
+    : route_(std::move(route)), speed_mps_(speed_mps), tolerance_m_(tolerance_m), loop_(loop) {
+  if (route_.empty()) throw std::invalid_argument("route driver needs at least one waypoint");
+  if (!(speed_mps > 0) || !(tolerance_m > 0)) throw std::invalid_argument("route driver needs positive speed and tolerance");
+}
+
+Eigen::Vector2d RouteDriver::Command(const Pose2& pose) {
+  if (finished_) return {0, 0};
+  const Eigen::Vector2d here(pose.x_m, pose.y_m);
+  if ((route_[next_] - here).norm() < tolerance_m_) {
+    if (++next_ == route_.size()) {
+      ++laps_;
+      next_ = 0;
+      if (!loop_) {
+        finished_ = true;
+        return {0, 0};
+      }
+    }
+  }
+  const Eigen::Vector2d to = route_[next_] - here;
+  const double err = WrapAngle(std::atan2(to.y(), to.x()) - pose.theta_rad);
+  const double w = std::clamp(2.5 * err, -1.2, 1.2);
+  const double v = std::abs(err) < 0.6 ? speed_mps_ * std::cos(err) * std::min(1.0, to.norm() / 0.3 + 0.3) : 0.0;
+  return {v, w};
+}
+
+}  // namespace snapnav::nav::sim

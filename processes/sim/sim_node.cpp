@@ -1,0 +1,304 @@
+#include "sim_node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <ostream>
+#include <stdexcept>
+#include <thread>
+
+#include "snapnav/glue/channels.hpp"
+#include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/time.hpp"
+#include "snapnav/laser_scan_t.hpp"
+#include "snapnav/odometry_t.hpp"
+#include "snapnav/omni_frame_t.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+int EveryNSteps(double physics_hz, double rate_hz, const char* what) {
+  const double n = physics_hz / rate_hz;
+  if (std::abs(n - std::round(n)) > 1e-6 || n < 1) {
+    throw std::invalid_argument(std::string(what) + " rate must divide the physics rate");
+  }
+  return static_cast<int>(std::round(n));
+}
+
+}  // namespace
+
+SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix) {
+  SimConfig c;
+  c.scene = ini.GetString("sim", "scene");
+  c.seed = static_cast<uint64_t>(ini.GetInt("sim", "seed"));
+  const std::string mode = ini.GetString("sim", "mode");
+  if (mode != "realtime" && mode != "lockstep") throw glue::ConfigError(ini.origin() + ": [sim] mode must be realtime or lockstep");
+  c.realtime = mode == "realtime";
+  c.duration_s = ini.GetDouble("sim", "duration_s");
+  c.start_utime = static_cast<int64_t>(ini.GetDouble("sim", "start_time_s") * 1e6);
+  c.physics_rate_hz = ini.GetDouble("sim", "physics_rate_hz");
+  c.drive = ini.GetString("sim", "drive");
+  c.route_speed_mps = ini.GetDouble("sim", "route_speed_mps");
+  c.route_tolerance_m = ini.GetDouble("sim", "route_tolerance_m");
+  c.route_loop = ini.GetBool("sim", "route_loop");
+  c.command_timeout_s = ini.GetDouble("sim", "command_timeout_s");
+
+  c.camera_rate_hz = ini.GetDouble("camera", "rate_hz");
+  c.publish_raw = ini.GetBool("camera", "publish_raw");
+  c.publish_panorama = ini.GetBool("camera", "publish_panorama");
+  try {
+    c.encoding = glue::ParseFrameEncoding(ini.GetString("camera", "encoding"));
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": [camera] " + e.what());
+  }
+  c.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
+  auto& cam = c.camera;
+  cam.height_m = ini.GetDouble("camera", "height_m");
+  cam.offset_x_m = ini.GetDouble("camera", "offset_x_m");
+  cam.omni_width_px = ini.GetInt("camera", "width_px");
+  cam.omni_height_px = ini.GetInt("camera", "height_px");
+  cam.mirror.center_x_px = ini.GetDouble("mirror", "center_x_px");
+  cam.mirror.center_y_px = ini.GetDouble("mirror", "center_y_px");
+  cam.mirror.inner_radius_px = ini.GetDouble("mirror", "inner_radius_px");
+  cam.mirror.outer_radius_px = ini.GetDouble("mirror", "outer_radius_px");
+  cam.mirror.elevation_inner_rad = ini.GetDouble("mirror", "elevation_inner_deg") * kDeg;
+  cam.mirror.elevation_outer_rad = ini.GetDouble("mirror", "elevation_outer_deg") * kDeg;
+  cam.panorama.width_px = ini.GetInt("panorama", "width_px");
+  cam.panorama.height_px = ini.GetInt("panorama", "height_px");
+  cam.panorama.elevation_top_rad = ini.GetDouble("panorama", "elevation_top_deg") * kDeg;
+  cam.panorama.elevation_bottom_rad = ini.GetDouble("panorama", "elevation_bottom_deg") * kDeg;
+  c.effects.blur_sigma_px = ini.GetDouble("effects", "blur_sigma_px");
+  c.effects.noise_sigma = ini.GetDouble("effects", "noise_sigma");
+  c.effects.salt_pepper_fraction = ini.GetDouble("effects", "salt_pepper_fraction");
+  c.effects.gain = ini.GetDouble("effects", "illumination_gain");
+  c.effects.offset = ini.GetDouble("effects", "illumination_offset");
+
+  c.laser_rate_hz = ini.GetDouble("laser", "rate_hz");
+  c.laser.beams = ini.GetInt("laser", "beams");
+  c.laser.angle_min_rad = ini.GetDouble("laser", "angle_min_deg") * kDeg;
+  c.laser.angle_max_rad = ini.GetDouble("laser", "angle_max_deg") * kDeg;
+  c.laser.range_min_m = ini.GetDouble("laser", "range_min_m");
+  c.laser.range_max_m = ini.GetDouble("laser", "range_max_m");
+  c.laser.range_noise_m = ini.GetDouble("laser", "range_noise_m");
+  c.laser.mount_height_m = ini.GetDouble("laser", "mount_height_m");
+  c.laser.mount_x_m = ini.GetDouble("laser", "mount_x_m");
+
+  c.odometry_rate_hz = ini.GetDouble("robot", "odometry_rate_hz");
+  auto& d = c.drive_options;
+  d.max_linear_mps = ini.GetDouble("robot", "max_linear_mps");
+  d.max_angular_radps = ini.GetDouble("robot", "max_angular_radps");
+  d.heading_drift_deg_per_m = ini.GetDouble("robot", "heading_drift_deg_per_m");
+  d.linear_noise_frac = ini.GetDouble("robot", "linear_noise_frac");
+  d.angular_noise_radps = ini.GetDouble("robot", "angular_noise_radps");
+  d.odometry_linear_noise_frac = ini.GetDouble("robot", "odometry_linear_noise_frac");
+  d.odometry_angular_noise_frac = ini.GetDouble("robot", "odometry_angular_noise_frac");
+  d.robot_radius_m = ini.GetDouble("robot", "radius_m");
+
+  c.omni_channel = prefix + ini.GetString("channels", "omni");
+  c.panorama_channel = prefix + ini.GetString("channels", "panorama");
+  c.scan_channel = prefix + ini.GetString("channels", "scan");
+  c.odometry_channel = prefix + ini.GetString("channels", "odometry");
+  c.ground_truth_channel = prefix + ini.GetString("channels", "ground_truth");
+  c.command_channel = prefix + ini.GetString("channels", "drive_command");
+  ini.CheckAllUsed();
+  try {
+    c.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": " + e.what());
+  }
+  return c;
+}
+
+void SimConfig::Validate() const {
+  if (drive != "route" && drive != "commands" && drive != "still") throw std::invalid_argument("drive must be route, commands or still");
+  if (!(physics_rate_hz > 0) || !(camera_rate_hz > 0) || !(laser_rate_hz > 0) || !(odometry_rate_hz > 0)) {
+    throw std::invalid_argument("rates must be positive");
+  }
+  if (std::abs(1e6 / physics_rate_hz - std::round(1e6 / physics_rate_hz)) > 1e-9) {
+    throw std::invalid_argument("physics_rate_hz must give a whole number of microseconds per step");
+  }
+  EveryNSteps(physics_rate_hz, camera_rate_hz, "camera");
+  EveryNSteps(physics_rate_hz, laser_rate_hz, "laser");
+  EveryNSteps(physics_rate_hz, odometry_rate_hz, "odometry");
+  if (!(duration_s >= 0)) throw std::invalid_argument("duration_s must be >= 0");
+  if (!publish_raw && !publish_panorama) throw std::invalid_argument("publish at least raw frames or panoramas");
+  if (jpeg_quality < 1 || jpeg_quality > 100) throw std::invalid_argument("jpeg_quality must be in 1..100");
+  camera.Validate();
+  effects.Validate();
+  laser.Validate();
+  drive_options.Validate();
+}
+
+void SimConfig::Print(std::ostream& o) const {
+  o << "scene=" << scene << " seed=" << seed << " mode=" << (realtime ? "realtime" : "lockstep")
+    << " duration_s=" << duration_s << " drive=" << drive << " physics_rate_hz=" << physics_rate_hz << "\n"
+    << "camera: rate_hz=" << camera_rate_hz << " raw=" << publish_raw << " " << camera.omni_width_px << "x"
+    << camera.omni_height_px << " panorama=" << publish_panorama << " " << camera.panorama.width_px << "x"
+    << camera.panorama.height_px << " encoding=" << static_cast<int>(encoding) << " height_m=" << camera.height_m
+    << " mirror=(" << camera.mirror.center_x_px << "," << camera.mirror.center_y_px << ") r="
+    << camera.mirror.inner_radius_px << ".." << camera.mirror.outer_radius_px << "\n"
+    << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
+    << " salt_pepper=" << effects.salt_pepper_fraction << " gain=" << effects.gain << " offset=" << effects.offset << "\n"
+    << "laser: rate_hz=" << laser_rate_hz << " beams=" << laser.beams << " range=" << laser.range_min_m << ".."
+    << laser.range_max_m << " noise_m=" << laser.range_noise_m << "\n"
+    << "robot: odometry_rate_hz=" << odometry_rate_hz << " heading_drift_deg_per_m="
+    << drive_options.heading_drift_deg_per_m << " odometry_noise=" << drive_options.odometry_linear_noise_frac << ","
+    << drive_options.odometry_angular_noise_frac << "\n"
+    << "channels: " << omni_channel << " " << panorama_channel << " " << scan_channel << " " << odometry_channel << " "
+    << ground_truth_channel << " <- " << command_channel << "\n";
+}
+
+SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene& scene)
+    : bus_(bus),
+      config_(config),
+      scene_(scene),
+      world_(scene, config.drive_options, config.laser, config.seed),
+      renderer_(scene, config.camera),
+      effects_rng_(config.seed ^ 0x9e3779b97f4a7c15ULL) {
+  config_.Validate();
+  dt_us_ = static_cast<int64_t>(std::llround(1e6 / config_.physics_rate_hz));
+  camera_every_ = EveryNSteps(config_.physics_rate_hz, config_.camera_rate_hz, "camera");
+  laser_every_ = EveryNSteps(config_.physics_rate_hz, config_.laser_rate_hz, "laser");
+  odometry_every_ = EveryNSteps(config_.physics_rate_hz, config_.odometry_rate_hz, "odometry");
+  if (config_.drive == "route") {
+    if (scene.route.empty()) throw std::invalid_argument("scene '" + scene.name + "' has no route for drive = route");
+    route_.emplace(scene.route, config_.route_speed_mps, config_.route_tolerance_m, config_.route_loop);
+  }
+  if (config_.drive == "commands") bus_.Subscribe(config_.command_channel, &SimNode::OnDriveCommand, this);
+}
+
+int64_t SimNode::utime() const { return config_.start_utime + step_ * dt_us_; }
+
+void SimNode::OnDriveCommand(const drive_command_t& msg) {
+  if (!std::isfinite(msg.linear_velocity_mps) || !std::isfinite(msg.angular_velocity_radps)) {
+    throw std::invalid_argument("drive command is not finite");
+  }
+  cmd_linear_ = msg.linear_velocity_mps;
+  cmd_angular_ = msg.angular_velocity_radps;
+  last_command_utime_ = msg.utime;
+  ++commands_;
+}
+
+void SimNode::WaitForCommand() {
+  // Lockstep with a controller: it answers each frame with a command stamped at least the frame's utime.
+  const int64_t deadline = glue::MonotonicUtime() + static_cast<int64_t>(config_.command_timeout_s * 1e6);
+  while (last_command_utime_ < utime() && !glue::ShutdownRequested() && glue::MonotonicUtime() < deadline) {
+    bus_.HandleOnce(5);
+  }
+}
+
+void SimNode::PublishFrames() {
+  const nav::Pose2& pose = world_.true_pose();
+  auto publish = [&](const std::string& channel, bool raw) {
+    if (raw) {
+      renderer_.RenderOmni(pose, world_.people(), &image_);
+    } else {
+      renderer_.RenderPanorama(pose, world_.people(), &image_);
+    }
+    nav::sim::ApplyImageEffects(config_.effects, effects_rng_, &image_);
+    omni_frame_t f = glue::ImageToFrame(image_, config_.encoding, config_.jpeg_quality);
+    f.utime = utime();
+    f.sensor_name = "sim_omni";
+    f.kind = raw ? omni_frame_t::RAW_OMNI : omni_frame_t::PANORAMA;
+    if (raw) {
+      glue::SetMirror(config_.camera.mirror, &f);
+    } else {
+      glue::SetPanorama(config_.camera.panorama, &f);
+    }
+    bus_.Publish(channel, f);
+  };
+  if (config_.publish_raw) publish(config_.omni_channel, true);
+  if (config_.publish_panorama) publish(config_.panorama_channel, false);
+  ++frames_;
+}
+
+void SimNode::PublishScan() {
+  laser_scan_t s{};
+  s.utime = utime();
+  s.sensor_name = "sim_hokuyo";
+  s.sensor_x_m = static_cast<float>(config_.laser.mount_x_m);
+  s.sensor_y_m = 0;
+  s.sensor_theta_rad = 0;
+  s.angle_min_rad = static_cast<float>(config_.laser.angle_min_rad);
+  s.angle_increment_rad = static_cast<float>(config_.laser.AngleIncrement());
+  s.time_increment_s = 0;
+  s.range_min_m = static_cast<float>(config_.laser.range_min_m);
+  s.range_max_m = static_cast<float>(config_.laser.range_max_m);
+  s.ranges_m = world_.Scan();
+  s.nranges = static_cast<int32_t>(s.ranges_m.size());
+  s.nintensities = 0;
+  bus_.Publish(config_.scan_channel, s);
+  ++scans_;
+}
+
+void SimNode::PublishOdometry() {
+  const nav::sim::OdometryReading r = world_.TakeOdometry();
+  odometry_t o{};
+  o.utime = utime();
+  o.sensor_name = "sim_wheels";
+  o.x_m = r.cumulative.x_m;
+  o.y_m = r.cumulative.y_m;
+  o.theta_rad = r.cumulative.theta_rad;
+  o.delta_x_m = r.delta.x_m;
+  o.delta_y_m = r.delta.y_m;
+  o.delta_theta_rad = r.delta.theta_rad;
+  o.delta_t_s = r.dt_s;
+  o.linear_velocity_mps = r.dt_s > 0 ? std::hypot(r.delta.x_m, r.delta.y_m) / r.dt_s : 0;
+  o.angular_velocity_radps = r.dt_s > 0 ? r.delta.theta_rad / r.dt_s : 0;
+  bus_.Publish(config_.odometry_channel, o);
+  bus_.Publish(config_.ground_truth_channel,
+               glue::ToPoseMsg(utime(), "ground_truth", "map", world_.true_pose(), Eigen::Matrix3d::Zero()));
+  ++odometry_;
+}
+
+bool SimNode::Step() {
+  if (config_.duration_s > 0 && step_ * dt_us_ >= static_cast<int64_t>(config_.duration_s * 1e6)) return false;
+  if (route_ && route_->finished()) return false;
+  // Sensors first: what the robot sees at time t, then it moves to t + dt.
+  if (step_ % odometry_every_ == 0) PublishOdometry();
+  if (step_ % laser_every_ == 0) PublishScan();
+  if (step_ % camera_every_ == 0) {
+    PublishFrames();
+    if (config_.drive == "commands" && !config_.realtime) WaitForCommand();
+  }
+  if (config_.drive == "commands") {
+    while (bus_.HandleOnce(0)) {
+    }
+  } else if (route_) {
+    const Eigen::Vector2d cmd = route_->Command(world_.true_pose());
+    cmd_linear_ = cmd.x();
+    cmd_angular_ = cmd.y();
+  }
+  world_.Step(cmd_linear_, cmd_angular_, dt_us_ * 1e-6);
+  ++step_;
+  return true;
+}
+
+void SimNode::Run(std::ostream* progress) {
+  const int64_t wall_start = glue::MonotonicUtime();
+  int64_t next_report_s = 10;
+  while (!glue::ShutdownRequested()) {
+    if (config_.realtime) {
+      const int64_t due = wall_start + step_ * dt_us_;
+      for (int64_t now = glue::MonotonicUtime(); now < due; now = glue::MonotonicUtime()) {
+        bus_.HandleOnce(static_cast<int>(std::max<int64_t>(1, (due - now) / 1000)));
+      }
+    }
+    if (!Step()) break;
+    const double t = step_ * dt_us_ * 1e-6;
+    if (progress && t >= next_report_s) {
+      const nav::Pose2& p = world_.true_pose();
+      *progress << "sim: t=" << std::fixed << std::setprecision(1) << t << " s  frames " << frames_ << "  scans "
+                << scans_ << "  pose (" << std::setprecision(2) << p.x_m << ", " << p.y_m << ", "
+                << p.theta_rad / kDeg << " deg)  distance " << world_.distance_m() << " m  wall "
+                << (glue::MonotonicUtime() - wall_start) * 1e-6 << " s\n";
+      next_report_s += 10;
+    }
+  }
+}
+
+}  // namespace snapnav::processes

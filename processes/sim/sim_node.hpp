@@ -1,0 +1,94 @@
+#pragma once
+// sim: the simulated lab. Moves a differential-drive robot through a scene
+// (following DRIVE_COMMAND or its scripted route) and publishes what its
+// sensors see, with the ground truth: OMNI_FRAME (raw catadioptric) and/or
+// OMNI_PANORAMA, LASER_SCAN, ODOMETRY, POSE_GROUND_TRUTH.
+
+#include <cstdint>
+#include <iosfwd>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "snapnav/drive_command_t.hpp"
+#include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/nav/sim/omni_renderer.hpp"
+#include "snapnav/nav/sim/world.hpp"
+
+namespace snapnav::processes {
+
+struct SimConfig {
+  std::string scene = "indoor13";     // scene name (config/scenes/NAME.scene) or path
+  uint64_t seed = 1;
+  bool realtime = false;              // false: lockstep, as fast as possible
+  double duration_s = 60;             // simulated time to run; 0: until stopped
+  int64_t start_utime = 1'700'000'000'000'000;  // utime of the first message [us]
+  double physics_rate_hz = 100;
+  std::string drive = "route";        // route | commands | still
+  double route_speed_mps = 0.3;
+  double route_tolerance_m = 0.1;
+  bool route_loop = true;
+  double command_timeout_s = 1.0;     // lockstep + commands: longest wait for a command per frame (wall clock)
+
+  double camera_rate_hz = 10;
+  bool publish_raw = true;
+  bool publish_panorama = false;
+  int8_t encoding = 1;                // omni_frame_t::RGB8
+  int jpeg_quality = 90;
+  nav::sim::OmniCameraOptions camera;
+  nav::sim::ImageEffectsOptions effects;
+
+  double laser_rate_hz = 10;
+  nav::sim::LaserOptions laser;
+  double odometry_rate_hz = 50;
+  nav::sim::DriveOptions drive_options;
+
+  std::string omni_channel, panorama_channel, scan_channel, odometry_channel, ground_truth_channel, command_channel;
+
+  // Reads every section of config/sim.ini; a missing or unknown key is an error.
+  static SimConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
+  void Validate() const;  // throws std::invalid_argument
+  void Print(std::ostream& out) const;
+};
+
+class SimNode {
+ public:
+  SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene& scene);
+
+  // Runs until duration_s of simulated time, the end of the route, or shutdown.
+  void Run(std::ostream* progress);
+  // One physics step, publishing the sensors that are due. Returns false when done.
+  bool Step();
+
+  int64_t utime() const;
+  const nav::sim::World& world() const { return world_; }
+  int64_t frames() const { return frames_; }
+  int64_t scans() const { return scans_; }
+  int64_t odometry_messages() const { return odometry_; }
+  int64_t commands() const { return commands_; }
+
+ private:
+  void OnDriveCommand(const drive_command_t& msg);
+  void PublishFrames();
+  void PublishScan();
+  void PublishOdometry();
+  void WaitForCommand();
+
+  glue::Bus& bus_;
+  SimConfig config_;
+  const nav::sim::Scene& scene_;
+  nav::sim::World world_;
+  nav::sim::OmniRenderer renderer_;
+  std::optional<nav::sim::RouteDriver> route_;
+  int64_t step_ = 0;
+  int64_t dt_us_ = 0;
+  int camera_every_ = 1, laser_every_ = 1, odometry_every_ = 1;
+  double cmd_linear_ = 0, cmd_angular_ = 0;
+  int64_t last_command_utime_ = -1;
+  int64_t frames_ = 0, scans_ = 0, odometry_ = 0, commands_ = 0;
+  std::mt19937_64 effects_rng_;
+  cv::Mat image_;
+};
+
+}  // namespace snapnav::processes

@@ -1,0 +1,181 @@
+// Geometry of the simulated sensors on small scenes built inline.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/sim/omni_renderer.hpp"
+#include "snapnav/nav/sim/world.hpp"
+
+namespace snapnav::nav::sim {
+namespace {
+
+// A grey 10 x 10 m room with one red post (radius 5 cm) at `post`.
+Scene RoomWithPost(const Eigen::Vector2d& post) {
+  Scene s;
+  s.name = "test";
+  s.textures.push_back(MakeTexture("grey", cv::Mat(16, 16, CV_8UC3, cv::Scalar(128, 128, 128)), 1, 1));
+  s.textures.push_back(MakeTexture("red", cv::Mat(16, 16, CV_8UC3, cv::Scalar(0, 0, 255)), 1, 1));
+  s.walls = {{{-5, -5}, {5, -5}, 2.5, 0, 0, 0}, {{5, -5}, {5, 5}, 2.5, 0, 0, 0},
+             {{5, 5}, {-5, 5}, 2.5, 0, 0, 0},   {{-5, 5}, {-5, -5}, 2.5, 0, 0, 0}};
+  Cylinder c;
+  c.center = post;
+  c.radius_m = 0.05;
+  c.height_m = 2.5;
+  c.texture = 1;
+  s.cylinders.push_back(c);
+  return s;
+}
+
+// Centre of the red columns in `row`, as a circular mean around `near_col`.
+double RedColumn(const cv::Mat& pano, int row, double near_col) {
+  double sum = 0;
+  int n = 0;
+  for (int c = 0; c < pano.cols; ++c) {
+    const cv::Vec3b px = pano.at<cv::Vec3b>(row, c);
+    if (px[2] - 0.5 * (px[0] + px[1]) < 100) continue;
+    double d = c - near_col;
+    d -= std::round(d / pano.cols) * pano.cols;
+    sum += d;
+    ++n;
+  }
+  return n ? near_col + sum / n : -1e9;
+}
+
+TEST(OmniRender, LandmarkAppearsAtItsBearingColumn) {
+  OmniCameraOptions o;
+  o.panorama.width_px = 720;
+  for (const double bearing_deg : {0.0, 37.0, 90.0, 163.0, -120.0}) {
+    const double b = bearing_deg * M_PI / 180;
+    const Scene scene = RoomWithPost({2.0 * std::cos(b + 0.3), 2.0 * std::sin(b + 0.3)});
+    OmniRenderer r(scene, o);
+    cv::Mat pano;
+    r.RenderPanorama(Pose2{0, 0, 0.3}, {}, &pano);  // robot turned by 0.3 rad: bearing is relative
+    const double expected = o.panorama.ColumnOfBearing(b);
+    const double got = RedColumn(pano, pano.rows / 2, expected);
+    const double diff = std::abs(got - expected);
+    EXPECT_LE(diff, 1.0) << "bearing " << bearing_deg << " deg: column " << got << ", expected " << expected;
+  }
+}
+
+TEST(OmniRender, RawImageShowsLandmarkAtMirrorPixel) {
+  OmniCameraOptions o;
+  const double b = 50 * M_PI / 180;
+  const Scene scene = RoomWithPost({2.0 * std::cos(b), 2.0 * std::sin(b)});
+  OmniRenderer r(scene, o);
+  cv::Mat raw;
+  r.RenderOmni(Pose2{0, 0, 0}, {}, &raw);
+  ASSERT_EQ(raw.cols, 640);
+  ASSERT_EQ(raw.rows, 480);
+  const auto px = MirrorPixel(o.mirror, b, 0.0);
+  ASSERT_TRUE(px.has_value());
+  const cv::Vec3b v = raw.at<cv::Vec3b>(static_cast<int>(std::round(px->y())), static_cast<int>(std::round(px->x())));
+  EXPECT_GT(v[2], 150) << "expected the red post at the mirror pixel";
+  EXPECT_LT(v[0], 80);
+  // The mirror of the other side shows grey wall.
+  const auto opposite = MirrorPixel(o.mirror, b + M_PI, 0.0);
+  const cv::Vec3b w = raw.at<cv::Vec3b>(static_cast<int>(opposite->y()), static_cast<int>(opposite->x()));
+  EXPECT_LT(std::abs(w[2] - w[0]), 30);
+  // Outside the ring: dark border.
+  EXPECT_LT(raw.at<cv::Vec3b>(2, 2)[0], 40);
+}
+
+TEST(OmniGeometry, MirrorPixelAndDirectionAreInverse) {
+  MirrorModel m;
+  for (double b = -3.0; b < 3.1; b += 0.7) {
+    for (double e = -0.6; e < 0.3; e += 0.2) {
+      const auto px = MirrorPixel(m, b, e);
+      ASSERT_TRUE(px);
+      const auto dir = MirrorDirection(m, px->x(), px->y());
+      ASSERT_TRUE(dir);
+      EXPECT_NEAR((*dir)[0], b, 1e-9);
+      EXPECT_NEAR((*dir)[1], e, 1e-9);
+    }
+  }
+  EXPECT_FALSE(MirrorPixel(m, 0, 1.0));  // above the mirror's field of view
+  EXPECT_FALSE(MirrorDirection(m, m.center_x_px, m.center_y_px));
+}
+
+TEST(Laser, WallAtKnownDistanceGivesExpectedRanges) {
+  const Scene scene = RoomWithPost({-4, -4});
+  LaserOptions l;
+  l.range_noise_m = 0;
+  l.mount_x_m = 0.1;
+  l.range_max_m = 5.6;
+  World world(scene, DriveOptions{}, l, 1);
+  world.SetTruePose(Pose2{2.0, 0, 0});  // wall at x = 5: 2.9 m ahead of the sensor
+  const auto ranges = world.Scan();
+  ASSERT_EQ(ranges.size(), 681u);
+  const int centre = 340;
+  EXPECT_NEAR(ranges[centre], 2.9, 1e-4);
+  const double a = l.angle_min_rad + 300 * l.AngleIncrement();
+  EXPECT_NEAR(ranges[300], 2.9 / std::cos(a), 1e-4);
+  // Beams towards the far corner (behind-left, > 5.6 m) read max range.
+  world.SetTruePose(Pose2{4.0, 4.0, M_PI});
+  const auto far = world.Scan();
+  EXPECT_FLOAT_EQ(far[centre], 5.6f);  // 8.9 m to the west wall
+}
+
+TEST(Laser, LowObjectsAreBelowTheScanPlane) {
+  Scene scene = RoomWithPost({-4, -4});
+  scene.AddBox({1.0, 0}, 0.4, 0.4, 0, 0.2, 0);  // 20 cm high box in front
+  LaserOptions l;
+  l.range_noise_m = 0;
+  l.mount_height_m = 0.3;
+  World world(scene, DriveOptions{}, l, 1);
+  EXPECT_NEAR(world.Scan()[340], 4.9, 1e-4);  // sees the wall, not the box
+}
+
+TEST(Robot, HeadingDriftPerMetreAndOdometryDoNotSeeIt) {
+  const Scene scene = RoomWithPost({-4, -4});
+  DriveOptions d;
+  d.linear_noise_frac = d.angular_noise_radps = 0;
+  d.odometry_linear_noise_frac = d.odometry_angular_noise_frac = 0;
+  d.heading_drift_deg_per_m = 0.3;
+  World world(scene, d, LaserOptions{}, 1);
+  world.SetTruePose(Pose2{-2, 0, 0});
+  for (int i = 0; i < 100; ++i) world.Step(0.2, 0, 0.05);  // 1 m
+  EXPECT_NEAR(world.true_pose().theta_rad * 180 / M_PI, 0.3, 1e-6);
+  EXPECT_NEAR(world.distance_m(), 1.0, 1e-9);
+  const auto odo = world.TakeOdometry();
+  EXPECT_NEAR(odo.delta.x_m, 1.0, 1e-9);
+  EXPECT_NEAR(odo.delta.theta_rad, 0.0, 1e-12);
+  EXPECT_NEAR(odo.dt_s, 5.0, 1e-9);
+}
+
+TEST(Robot, WallsBlockTheRobot) {
+  const Scene scene = RoomWithPost({-4, -4});
+  World world(scene, DriveOptions{}, LaserOptions{}, 1);
+  world.SetTruePose(Pose2{4.5, 0, 0});
+  for (int i = 0; i < 100; ++i) world.Step(0.5, 0, 0.05);
+  EXPECT_LT(world.true_pose().x_m, 5.0 - 0.19);
+  EXPECT_GT(world.collisions(), 0);
+}
+
+TEST(RouteDriver, ReachesEveryWaypoint) {
+  const Scene scene = RoomWithPost({-4, -4});
+  World world(scene, DriveOptions{}, LaserOptions{}, 3);
+  RouteDriver driver({{1, 0}, {1, 1}, {-1, 1}}, 0.3, 0.1, false);
+  double min_d[3] = {9, 9, 9};
+  const Eigen::Vector2d wp[3] = {{1, 0}, {1, 1}, {-1, 1}};
+  for (int i = 0; i < 4000 && !driver.finished(); ++i) {
+    const auto cmd = driver.Command(world.true_pose());
+    world.Step(cmd.x(), cmd.y(), 0.01);
+    for (int k = 0; k < 3; ++k) min_d[k] = std::min(min_d[k], (Eigen::Vector2d(world.true_pose().x_m, world.true_pose().y_m) - wp[k]).norm());
+  }
+  EXPECT_TRUE(driver.finished());
+  for (double d : min_d) EXPECT_LT(d, 0.1);
+}
+
+TEST(Scene, BadElementsAreRejected) {
+  Scene s = RoomWithPost({0, 0});
+  s.walls.push_back({{0, 0}, {0, 0}, 2, 0, 0, 0});
+  EXPECT_THROW(s.Validate(), std::invalid_argument);
+  Scene t = RoomWithPost({0, 0});
+  t.cylinders[0].texture = 7;
+  EXPECT_THROW(t.Validate(), std::invalid_argument);
+  EXPECT_THROW(MakeTexture("x", cv::Mat(), 1, 1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace snapnav::nav::sim
