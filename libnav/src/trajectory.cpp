@@ -1,18 +1,34 @@
 #include "snapnav/nav/trajectory.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <cstdlib>
 #include <stdexcept>
 
 namespace snapnav::nav {
 
+std::optional<size_t> NearestInTime(const std::vector<StampedPose>& reference, int64_t utime, int64_t max_dt_us) {
+  const auto it = std::lower_bound(reference.begin(), reference.end(), utime,
+                                   [](const StampedPose& p, int64_t t) { return p.utime < t; });
+  std::optional<size_t> best;
+  int64_t best_dt = max_dt_us;
+  for (auto c : {it, it == reference.begin() ? reference.end() : std::prev(it)}) {
+    if (c == reference.end()) continue;
+    const int64_t dt = std::llabs(c->utime - utime);
+    if (dt <= best_dt) {
+      best_dt = dt;
+      best = static_cast<size_t>(c - reference.begin());
+    }
+  }
+  return best;
+}
+
 std::vector<std::pair<Pose2, Pose2>> AssociateByTime(const std::vector<StampedPose>& estimate,
                                                      const std::vector<StampedPose>& reference, int64_t max_dt_us) {
   std::vector<std::pair<Pose2, Pose2>> pairs;
-  size_t j = 0;
   for (const StampedPose& e : estimate) {
-    while (j + 1 < reference.size() && std::llabs(reference[j + 1].utime - e.utime) <= std::llabs(reference[j].utime - e.utime)) ++j;
-    if (j < reference.size() && std::llabs(reference[j].utime - e.utime) <= max_dt_us) pairs.emplace_back(e.pose, reference[j].pose);
+    if (const auto j = NearestInTime(reference, e.utime, max_dt_us)) pairs.emplace_back(e.pose, reference[*j].pose);
   }
   return pairs;
 }

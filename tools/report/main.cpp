@@ -137,13 +137,11 @@ int Main(int argc, char** argv) {
   // The plot: laser map from the ground truth, then every trajectory.
   std::vector<Eigen::Vector2d> map_points;
   if (truth_it != poses.end()) {
-    std::vector<nav::StampedPose> scan_times;
-    for (const auto& s : scans) scan_times.push_back({s.utime, {}});
     const auto& truth = truth_it->second;
     for (const auto& s : scans) {
-      const auto pairs = nav::AssociateByTime({{s.utime, {}}}, truth, 20000);
-      if (pairs.empty()) continue;
-      const nav::Pose2 sensor = pairs[0].second.Compose({s.sensor_x_m, s.sensor_y_m, s.sensor_theta_rad});
+      const auto j = nav::NearestInTime(truth, s.utime, 20000);
+      if (!j) continue;
+      const nav::Pose2 sensor = truth[*j].pose.Compose({s.sensor_x_m, s.sensor_y_m, s.sensor_theta_rad});
       for (int i = 0; i < s.nranges; i += 2) {
         const double r = s.ranges_m[i];
         if (!(r < s.range_max_m) || r < s.range_min_m) continue;

@@ -139,11 +139,13 @@ void OmniRenderer::RenderPanorama(const Pose2& robot, const std::vector<Cylinder
 }
 
 void OmniRenderer::RenderOmni(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out) {
-  Render(fine_, robot, people, &fine_image_);
-  // Wrap one column around so bilinear sampling is seamless at the bearing seam.
-  cv::Mat wrapped;
-  cv::hconcat(fine_image_, fine_image_.col(0), wrapped);
-  cv::remap(wrapped, *out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(16, 16, 16));
+  // The fine panorama has one extra column, a copy of column 0, so bilinear sampling
+  // is seamless at the bearing seam; the buffer is reused from frame to frame.
+  fine_image_.create(fine_.height_px, fine_.width_px + 1, CV_8UC3);
+  cv::Mat body = fine_image_.colRange(0, fine_.width_px);
+  Render(fine_, robot, people, &body);
+  fine_image_.col(0).copyTo(fine_image_.col(fine_.width_px));
+  cv::remap(fine_image_, *out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(16, 16, 16));
 }
 
 void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const std::vector<Cylinder>& people,

@@ -15,6 +15,10 @@ struct StampedPose {
   Pose2 pose;
 };
 
+// Index of the reference pose nearest in time to `utime` (binary search; `reference`
+// sorted by utime), or nullopt if none lies within max_dt_us.
+std::optional<size_t> NearestInTime(const std::vector<StampedPose>& reference, int64_t utime, int64_t max_dt_us);
+
 // Pairs each estimate with the reference pose nearest in time (within max_dt_us).
 // Both must be sorted by utime. Returns (estimate, reference) pairs.
 std::vector<std::pair<Pose2, Pose2>> AssociateByTime(const std::vector<StampedPose>& estimate,
