@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
 #include "snapnav/nav/pose2.hpp"
@@ -18,6 +19,16 @@ std::optional<OrientationRange> ParseOrientationRange(const std::string& name) {
   return std::nullopt;
 }
 
+const char* OrientationRangeName(OrientationRange range) {
+  switch (range) {
+    case OrientationRange::kAll: return "all";
+    case OrientationRange::kVertical: return "vertical";
+    case OrientationRange::kHorizontal: return "horizontal";
+    case OrientationRange::kNarrowVertical: return "narrow_vertical";
+  }
+  return "?";
+}
+
 void HogOptions::Validate() const {
   if (cell_size_px < 2) throw std::invalid_argument("hog: cell_size_px must be >= 2");
   if (bins < 2 || bins > 360) throw std::invalid_argument("hog: bins must be in 2..360");
@@ -28,57 +39,86 @@ void HogOptions::Validate() const {
 void HogAlvOptions::Validate() const {
   if (!(threshold_frac >= 0 && threshold_frac <= 1)) throw std::invalid_argument("hog alv: threshold_frac in [0, 1]");
   if (min_bins < 1) throw std::invalid_argument("hog alv: min_bins >= 1");
+  if (!(log_scale > 0)) throw std::invalid_argument("hog alv: log_scale must be > 0");
 }
 
-ColumnHistograms::ColumnHistograms(const cv::Mat& panorama, const HogOptions& o) {
-  o.Validate();
+Gradients ComputeGradients(const cv::Mat& gray) {
+  if (gray.empty() || gray.type() != CV_8UC1) throw std::invalid_argument("hog: need a non-empty 8-bit grey panorama");
+  // Centred differences; the columns wrap around (a panorama is a cylinder), rows replicate.
+  cv::Mat padded;
+  cv::copyMakeBorder(gray, padded, 1, 1, 0, 0, cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(padded, padded, 0, 0, 1, 1, cv::BORDER_WRAP);
+  cv::Mat f;
+  padded.convertTo(f, CV_32F);
+  const cv::Rect inner(1, 1, gray.cols, gray.rows);
+  cv::Mat gx = f(inner + cv::Point(1, 0)) - f(inner - cv::Point(1, 0));
+  cv::Mat gy = f(inner + cv::Point(0, 1)) - f(inner - cv::Point(0, 1));
+  Gradients g;
+  cv::cartToPolar(gx, gy, g.magnitude, g.angle_rad, false);  // angle in [0, 2 pi)
+  return g;
+}
+
+namespace {
+
+cv::Mat ToGray(const cv::Mat& panorama) {
   if (panorama.empty() || panorama.depth() != CV_8U) throw std::invalid_argument("hog: need a non-empty 8-bit panorama");
-  const int band_h = o.band_height_px > 0 ? o.band_height_px : panorama.rows - o.band_top_px;
-  if (o.band_top_px + band_h > panorama.rows || band_h < o.cell_size_px) {
-    throw std::invalid_argument("hog: band rows " + std::to_string(o.band_top_px) + "+" + std::to_string(band_h) +
-                                " do not fit a panorama of " + std::to_string(panorama.rows) +
-                                " rows with cells of " + std::to_string(o.cell_size_px));
-  }
+  if (panorama.channels() == 1) return panorama;
   cv::Mat gray;
-  if (panorama.channels() == 3) cv::cvtColor(panorama, gray, cv::COLOR_BGR2GRAY); else gray = panorama;
-  gray = gray.rowRange(o.band_top_px, o.band_top_px + band_h);
-  if (o.equalize_histogram) {
-    cv::Mat eq;
-    cv::equalizeHist(gray, eq);
-    gray = eq;
+  cv::cvtColor(panorama, gray, panorama.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+  return gray;
+}
+
+}  // namespace
+
+ColumnHistograms::ColumnHistograms(const Gradients& gradients, const HogOptions& options) { Build(gradients, options); }
+
+ColumnHistograms::ColumnHistograms(const cv::Mat& panorama, const HogOptions& options) {
+  options.Validate();
+  Build(ComputeGradients(ToGray(panorama)), options);
+}
+
+void ColumnHistograms::Build(const Gradients& g, const HogOptions& o) {
+  o.Validate();
+  if (g.magnitude.empty()) throw std::invalid_argument("hog: empty gradients");
+  const int rows = g.magnitude.rows;
+  const int band_h = o.band_height_px > 0 ? o.band_height_px : rows - o.band_top_px;
+  if (o.band_top_px + band_h > rows || band_h < o.cell_size_px) {
+    throw std::invalid_argument("hog: band rows " + std::to_string(o.band_top_px) + "+" + std::to_string(band_h) +
+                                " do not fit a panorama of " + std::to_string(rows) + " rows with cells of " +
+                                std::to_string(o.cell_size_px));
   }
-  width_ = gray.cols;
+  width_ = g.magnitude.cols;
   cell_rows_ = band_h / o.cell_size_px;
   bins_ = o.bins;
   prefix_.assign(static_cast<size_t>(cell_rows_) * (width_ + 1) * bins_, 0.0);
-  std::vector<double> column(static_cast<size_t>(bins_));
-  const double bin_width = 2 * M_PI / bins_;
-  const double narrow = o.narrow_range_deg * M_PI / 180;
+  // Column histograms first (one pass over the pixels), then prefix sums over columns.
+  std::vector<double> columns(static_cast<size_t>(width_) * bins_);
+  const float bin_scale = static_cast<float>(bins_ / (2 * M_PI));
+  const float narrow = static_cast<float>(o.narrow_range_deg * M_PI / 180);
+  const float quarter = static_cast<float>(M_PI / 4), pi = static_cast<float>(M_PI), two_pi = static_cast<float>(2 * M_PI);
   for (int r = 0; r < cell_rows_; ++r) {
+    std::fill(columns.begin(), columns.end(), 0.0);
+    for (int y = o.band_top_px + r * o.cell_size_px; y < o.band_top_px + (r + 1) * o.cell_size_px; ++y) {
+      const float* mag = g.magnitude.ptr<float>(y);
+      const float* ang = g.angle_rad.ptr<float>(y);
+      for (int x = 0; x < width_; ++x) {
+        const float m = mag[x];
+        if (m == 0) continue;
+        const float a = ang[x];
+        if (o.range != OrientationRange::kAll) {
+          // Distance of the gradient direction from horizontal (a vertical edge): 0..pi/2.
+          const float from_horizontal = std::min({a, std::abs(a - pi), two_pi - a});
+          if (o.range == OrientationRange::kVertical && from_horizontal > quarter) continue;
+          if (o.range == OrientationRange::kHorizontal && from_horizontal <= quarter) continue;
+          if (o.range == OrientationRange::kNarrowVertical && from_horizontal > narrow) continue;
+        }
+        const int b = std::min(bins_ - 1, static_cast<int>(a * bin_scale));
+        columns[static_cast<size_t>(x) * bins_ + b] += m;
+      }
+    }
     double* pre = &prefix_[static_cast<size_t>(r) * (width_ + 1) * bins_];
     for (int x = 0; x < width_; ++x) {
-      std::fill(column.begin(), column.end(), 0.0);
-      const int xl = x == 0 ? width_ - 1 : x - 1, xr = x + 1 == width_ ? 0 : x + 1;  // the panorama wraps around
-      for (int y = r * o.cell_size_px; y < (r + 1) * o.cell_size_px; ++y) {
-        const int yu = std::max(0, y - 1), yd = std::min(gray.rows - 1, y + 1);
-        const double gx = gray.at<uint8_t>(y, xr) - gray.at<uint8_t>(y, xl);  // centred gradient
-        const double gy = gray.at<uint8_t>(yd, x) - gray.at<uint8_t>(yu, x);
-        const double mag = std::hypot(gx, gy);
-        if (mag == 0) continue;
-        double angle = std::atan2(gy, gx);  // signed, (-pi, pi]
-        if (angle < 0) angle += 2 * M_PI;
-        // Distance of the gradient direction from horizontal (a vertical edge): 0..pi/2.
-        const double from_horizontal = std::min({angle, std::abs(angle - M_PI), 2 * M_PI - angle});
-        switch (o.range) {
-          case OrientationRange::kAll: break;
-          case OrientationRange::kVertical: if (from_horizontal > M_PI / 4) continue; break;
-          case OrientationRange::kHorizontal: if (from_horizontal <= M_PI / 4) continue; break;
-          case OrientationRange::kNarrowVertical: if (from_horizontal > narrow) continue; break;
-        }
-        const int b = std::min(bins_ - 1, static_cast<int>(angle / bin_width));
-        column[b] += mag;
-      }
-      for (int b = 0; b < bins_; ++b) pre[(x + 1) * bins_ + b] = pre[x * bins_ + b] + column[b];
+      for (int b = 0; b < bins_; ++b) pre[(x + 1) * bins_ + b] = pre[x * bins_ + b] + columns[static_cast<size_t>(x) * bins_ + b];
     }
   }
 }
@@ -103,10 +143,28 @@ HogCells CellsAtShift(const ColumnHistograms& h, int cell_size_px, int shift_px)
   c.values.assign(static_cast<size_t>(c.cell_rows) * c.cell_cols * c.bins, 0.0);
   for (int r = 0; r < c.cell_rows; ++r) {
     for (int p = 0; p < c.cell_cols; ++p) {
-      h.AddRun(r, shift_px + p * cell_size_px, cell_size_px, &c.values[(static_cast<size_t>(r) * c.cell_cols + p) * c.bins]);
+      h.AddRun(r, shift_px + p * cell_size_px, cell_size_px,
+               &c.values[(static_cast<size_t>(r) * c.cell_cols + p) * c.bins]);
     }
   }
   return c;
+}
+
+double CellEntropyBits(const HogCells& cells) {
+  double weighted = 0, energy = 0;
+  for (int k = 0; k < cells.cell_rows * cells.cell_cols; ++k) {
+    const double* h = &cells.values[static_cast<size_t>(k) * cells.bins];
+    double total = 0;
+    for (int q = 0; q < cells.bins; ++q) total += h[q];
+    if (total <= 0) continue;
+    double entropy = 0;
+    for (int q = 0; q < cells.bins; ++q) {
+      if (h[q] > 0) entropy -= h[q] / total * std::log2(h[q] / total);
+    }
+    weighted += total * entropy;
+    energy += total;
+  }
+  return energy > 0 ? weighted / energy : 0.0;
 }
 
 CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms& current, int cell_size_px) {
@@ -115,18 +173,20 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
   }
   const HogCells h = CellsAtShift(home, cell_size_px, 0);
   CompassResult result;
-  result.distance_by_shift.resize(home.width());
+  const int w = home.width();
+  result.distance_by_shift.resize(w);
   std::vector<double> cell(static_cast<size_t>(home.bins()));
   int best = 0;
-  for (int s = 0; s < home.width(); ++s) {
+  for (int s = 0; s < w; ++s) {
     double d = 0;
     for (int r = 0; r < h.cell_rows; ++r) {
       for (int p = 0; p < h.cell_cols; ++p) {
         std::fill(cell.begin(), cell.end(), 0.0);
         current.AddRun(r, s + p * cell_size_px, cell_size_px, cell.data());
+        const double* ref = &h.values[(static_cast<size_t>(r) * h.cell_cols + p) * h.bins];
         double d2 = 0;
         for (int q = 0; q < h.bins; ++q) {
-          const double diff = cell[q] - h.at(r, p, q);
+          const double diff = cell[q] - ref[q];
           d2 += diff * diff;
         }
         d += std::sqrt(d2);  // Euclidean distance per cell (3.1.2), summed
@@ -136,7 +196,6 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
     if (d < result.distance_by_shift[best]) best = s;
   }
   // Sub-column refinement: vertex of the parabola through the minimum and its neighbours.
-  const int w = home.width();
   const double dm = result.distance_by_shift[(best + w - 1) % w], d0 = result.distance_by_shift[best],
                dp = result.distance_by_shift[(best + 1) % w];
   const double denom = dm - 2 * d0 + dp;
@@ -148,15 +207,20 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
   return result;
 }
 
-std::vector<Eigen::Vector2d> BinAlvs(const HogCells& cells, int cell_size_px, const PanoramaModel& panorama) {
+std::vector<Eigen::Vector2d> BinAlvs(const HogCells& cells, int cell_size_px, const PanoramaModel& panorama,
+                                     const HogAlvOptions& options) {
   std::vector<Eigen::Vector2d> alv(static_cast<size_t>(cells.bins), Eigen::Vector2d::Zero());
+  const bool log_weight = options.weight == CellWeight::kLog;
   for (int p = 0; p < cells.cell_cols; ++p) {
     // Bearing of the cell centre; for cells taken at the compass shift this is the bearing
     // in the home view's frame.
     const double phi = panorama.BearingOfColumn(p * cell_size_px + cell_size_px / 2.0);
     const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
     for (int r = 0; r < cells.cell_rows; ++r) {
-      for (int q = 0; q < cells.bins; ++q) alv[q] += std::abs(cells.at(r, p, q)) * dir;
+      for (int q = 0; q < cells.bins; ++q) {
+        const double m = std::abs(cells.at(r, p, q));
+        alv[q] += (log_weight ? std::log1p(m / options.log_scale) : m) * dir;
+      }
     }
   }
   return alv;
@@ -164,13 +228,22 @@ std::vector<Eigen::Vector2d> BinAlvs(const HogCells& cells, int cell_size_px, co
 
 std::optional<HomingEstimate> HogHoming(const ColumnHistograms& home, const ColumnHistograms& current,
                                         const HogOptions& hog, const HogAlvOptions& alv_options,
-                                        const PanoramaModel& panorama) {
+                                        const PanoramaModel& panorama, const CompassResult& compass) {
   alv_options.Validate();
-  const CompassResult compass = VisualCompass(home, current, hog.cell_size_px);
-  const int shift = static_cast<int>(std::lround(compass.shift_px));
+  if (home.width() != current.width() || home.cell_rows() != current.cell_rows() || home.bins() != current.bins()) {
+    throw std::invalid_argument("hog homing: the two panoramas have different HOG shapes");
+  }
+  const double shift_px = compass.rotation_rad * home.width() / (2 * M_PI);
+  const int shift = static_cast<int>(std::lround(shift_px));
   // Current cells sampled at the compass shift look at the same world bearings as the home cells.
-  const auto home_alv = BinAlvs(CellsAtShift(home, hog.cell_size_px, 0), hog.cell_size_px, panorama);
-  const auto cur_alv = BinAlvs(CellsAtShift(current, hog.cell_size_px, shift), hog.cell_size_px, panorama);
+  const auto home_alv = BinAlvs(CellsAtShift(home, hog.cell_size_px, 0), hog.cell_size_px, panorama, alv_options);
+  auto cur_alv = BinAlvs(CellsAtShift(current, hog.cell_size_px, shift), hog.cell_size_px, panorama, alv_options);
+  // The sub-column rest of the shift rotates the current cells' bearings in the home frame.
+  const double residual = (shift_px - shift) * 2 * M_PI / home.width();
+  if (residual != 0) {
+    const Eigen::Rotation2Dd rot(residual);
+    for (auto& v : cur_alv) v = rot * v;
+  }
   std::vector<Eigen::Vector2d> diff(home_alv.size());
   double strongest = 0;
   for (size_t q = 0; q < diff.size(); ++q) {
@@ -195,6 +268,111 @@ std::optional<HomingEstimate> HogHoming(const ColumnHistograms& home, const Colu
   e.magnitude = sum.norm();
   e.bins_used = used;
   return e;
+}
+
+std::optional<HomingEstimate> HogHoming(const ColumnHistograms& home, const ColumnHistograms& current,
+                                        const HogOptions& hog, const HogAlvOptions& alv,
+                                        const PanoramaModel& panorama) {
+  return HogHoming(home, current, hog, alv, panorama, VisualCompass(home, current, hog.cell_size_px));
+}
+
+void WarpCompensationOptions::Validate() const {
+  if (!(camera_height_m > 0)) throw std::invalid_argument("warp compensation: camera_height_m must be > 0");
+  if (!(height_top_m > height_bottom_m)) throw std::invalid_argument("warp compensation: height_top_m must exceed height_bottom_m");
+  if (!(min_distance_m > 0 && max_distance_m > min_distance_m)) throw std::invalid_argument("warp compensation: bad distance clamp");
+  if (median_columns < 1 || median_columns % 2 == 0) throw std::invalid_argument("warp compensation: median_columns must be odd");
+  if (!(canny_low >= 0 && canny_high >= canny_low)) throw std::invalid_argument("warp compensation: bad Canny thresholds");
+}
+
+cv::Mat CompensateWarping(const cv::Mat& gray, const PanoramaModel& panorama, const WarpCompensationOptions& o,
+                          std::vector<double>* distances_m) {
+  o.Validate();
+  if (gray.empty() || gray.type() != CV_8UC1) throw std::invalid_argument("warp compensation: need an 8-bit grey panorama");
+  if (gray.cols != panorama.width_px || gray.rows != panorama.height_px) {
+    throw std::invalid_argument("warp compensation: image size differs from the panorama model");
+  }
+  cv::Mat blurred, edges;
+  if (o.blur_sigma_px > 0) cv::GaussianBlur(gray, blurred, {0, 0}, o.blur_sigma_px); else blurred = gray;
+  cv::Canny(blurred, edges, o.canny_low, o.canny_high);
+  // Per column, the lowest edge above the floor: the bottom line of the objects. Rows below
+  // the horizon only (an edge above the horizon says nothing about the floor contact).
+  const int horizon = std::clamp(static_cast<int>(std::floor(panorama.RowOfElevation(0.0))), 0, gray.rows - 1);
+  std::vector<double> distance(static_cast<size_t>(gray.cols), o.max_distance_m);
+  for (int x = 0; x < gray.cols; ++x) {
+    for (int y = gray.rows - 1; y > horizon; --y) {
+      if (edges.at<uint8_t>(y, x) == 0) continue;
+      const double elevation = panorama.ElevationOfRow(y);
+      if (elevation < 0) distance[x] = std::clamp(o.camera_height_m / std::tan(-elevation), o.min_distance_m, o.max_distance_m);
+      break;
+    }
+  }
+  // Median over neighbouring columns (wrapping) removes single-column outliers.
+  std::vector<double> smooth(distance.size()), window(static_cast<size_t>(o.median_columns));
+  const int half = o.median_columns / 2;
+  for (int x = 0; x < gray.cols; ++x) {
+    for (int k = -half; k <= half; ++k) window[k + half] = distance[((x + k) % gray.cols + gray.cols) % gray.cols];
+    std::nth_element(window.begin(), window.begin() + half, window.end());
+    smooth[x] = window[half];
+  }
+  // Output row r shows height z(r) on the object at the column's distance.
+  cv::Mat map_x(gray.size(), CV_32F), map_y(gray.size(), CV_32F);
+  for (int x = 0; x < gray.cols; ++x) {
+    for (int r = 0; r < gray.rows; ++r) {
+      const double z = o.height_top_m - (o.height_top_m - o.height_bottom_m) * r / std::max(1, gray.rows - 1);
+      const double elevation = std::atan2(z - o.camera_height_m, smooth[x]);
+      map_x.at<float>(r, x) = static_cast<float>(x);
+      map_y.at<float>(r, x) = static_cast<float>(panorama.RowOfElevation(elevation));
+    }
+  }
+  cv::Mat out;
+  cv::remap(gray, out, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+  if (distances_m) *distances_m = smooth;
+  return out;
+}
+
+void HogHomingConfig::Validate() const {
+  hog.Validate();
+  compass_hog.Validate();
+  alv.Validate();
+  if (warp_compensation) warp.Validate();
+}
+
+HogHomer::HogHomer(const HogHomingConfig& config, const PanoramaModel& panorama)
+    : config_(config), panorama_(panorama) {
+  config_.Validate();
+  panorama_.Validate();
+}
+
+HogHomer::Views HogHomer::Describe(const cv::Mat& image) const {
+  if (image.empty()) throw std::invalid_argument("hog homing: empty panorama");
+  if (image.cols != panorama_.width_px || image.rows != panorama_.height_px) {
+    throw std::invalid_argument("hog homing: panorama is " + std::to_string(image.cols) + "x" +
+                                std::to_string(image.rows) + ", the model is " + std::to_string(panorama_.width_px) +
+                                "x" + std::to_string(panorama_.height_px));
+  }
+  cv::Mat gray = ToGray(image);
+  if (config_.equalize_histogram) {
+    cv::Mat eq;
+    cv::equalizeHist(gray, eq);
+    gray = eq;
+  }
+  if (config_.warp_compensation) gray = CompensateWarping(gray, panorama_, config_.warp);
+  const Gradients g = ComputeGradients(gray);
+  return Views{ColumnHistograms(g, config_.hog), ColumnHistograms(g, config_.compass_hog)};
+}
+
+void HogHomer::SetHome(const cv::Mat& panorama) { home_.emplace(Describe(panorama)); }
+
+std::optional<HomingEstimate> HogHomer::Home(const cv::Mat& panorama, std::optional<double> known_rotation_rad) const {
+  if (!home_) throw std::logic_error("hog homing: no home snapshot set");
+  const Views current = Describe(panorama);
+  CompassResult compass;
+  if (known_rotation_rad) {
+    compass.rotation_rad = WrapAngle(*known_rotation_rad);
+  } else if (config_.use_compass) {
+    compass = VisualCompass(home_->compass, current.compass, config_.compass_hog.cell_size_px);
+  }
+  return HogHoming(home_->hog, current.hog, config_.hog, config_.alv, panorama_, compass);
 }
 
 }  // namespace snapnav::nav

@@ -1,0 +1,438 @@
+// eval-homing: snapshot homing evaluated the way the thesis does (3.1.4, Appendix A):
+// angular error over a scene's grid database, the average angular error (AAE), the
+// closed-loop return ratio, vector maps, AAE by cell size and descriptor range, by noise
+// type and level, entropy by cell size, and a parameter sweep table.
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "homing_eval.hpp"
+#include "homing_node.hpp"
+#include "scene_file.hpp"
+#include "sim_node.hpp"
+#include "snapnav/glue/app.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/plot/plot.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace snapnav;
+using eval::CameraPipeline;
+
+struct Overrides {
+  int cell = 0, bins = 0;
+  std::string range, weight, difference, band;
+  double threshold = -1;
+  bool no_compass = false, equalize = false, warp = false;
+};
+
+nav::HogHomingConfig Apply(nav::HogHomingConfig c, const Overrides& o) {
+  if (o.cell > 0) c.hog.cell_size_px = o.cell;
+  if (o.bins > 0) c.hog.bins = o.bins;
+  if (!o.range.empty()) {
+    const auto r = nav::ParseOrientationRange(o.range);
+    if (!r) throw glue::FlagError("--range must be all, vertical, horizontal or narrow_vertical, not '" + o.range + "'");
+    c.hog.range = *r;
+  }
+  if (!o.weight.empty()) {
+    if (o.weight == "magnitude") c.alv.weight = nav::CellWeight::kMagnitude;
+    else if (o.weight == "log") c.alv.weight = nav::CellWeight::kLog;
+    else throw glue::FlagError("--weight must be magnitude or log, not '" + o.weight + "'");
+  }
+  if (!o.difference.empty()) {
+    if (o.difference == "current_minus_home") c.alv.difference = nav::AlvDifference::kCurrentMinusHome;
+    else if (o.difference == "home_minus_current") c.alv.difference = nav::AlvDifference::kHomeMinusCurrent;
+    else throw glue::FlagError("--difference must be current_minus_home or home_minus_current");
+  }
+  if (!o.band.empty()) {
+    const auto parts = glue::SplitList(o.band);
+    if (parts.size() != 2) throw glue::FlagError("--band must be TOP,HEIGHT in pixel rows");
+    c.hog.band_top_px = std::stoi(parts[0]);
+    c.hog.band_height_px = std::stoi(parts[1]);
+  }
+  if (o.threshold >= 0) c.alv.threshold_frac = o.threshold;
+  if (o.no_compass) c.use_compass = false;
+  if (o.equalize) c.equalize_histogram = true;
+  if (o.warp) c.warp_compensation = true;
+  // Whole cells of the band only: a band shorter than a cell is widened to one cell.
+  if (c.hog.band_height_px > 0 && c.hog.band_height_px < c.hog.cell_size_px) c.hog.band_height_px = c.hog.cell_size_px;
+  c.Validate();
+  return c;
+}
+
+std::string WeightName(nav::CellWeight w) { return w == nav::CellWeight::kLog ? "log" : "magnitude"; }
+std::string DifferenceName(nav::AlvDifference d) {
+  return d == nav::AlvDifference::kCurrentMinusHome ? "current_minus_home" : "home_minus_current";
+}
+
+std::string Describe(const nav::HogHomingConfig& c) {
+  std::ostringstream s;
+  s << "band " << c.hog.band_top_px << "+" << c.hog.band_height_px << " px, cell " << c.hog.cell_size_px << " px, "
+    << c.hog.bins << " bins, range " << nav::OrientationRangeName(c.hog.range) << ", threshold "
+    << c.alv.threshold_frac << ", weight " << WeightName(c.alv.weight) << ", " << DifferenceName(c.alv.difference)
+    << ", compass " << (c.use_compass ? "hog" : "off") << (c.equalize_histogram ? ", equalised" : "")
+    << (c.warp_compensation ? ", warp-compensated" : "");
+  return s.str();
+}
+
+// The thesis' configuration (3.1.3-3.1.4): all bins, every orientation, 40 px cells, 8 bins,
+// magnitude weights, home - current.
+nav::HogHomingConfig ThesisConfig(nav::HogHomingConfig c) {
+  c.hog.cell_size_px = 40;
+  c.hog.bins = 8;
+  c.hog.range = nav::OrientationRange::kAll;
+  c.alv.threshold_frac = 0;
+  c.alv.weight = nav::CellWeight::kMagnitude;
+  c.alv.difference = nav::AlvDifference::kHomeMinusCurrent;
+  if (c.hog.band_height_px > 0 && c.hog.band_height_px < 40) c.hog.band_height_px = 40;
+  return c;
+}
+
+void Progress(const std::string& what, int done, int total) {
+  if (done == total || done % 10 == 0) {
+    std::cerr << "eval-homing: " << what << " " << done << "/" << total << (done == total ? "\n" : "\r") << std::flush;
+  }
+}
+
+double Aae(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos, const nav::HogHomingConfig& c,
+           const nav::PanoramaModel& pm, eval::GridResult* out = nullptr) {
+  eval::HogMethod m(c, pm);
+  auto r = eval::EvaluatePanoramas(db, panos, m);
+  if (out) *out = r;
+  return r.aae_deg;
+}
+
+plot::Axes MakeAxes(const std::string& title, const std::string& x_label, const std::string& y_label) {
+  plot::Axes axes;
+  axes.title = title;
+  axes.x_label = x_label;
+  axes.y_label = y_label;
+  return axes;
+}
+
+std::string Fixed(double v, int digits = 2) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+int Main(int argc, char** argv) {
+  std::string scene_name = "indoor13", method = "hog", home_text, out_dir, input = "raw";
+  std::string config_path = SNAPNAV_CONFIG_DIR "/homing.ini", sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini";
+  std::string entropy_scenes = "indoor13,indoor_objects11,outdoor11";
+  bool random_headings = false, sweep = false, quick = false, no_return = false;
+  int seed = 1;
+  Overrides o;
+  eval::ReturnOptions ret;
+  glue::Flags flags("eval-homing",
+                    "Evaluates snapshot homing over a scene's grid database (thesis 3.1.4): angular error at every\n"
+                    "grid position, AAE, closed-loop return ratio, vector map; figures (AAE by cell size and\n"
+                    "descriptor range, by noise, entropy by cell size) and, with --sweep, a parameter table.\n"
+                    "Writes OUT/summary.json, PNGs, and OUT/report.md.");
+  flags.AddString("scene", &scene_name, "scene name (config/scenes) or file");
+  flags.AddString("method", &method, "homing method: hog");
+  flags.AddString("home", &home_text, "home position X,Y [m] (a grid position; default: the grid centre)");
+  flags.AddString("config", &config_path, "homing config (its [hog], [compass], [alv], [preprocess])");
+  flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama)");
+  flags.AddString("input", &input, "raw (render catadioptric images and unwrap) or panorama (render panoramas)");
+  flags.AddBool("random-headings", &random_headings, "grid images at random headings (exercises the compass)");
+  flags.AddInt("seed", &seed, "seed for headings, people and noise");
+  flags.AddInt("cell", &o.cell, "override: cell size [px]");
+  flags.AddInt("bins", &o.bins, "override: orientation bins");
+  flags.AddString("range", &o.range, "override: all|vertical|horizontal|narrow_vertical");
+  flags.AddDouble("threshold", &o.threshold, "override: dominant-bin threshold fraction");
+  flags.AddString("weight", &o.weight, "override: magnitude|log");
+  flags.AddString("difference", &o.difference, "override: current_minus_home|home_minus_current");
+  flags.AddString("band", &o.band, "override: TOP,HEIGHT band rows");
+  flags.AddBool("no-compass", &o.no_compass, "override: assume the views share a heading");
+  flags.AddBool("equalize", &o.equalize, "override: histogram equalisation (3.1.5)");
+  flags.AddBool("warp", &o.warp, "override: warping compensation (3.1.6)");
+  flags.AddDouble("step-m", &ret.step_m, "return run: step length [m]");
+  flags.AddBool("no-return", &no_return, "skip the closed-loop return runs");
+  flags.AddBool("quick", &quick, "AAE, vector map and return ratio only (no figures)");
+  flags.AddBool("sweep", &sweep, "also write sweep.md/sweep.csv: AAE for cell x bins x threshold x range x weight");
+  flags.AddString("entropy-scenes", &entropy_scenes, "scenes of the entropy figure");
+  flags.AddString("out", &out_dir, "output folder (required)");
+  if (!flags.Parse(argc, argv)) return 0;
+  if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
+  if (method != "hog") throw glue::FlagError("--method '" + method + "' is not available (available: hog)");
+  if (input != "raw" && input != "panorama") throw glue::FlagError("--input must be raw or panorama");
+  fs::create_directories(out_dir);
+  const fs::path out(out_dir);
+
+  const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  const auto homing_ini = glue::IniFile::Load(config_path);
+  const auto homing = processes::HomingConfig::FromIni(homing_ini, "");
+  const nav::PanoramaModel& pm = sim.camera.panorama;
+  if (homing.panorama.width_px != pm.width_px || homing.panorama.height_px != pm.height_px) {
+    throw glue::ConfigError(config_path + ": [panorama] is " + std::to_string(homing.panorama.width_px) + "x" +
+                            std::to_string(homing.panorama.height_px) + ", the camera of " + sim_config_path + " makes " +
+                            std::to_string(pm.width_px) + "x" + std::to_string(pm.height_px));
+  }
+  const nav::HogHomingConfig config = Apply(homing.homing, o);
+  const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
+
+  eval::GridOptions grid;
+  if (!home_text.empty()) {
+    const auto parts = glue::SplitList(home_text);
+    if (parts.size() != 2) throw glue::FlagError("--home must be X,Y");
+    grid.home = Eigen::Vector2d(std::stod(parts[0]), std::stod(parts[1]));
+  }
+  grid.random_headings = random_headings;
+  grid.seed = static_cast<uint64_t>(seed);
+  grid.input = input == "raw" ? CameraPipeline::Input::kRaw : CameraPipeline::Input::kPanorama;
+  CameraPipeline pipeline;
+  pipeline.input = grid.input;
+
+  std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, input "
+            << input << ", " << Describe(config) << "\n";
+  eval::ViewRenderer renderer(scene, sim.camera, static_cast<uint64_t>(seed));
+  const auto db = eval::RenderGrid(scene, renderer, grid, [](int d, int t) { Progress("rendering grid", d, t); });
+  std::vector<cv::Mat> panos;
+  for (const auto& s : db.sensor) panos.push_back(renderer.ToPanorama(s, pipeline));
+
+  eval::GridResult result;
+  Aae(db, panos, config, pm, &result);
+  const double fps = result.seconds_in_method > 0 ? result.method_calls / result.seconds_in_method : 0;
+  std::cerr << "eval-homing: AAE " << Fixed(result.aae_deg) << " deg (median " << Fixed(result.median_deg) << ", max "
+            << Fixed(result.max_deg) << ", " << result.failures << " without an answer), compass error "
+            << Fixed(result.compass_mean_deg) << " deg, " << Fixed(fps, 0) << " vectors/s\n";
+  const double thesis_aae = Aae(db, panos, ThesisConfig(config), pm);
+  nav::HogHomingConfig thesis_lambrinos = ThesisConfig(config);
+  thesis_lambrinos.alv.difference = nav::AlvDifference::kCurrentMinusHome;
+  const double thesis_lambrinos_aae = Aae(db, panos, thesis_lambrinos, pm);
+  std::cerr << "eval-homing: thesis configuration AAE " << Fixed(thesis_aae) << " deg (with current - home: "
+            << Fixed(thesis_lambrinos_aae) << " deg)\n";
+
+  eval::ReturnResult returns;
+  if (!no_return) {
+    eval::HogMethod m(config, pm);
+    returns = eval::EvaluateReturn(db, m, renderer, pipeline, ret, [](int d, int t) { Progress("return runs", d, t); });
+    std::cerr << "eval-homing: return ratio " << Fixed(returns.ratio, 3) << " (" << returns.successes << "/"
+              << returns.starts << "), mean path / straight line " << Fixed(returns.mean_path_ratio) << "\n";
+  }
+  std::vector<std::string> figures;
+  auto save = [&](const cv::Mat& img, const std::string& name) {
+    plot::SavePng(img, (out / name).string());
+    figures.push_back(name);
+  };
+  save(eval::DrawVectorMap(db, result,
+                           scene.name + " hog: AAE " + Fixed(result.aae_deg, 1) + " deg" +
+                               (no_return ? std::string() : ", return ratio " + Fixed(returns.ratio, 2)),
+                           no_return ? nullptr : &returns),
+       "vector_map.png");
+  {
+    eval::GridResult thesis_result;
+    Aae(db, panos, ThesisConfig(config), pm, &thesis_result);
+    save(eval::DrawVectorMap(db, thesis_result, scene.name + " thesis configuration: AAE " + Fixed(thesis_aae, 1) + " deg"),
+         "vector_map_thesis_config.png");
+  }
+
+  std::ostringstream report;
+  report << "# Homing evaluation: " << scene.name << "\n\n"
+         << "- configuration: " << Describe(config) << "\n- input: " << input << ", headings "
+         << (random_headings ? "random" : "all 0") << ", home (" << db.home.x_m << ", " << db.home.y_m << ")\n\n"
+         << "| | AAE [deg] | median | max | return ratio |\n|---|---|---|---|---|\n"
+         << "| this configuration | " << Fixed(result.aae_deg) << " | " << Fixed(result.median_deg) << " | "
+         << Fixed(result.max_deg) << " | " << (no_return ? "-" : Fixed(returns.ratio, 3)) << " |\n"
+         << "| thesis configuration (40 px, 8 bins, all, home - current) | " << Fixed(thesis_aae) << " | | | |\n"
+         << "| thesis configuration with current - home | " << Fixed(thesis_lambrinos_aae) << " | | | |\n"
+         << "| thesis' own figure (3.1.4) | 18.11 | | | |\n\n";
+
+  // Cell sizes of the figures; a band lower than a cell is widened to one cell.
+  const std::vector<int> cells = {10, 20, 30, 40, 60};
+  const std::vector<nav::OrientationRange> ranges = {nav::OrientationRange::kAll, nav::OrientationRange::kVertical,
+                                                      nav::OrientationRange::kHorizontal,
+                                                      nav::OrientationRange::kNarrowVertical};
+  auto with = [&](int cell, nav::OrientationRange range, double thr) {
+    nav::HogHomingConfig c = config;
+    c.hog.cell_size_px = cell;
+    c.hog.range = range;
+    c.alv.threshold_frac = thr;
+    if (c.hog.band_height_px > 0 && c.hog.band_height_px < cell) c.hog.band_height_px = cell;
+    if (c.hog.band_top_px + std::max(c.hog.band_height_px, cell) > pm.height_px) c.hog.band_top_px = pm.height_px - cell;
+    return c;
+  };
+  if (!quick) {
+    // AAE by cell size and descriptor range (fig. 3.9), at thresholds 0, 0.3 and 0.5.
+    report << "## AAE by cell size and descriptor range (thesis fig. 3.9)\n\n| threshold | cell [px] |";
+    for (auto r : ranges) report << " " << nav::OrientationRangeName(r) << " |";
+    report << "\n|---|---|---|---|---|---|\n";
+    for (double thr : {0.0, 0.3, 0.5}) {
+      std::vector<plot::BarGroup> groups;
+      for (int c : cells) {
+        plot::BarGroup g{std::to_string(c) + " px", {}};
+        report << "| " << thr << " | " << c << " |";
+        for (auto r : ranges) {
+          g.values.push_back(Aae(db, panos, with(c, r, thr), pm));
+          report << " " << Fixed(g.values.back(), 1) << " |";
+        }
+        report << "\n";
+        groups.push_back(g);
+      }
+      std::vector<std::string> names;
+      for (auto r : ranges) names.push_back(nav::OrientationRangeName(r));
+      plot::Axes axes = MakeAxes("AAE by cell size and descriptor range, threshold " + Fixed(thr, 1) + " (" + scene.name + ")",
+                      "cell size", "average angular error [deg]");
+      axes.value_labels = true;
+      save(plot::BarChart(axes, names, groups), "aae_by_cell_range_thr" + Fixed(thr, 1) + ".png");
+      std::cerr << "eval-homing: AAE by cell and range at threshold " << thr << " done\n";
+    }
+    report << "\n";
+    // AAE by noise type and level (fig. 3.12).
+    struct Noise { std::string name, unit; std::vector<double> levels; };
+    const std::vector<Noise> noises = {{"Gaussian blur", "sigma [px]", {0, 1, 2, 4, 8}},
+                                       {"low resolution", "scale", {1.0, 0.5, 0.3, 0.2, 0.1}},
+                                       {"salt and pepper", "fraction", {0, 0.01, 0.05, 0.1, 0.2}},
+                                       {"Gaussian noise", "sigma [grey levels]", {0, 5, 10, 20, 40}}};
+    report << "## AAE by noise type and level (thesis fig. 3.12)\n\n| noise | level | AAE [deg] |\n|---|---|---|\n";
+    std::vector<cv::Mat> charts;
+    for (size_t k = 0; k < noises.size(); ++k) {
+      plot::Series s{scene.name, {}, {}};
+      for (double level : noises[k].levels) {
+        CameraPipeline p = pipeline;
+        if (k == 0) p.effects.blur_sigma_px = level;
+        if (k == 1) p.low_resolution_scale = level;
+        if (k == 2) p.effects.salt_pepper_fraction = level;
+        if (k == 3) p.effects.noise_sigma = level;
+        std::vector<cv::Mat> noisy;
+        for (const auto& img : db.sensor) noisy.push_back(renderer.ToPanorama(img, p));
+        s.x.push_back(level);
+        s.y.push_back(Aae(db, noisy, config, pm));
+        report << "| " << noises[k].name << " | " << level << " | " << Fixed(s.y.back(), 1) << " |\n";
+      }
+      plot::Axes axes = MakeAxes(noises[k].name, noises[k].unit, "AAE [deg]");
+      axes.y_from_zero = true;
+      charts.push_back(plot::LineChart(axes, {s}, {600, 400}));
+      std::cerr << "eval-homing: noise '" << noises[k].name << "' done\n";
+    }
+    cv::Mat top, bottom, all;
+    cv::hconcat(charts[0], charts[1], top);
+    cv::hconcat(charts[2], charts[3], bottom);
+    cv::vconcat(top, bottom, all);
+    save(all, "aae_by_noise.png");
+    report << "\n## Entropy by cell size (thesis fig. 3.13)\n\n| scene | cell [px] | entropy [bits] |\n|---|---|---|\n";
+    // Entropy by cell size (fig. 3.13), per scene.
+    std::vector<plot::Series> entropy;
+    for (const auto& name : glue::SplitList(entropy_scenes)) {
+      const auto s = name == scene.name ? scene : processes::LoadSceneFile(processes::SceneFilePath(name));
+      std::vector<cv::Mat> images;
+      if (name == scene.name) {
+        images = panos;
+      } else {
+        eval::ViewRenderer r(s, sim.camera, static_cast<uint64_t>(seed));
+        eval::GridOptions g;
+        g.input = CameraPipeline::Input::kPanorama;
+        g.seed = static_cast<uint64_t>(seed);
+        const auto other = eval::RenderGrid(s, r, g);
+        CameraPipeline p;
+        p.input = CameraPipeline::Input::kPanorama;
+        for (const auto& img : other.sensor) images.push_back(r.ToPanorama(img, p));
+      }
+      plot::Series series{s.name, {}, {}};
+      for (int c : cells) {
+        const auto cfg = with(c, config.hog.range, 0);
+        double sum = 0;
+        for (const auto& img : images) {
+          cv::Mat gray;
+          cv::cvtColor(img, gray, cv::COLOR_BGR2GRAY);
+          sum += nav::CellEntropyBits(nav::CellsAtShift(nav::ColumnHistograms(gray, cfg.hog), c, 0));
+        }
+        series.x.push_back(c);
+        series.y.push_back(sum / images.size());
+        report << "| " << s.name << " | " << c << " | " << Fixed(series.y.back(), 3) << " |\n";
+      }
+      entropy.push_back(series);
+    }
+    plot::Axes axes = MakeAxes("Mean cell entropy by cell size (" + std::string(nav::OrientationRangeName(config.hog.range)) + ")",
+                    "cell size [px]", "entropy [bits]");
+    save(plot::LineChart(axes, entropy), "entropy_by_cell.png");
+    std::cerr << "eval-homing: entropy done\n";
+  }
+
+  if (sweep) {
+    std::ofstream csv(out / "sweep.csv");
+    csv << "cell_px,bins,threshold,range,weight,aae_deg,median_deg,failures\n";
+    std::ostringstream md;
+    md << "# AAE sweep: " << scene.name << " (" << input << ", headings " << (random_headings ? "random" : "0")
+       << ", compass " << (config.use_compass ? "hog" : "off") << ", band " << config.hog.band_top_px << "+"
+       << config.hog.band_height_px << ")\n\n| cell | bins | threshold | range | weight | AAE [deg] | median | failures |\n"
+       << "|---|---|---|---|---|---|---|---|\n";
+    const std::vector<int> bins = {8, 16, 36};
+    const int total = static_cast<int>(cells.size() * bins.size() * 3 * ranges.size() * 2);
+    int done = 0;
+    double best = 1e9;
+    std::string best_row;
+    for (int c : cells) {
+      for (int b : bins) {
+        for (double thr : {0.0, 0.3, 0.5}) {
+          for (auto r : ranges) {
+            for (auto w : {nav::CellWeight::kMagnitude, nav::CellWeight::kLog}) {
+              auto cfg = with(c, r, thr);
+              cfg.hog.bins = b;
+              cfg.alv.weight = w;
+              eval::GridResult gr;
+              Aae(db, panos, cfg, pm, &gr);
+              csv << c << "," << b << "," << thr << "," << nav::OrientationRangeName(r) << "," << WeightName(w) << ","
+                  << Fixed(gr.aae_deg, 3) << "," << Fixed(gr.median_deg, 3) << "," << gr.failures << "\n";
+              const std::string row = "| " + std::to_string(c) + " | " + std::to_string(b) + " | " + Fixed(thr, 1) +
+                                      " | " + nav::OrientationRangeName(r) + " | " + WeightName(w) + " | " +
+                                      Fixed(gr.aae_deg) + " | " + Fixed(gr.median_deg) + " | " +
+                                      std::to_string(gr.failures) + " |\n";
+              md << row;
+              if (gr.aae_deg < best) {
+                best = gr.aae_deg;
+                best_row = row;
+              }
+              Progress("sweep", ++done, total);
+            }
+          }
+        }
+      }
+    }
+    md << "\nBest: \n\n| cell | bins | threshold | range | weight | AAE [deg] | median | failures |\n"
+       << "|---|---|---|---|---|---|---|---|\n" << best_row;
+    std::ofstream(out / "sweep.md") << md.str();
+    report << "\n## Sweep\n\nBest of " << total << " configurations (sweep.md, sweep.csv):\n\n"
+           << "| cell | bins | threshold | range | weight | AAE [deg] | median | failures |\n"
+           << "|---|---|---|---|---|---|---|---|\n" << best_row;
+  }
+
+  std::ofstream json(out / "summary.json");
+  json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"method\": \"" << method
+       << "\",\n  \"input\": \"" << input << "\",\n  \"random_headings\": " << (random_headings ? "true" : "false")
+       << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
+       << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
+       << ",\n  \"average_angular_error_deg\": " << result.aae_deg
+       << ",\n  \"median_angular_error_deg\": " << result.median_deg
+       << ",\n  \"max_angular_error_deg\": " << result.max_deg << ",\n  \"positions_without_answer\": " << result.failures
+       << ",\n  \"compass_mean_error_deg\": " << result.compass_mean_deg
+       << ",\n  \"thesis_configuration_aae_deg\": " << thesis_aae
+       << ",\n  \"thesis_configuration_current_minus_home_aae_deg\": " << thesis_lambrinos_aae
+       << ",\n  \"thesis_reported_aae_deg\": 18.11";
+  if (!no_return) {
+    json << ",\n  \"return_ratio\": " << returns.ratio << ",\n  \"return_starts\": " << returns.starts
+         << ",\n  \"return_successes\": " << returns.successes << ",\n  \"return_mean_path_ratio\": " << returns.mean_path_ratio
+         << ",\n  \"return_step_m\": " << ret.step_m;
+  }
+  json << ",\n  \"frames_per_second\": " << fps << ",\n  \"ms_per_frame\": " << (fps > 0 ? 1000 / fps : 0)
+       << ",\n  \"figures\": [";
+  for (size_t i = 0; i < figures.size(); ++i) json << (i ? ", " : "") << "\"" << figures[i] << "\"";
+  json << "]\n}\n";
+  std::ofstream(out / "report.md") << report.str();
+  std::cerr << "eval-homing: wrote " << (out / "summary.json").string() << ", report.md and " << figures.size()
+            << " figures\n";
+  std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
+  if (!no_return) std::cout << "return_ratio " << Fixed(returns.ratio, 3) << "\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return glue::RunMain(argc, argv, Main); }

@@ -1,0 +1,128 @@
+#pragma once
+// Homing evaluation over a scene's grid database (thesis 3.1.4, Appendix A):
+// the image database, the angular error at every grid position, the average
+// angular error (AAE), and the closed-loop return ratio with images rendered at
+// the robot's actual pose.
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/pose2.hpp"
+#include "snapnav/nav/sim/omni_renderer.hpp"
+#include "snapnav/nav/sim/scene.hpp"
+#include "snapnav/nav/unwrap.hpp"
+
+namespace snapnav::eval {
+
+// A homing method under test: set a home view, then ask for the direction home.
+class HomingMethod {
+ public:
+  virtual ~HomingMethod() = default;
+  virtual std::string name() const = 0;
+  virtual void SetHome(const cv::Mat& panorama) = 0;
+  virtual std::optional<nav::HomingEstimate> Home(const cv::Mat& panorama) = 0;
+};
+
+class HogMethod : public HomingMethod {
+ public:
+  HogMethod(const nav::HogHomingConfig& config, const nav::PanoramaModel& panorama) : homer_(config, panorama) {}
+  std::string name() const override { return "hog"; }
+  void SetHome(const cv::Mat& panorama) override { homer_.SetHome(panorama); }
+  std::optional<nav::HomingEstimate> Home(const cv::Mat& panorama) override { return homer_.Home(panorama); }
+
+ private:
+  nav::HogHomer homer_;
+};
+
+// How images reach the method: rendered as raw catadioptric images and unwrapped (the
+// real pipeline), or rendered directly as panoramas; with optional image effects.
+struct CameraPipeline {
+  enum class Input { kRaw, kPanorama } input = Input::kRaw;
+  nav::sim::ImageEffectsOptions effects;
+  double low_resolution_scale = 1.0;  // < 1: downsample (nearest) and back (thesis fig. 3.12 b)
+};
+
+class ViewRenderer {
+ public:
+  ViewRenderer(const nav::sim::Scene& scene, const nav::sim::OmniCameraOptions& camera, uint64_t seed);
+  // The sensor image (raw or panorama) seen from `pose`, before effects.
+  cv::Mat Sensor(const nav::Pose2& pose, CameraPipeline::Input input, const std::vector<nav::sim::Cylinder>& people);
+  // Effects and unwrap: sensor image -> panorama given to the method.
+  cv::Mat ToPanorama(const cv::Mat& sensor, const CameraPipeline& pipeline);
+  const nav::PanoramaModel& panorama_model() const { return camera_.panorama; }
+
+ private:
+  nav::sim::OmniCameraOptions camera_;
+  nav::sim::OmniRenderer renderer_;
+  nav::Unwrapper unwrapper_;
+  std::mt19937_64 rng_;
+};
+
+// The grid image database: one sensor image per grid position.
+struct GridDatabase {
+  int nx = 0, ny = 0;
+  std::vector<nav::Pose2> poses;   // true poses, index iy * nx + ix
+  std::vector<cv::Mat> sensor;     // sensor images (raw or panorama)
+  int home_index = 0;
+  nav::Pose2 home;
+};
+struct GridOptions {
+  std::optional<Eigen::Vector2d> home;  // default: the grid centre
+  bool random_headings = false;         // else heading 0 everywhere (the home is always heading 0)
+  uint64_t seed = 1;
+  CameraPipeline::Input input = CameraPipeline::Input::kRaw;
+};
+GridDatabase RenderGrid(const nav::sim::Scene& scene, ViewRenderer& renderer, const GridOptions& options,
+                        const std::function<void(int, int)>& progress = {});
+
+struct GridResult {
+  std::vector<double> error_rad;   // per grid position, NaN at home; pi where no estimate
+  std::vector<double> direction_world_rad;  // estimated direction in the world frame (NaN: none)
+  std::vector<double> compass_error_rad;    // |compass rotation - true rotation| (NaN at home)
+  int positions = 0, failures = 0;
+  double aae_deg = 0, median_deg = 0, max_deg = 0, compass_mean_deg = 0;
+  double seconds_in_method = 0;   // time spent in Home() calls
+  int method_calls = 0;
+};
+// Angular error at every grid position (thesis' AAE). The panoramas are made with `pipeline`.
+GridResult EvaluateGrid(const GridDatabase& db, HomingMethod& method, ViewRenderer& renderer,
+                        const CameraPipeline& pipeline);
+// Same on precomputed panoramas (index as db.poses).
+GridResult EvaluatePanoramas(const GridDatabase& db, const std::vector<cv::Mat>& panoramas, HomingMethod& method);
+
+struct ReturnOptions {
+  double step_m = 0.1;
+  double success_radius_m = 0.2;
+  double max_path_factor = 3.0;  // path length limit: this times the straight-line distance
+};
+struct ReturnRun {
+  std::vector<Eigen::Vector2d> path;
+  bool success = false;
+  double path_length_m = 0;
+};
+struct ReturnResult {
+  std::vector<ReturnRun> runs;  // one per start (grid positions outside the success radius)
+  int starts = 0, successes = 0;
+  double ratio = 0;
+  double mean_path_ratio = 0;   // successful runs: path length / straight-line distance
+};
+// Closed loop: from each grid position, step along the computed vector (the robot turns to
+// face it), rendering the view at the actual pose each step.
+ReturnResult EvaluateReturn(const GridDatabase& db, HomingMethod& method, ViewRenderer& renderer,
+                            const CameraPipeline& pipeline, const ReturnOptions& options,
+                            const std::function<void(int, int)>& progress = {});
+
+// Vector map (thesis figs. 3.6-3.7): an arrow per grid position, coloured by error, the home
+// marked; with return paths if given.
+cv::Mat DrawVectorMap(const GridDatabase& db, const GridResult& result, const std::string& title,
+                      const ReturnResult* paths = nullptr);
+
+}  // namespace snapnav::eval
