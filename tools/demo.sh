@@ -49,18 +49,21 @@ replay_rc=0; wait "$verify_pid" || replay_rc=$?
 rm -f "$OUT"/.*.ready "$PROBES"
 sed 's/^/  live:   /' "$OUT/probes-live.txt"; sed 's/^/  replay: /' "$OUT/probes-replay.txt"
 
-step "2/3 simulated lab '$SCENE' for $DURATION s in real time: sim + dead-reckoning, lcm-logger recording"
+step "2/3 simulated lab '$SCENE' for $DURATION s in real time: sim + dead-reckoning + homing, lcm-logger recording"
 LOG="$OUT/run.lcmlog"
 lcm-logger -f -q "$LOG" &
 logger_pid=$!; pids+=($logger_pid)
 "$BIN/dead-reckoning" 2>"$OUT/dead-reckoning.log" &
 dr_pid=$!; pids+=($dr_pid)
+"$BIN/homing" --home-first 2>"$OUT/homing.log" &
+homing_pid=$!; pids+=($homing_pid)
 sleep 0.5
 sim_rc=0
 "$BIN/sim" --scene "$SCENE" --duration-s "$DURATION" --mode realtime 2>&1 | tee "$OUT/sim.log" | grep --line-buffered -E "^sim: (t=|done)" | sed 's/^/  /' || sim_rc=$?
 sleep 0.5
-kill -INT "$dr_pid" "$logger_pid"; wait "$dr_pid" || true; wait "$logger_pid" || true
+kill -INT "$dr_pid" "$homing_pid" "$logger_pid"; wait "$dr_pid" || true; wait "$homing_pid" || true; wait "$logger_pid" || true
 sed 's/^/  /' "$OUT/dead-reckoning.log" | grep -E "published|ODOMETRY|POSE" || true
+sed 's/^/  /' "$OUT/homing.log" | grep -E "^homing: (published|frames|home)|HOMING_VECTOR" || true
 
 step "3/3 report"
 report_rc=0

@@ -88,6 +88,8 @@ bool Bus::HandleOnce(int timeout_ms) {
     end_of_log_ = true;
     return false;
   }
+  // A signal interrupting the wait (SIGINT, SIGTERM) is a shutdown, not a failure.
+  if (r < 0 && ShutdownRequested()) return false;
   if (r < 0) throw std::runtime_error("LCM handle failed on " + url_);
   return r > 0;
 }

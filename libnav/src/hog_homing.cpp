@@ -173,27 +173,32 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
   }
   const HogCells h = CellsAtShift(home, cell_size_px, 0);
   CompassResult result;
-  const int w = home.width();
-  result.distance_by_shift.resize(w);
-  std::vector<double> cell(static_cast<size_t>(home.bins()));
-  int best = 0;
-  for (int s = 0; s < w; ++s) {
-    double d = 0;
-    for (int r = 0; r < h.cell_rows; ++r) {
-      for (int p = 0; p < h.cell_cols; ++p) {
-        std::fill(cell.begin(), cell.end(), 0.0);
-        current.AddRun(r, s + p * cell_size_px, cell_size_px, cell.data());
-        const double* ref = &h.values[(static_cast<size_t>(r) * h.cell_cols + p) * h.bins];
+  const int w = home.width(), bins = home.bins();
+  result.distance_by_shift.assign(w, 0.0);
+  // The current view's cell histogram starting at every column, per cell row: each shift
+  // then reads contiguous memory instead of summing runs.
+  std::vector<double> starts(static_cast<size_t>(w) * bins);
+  for (int r = 0; r < h.cell_rows; ++r) {
+    std::fill(starts.begin(), starts.end(), 0.0);
+    for (int x = 0; x < w; ++x) current.AddRun(r, x, cell_size_px, &starts[static_cast<size_t>(x) * bins]);
+    for (int p = 0; p < h.cell_cols; ++p) {
+      const double* ref = &h.values[(static_cast<size_t>(r) * h.cell_cols + p) * bins];
+      for (int s = 0; s < w; ++s) {
+        int x = s + p * cell_size_px;
+        if (x >= w) x -= w * (x / w);
+        const double* cur = &starts[static_cast<size_t>(x) * bins];
         double d2 = 0;
-        for (int q = 0; q < h.bins; ++q) {
-          const double diff = cell[q] - ref[q];
+        for (int q = 0; q < bins; ++q) {
+          const double diff = cur[q] - ref[q];
           d2 += diff * diff;
         }
-        d += std::sqrt(d2);  // Euclidean distance per cell (3.1.2), summed
+        result.distance_by_shift[s] += std::sqrt(d2);  // Euclidean distance per cell (3.1.2), summed
       }
     }
-    result.distance_by_shift[s] = d;
-    if (d < result.distance_by_shift[best]) best = s;
+  }
+  int best = 0;
+  for (int s = 1; s < w; ++s) {
+    if (result.distance_by_shift[s] < result.distance_by_shift[best]) best = s;
   }
   // Sub-column refinement: vertex of the parabola through the minimum and its neighbours.
   const double dm = result.distance_by_shift[(best + w - 1) % w], d0 = result.distance_by_shift[best],

@@ -17,7 +17,7 @@ Unwrapper::Unwrapper(const MirrorModel& mirror, const PanoramaModel& panorama, c
   if (raw_size.width <= 0 || raw_size.height <= 0) throw std::invalid_argument("unwrap: empty raw image size");
   const double lo = std::min(mirror.elevation_inner_rad, mirror.elevation_outer_rad);
   const double hi = std::max(mirror.elevation_inner_rad, mirror.elevation_outer_rad);
-  if (panorama.elevation_bottom_rad < lo - 1e-9 || panorama.elevation_top_rad > hi + 1e-9) {
+  if (panorama.elevation_bottom_rad < lo - 1e-6 || panorama.elevation_top_rad > hi + 1e-6) {
     throw std::invalid_argument("unwrap: the panorama's elevations lie outside what the mirror sees");
   }
   if (mirror.center_x_px < 0 || mirror.center_y_px < 0 || mirror.center_x_px >= raw_size.width ||

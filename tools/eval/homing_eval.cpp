@@ -188,7 +188,7 @@ ReturnResult EvaluateReturn(const GridDatabase& db, HomingMethod& method, ViewRe
     }
     if (run.success) {
       ++result.successes;
-      path_ratio_sum += run.path_length_m / straight;
+      path_ratio_sum += run.path_length_m / std::max(1e-9, straight - options.success_radius_m);
     }
     result.runs.push_back(std::move(run));
     if (progress) progress(static_cast<int>(k) + 1, static_cast<int>(starts.size()));

@@ -112,7 +112,7 @@ struct ReturnResult {
   std::vector<ReturnRun> runs;  // one per start (grid positions outside the success radius)
   int starts = 0, successes = 0;
   double ratio = 0;
-  double mean_path_ratio = 0;   // successful runs: path length / straight-line distance
+  double mean_path_ratio = 0;   // successful runs: path length / (straight-line distance - success radius)
 };
 // Closed loop: from each grid position, step along the computed vector (the robot turns to
 // face it), rendering the view at the actual pose each step.

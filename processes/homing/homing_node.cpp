@@ -1,0 +1,402 @@
+#include "homing_node.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <initializer_list>
+#include <iostream>
+#include <ostream>
+#include <stdexcept>
+#include <utility>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "snapnav/glue/image_msg.hpp"
+#include "snapnav/homing_vector_t.hpp"
+#include "snapnav/landmark_set_t.hpp"
+#include "snapnav/nav/pose2.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+// Panorama geometry of a frame and of the config may differ by float rounding [rad].
+constexpr double kGeometryTolerance_rad = 1e-4;
+
+template <class E>
+E ReadChoice(const glue::IniFile& ini, const std::string& section, const std::string& key,
+             std::initializer_list<std::pair<const char*, E>> choices) {
+  const std::string value = ini.GetString(section, key);
+  std::string names;
+  for (const auto& [name, e] : choices) {
+    if (value == name) return e;
+    names += names.empty() ? name : std::string(" | ") + name;
+  }
+  throw glue::ConfigError(ini.origin() + ": [" + section + "] " + key + " = '" + value + "': expected " + names);
+}
+
+nav::OrientationRange ReadRange(const glue::IniFile& ini, const std::string& section) {
+  const std::string value = ini.GetString(section, "range");
+  if (const auto r = nav::ParseOrientationRange(value)) return *r;
+  throw glue::ConfigError(ini.origin() + ": [" + section + "] range = '" + value +
+                          "': expected all | vertical | horizontal | narrow_vertical");
+}
+
+nav::HogOptions ReadHog(const glue::IniFile& ini, const std::string& section) {
+  nav::HogOptions o;
+  o.band_top_px = ini.GetInt(section, "band_top_px");
+  o.band_height_px = ini.GetInt(section, "band_height_px");
+  o.cell_size_px = ini.GetInt(section, "cell_size_px");
+  o.bins = ini.GetInt(section, "bins");
+  o.range = ReadRange(ini, section);
+  return o;
+}
+
+void CheckBand(const nav::HogOptions& o, const nav::PanoramaModel& p, const std::string& section,
+               const std::string& origin) {
+  const int band_h = o.band_height_px > 0 ? o.band_height_px : p.height_px - o.band_top_px;
+  if (o.band_top_px < 0 || o.band_top_px + band_h > p.height_px || band_h < o.cell_size_px ||
+      o.cell_size_px > p.width_px) {
+    throw glue::ConfigError(origin + ": [" + section + "] the band (band_top_px " + std::to_string(o.band_top_px) +
+                            ", band_height_px " + std::to_string(o.band_height_px) +
+                            ") must hold at least one cell of cell_size_px " + std::to_string(o.cell_size_px) +
+                            " inside the " + std::to_string(p.width_px) + "x" + std::to_string(p.height_px) +
+                            " panorama");
+  }
+}
+
+bool SameMirror(const nav::MirrorModel& a, const nav::MirrorModel& b) {
+  return a.center_x_px == b.center_x_px && a.center_y_px == b.center_y_px && a.inner_radius_px == b.inner_radius_px &&
+         a.outer_radius_px == b.outer_radius_px && a.elevation_inner_rad == b.elevation_inner_rad &&
+         a.elevation_outer_rad == b.elevation_outer_rad;
+}
+
+bool IsZeroMirror(const omni_frame_t& f) {
+  return f.mirror_center_x_px == 0 && f.mirror_center_y_px == 0 && f.mirror_inner_radius_px == 0 &&
+         f.mirror_outer_radius_px == 0 && f.mirror_elevation_inner_rad == 0 && f.mirror_elevation_outer_rad == 0;
+}
+
+std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
+
+const char* InputName(HomingInput i) { return i == HomingInput::kRaw ? "raw" : "panorama"; }
+const char* HomeName(HomeSource h) {
+  switch (h) {
+    case HomeSource::kMessage:
+      return "message";
+    case HomeSource::kImage:
+      return "image";
+    case HomeSource::kFirst:
+      return "first";
+  }
+  return "?";
+}
+
+}  // namespace
+
+HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  HomingConfig c;
+  c.omni_channel = channel_prefix + ini.GetString("channels", "omni");
+  c.panorama_channel = channel_prefix + ini.GetString("channels", "panorama");
+  c.home_snapshot_channel = channel_prefix + ini.GetString("channels", "home_snapshot");
+  c.homing_vector_channel = channel_prefix + ini.GetString("channels", "homing_vector");
+
+  c.input = ReadChoice<HomingInput>(ini, "homing", "input",
+                                    {{"raw", HomingInput::kRaw}, {"panorama", HomingInput::kPanorama}});
+  c.home = ReadChoice<HomeSource>(
+      ini, "homing", "home",
+      {{"message", HomeSource::kMessage}, {"image", HomeSource::kImage}, {"first", HomeSource::kFirst}});
+  c.home_image = ini.GetString("homing", "home_image");
+  if (!c.home_image.empty() && std::filesystem::path(c.home_image).is_relative()) {
+    // Relative to the config file's folder, so the config works from any working directory.
+    c.home_image = (std::filesystem::path(ini.origin()).parent_path() / c.home_image).lexically_normal().string();
+  }
+  c.home_image_raw = ReadChoice<bool>(ini, "homing", "home_image_kind", {{"raw", true}, {"panorama", false}});
+
+  c.panorama.width_px = ini.GetInt("panorama", "width_px");
+  c.panorama.height_px = ini.GetInt("panorama", "height_px");
+  c.panorama.elevation_top_rad = ini.GetDouble("panorama", "elevation_top_deg") * kDeg;
+  c.panorama.elevation_bottom_rad = ini.GetDouble("panorama", "elevation_bottom_deg") * kDeg;
+
+  c.mirror.center_x_px = ini.GetDouble("mirror", "center_x_px");
+  c.mirror.center_y_px = ini.GetDouble("mirror", "center_y_px");
+  c.mirror.inner_radius_px = ini.GetDouble("mirror", "inner_radius_px");
+  c.mirror.outer_radius_px = ini.GetDouble("mirror", "outer_radius_px");
+  c.mirror.elevation_inner_rad = ini.GetDouble("mirror", "elevation_inner_deg") * kDeg;
+  c.mirror.elevation_outer_rad = ini.GetDouble("mirror", "elevation_outer_deg") * kDeg;
+
+  auto& h = c.homing;
+  h.hog = ReadHog(ini, "hog");
+  h.hog.narrow_range_deg = ini.GetDouble("hog", "narrow_range_deg");
+  h.use_compass = ini.GetBool("compass", "enabled");
+  h.compass_hog = ReadHog(ini, "compass");
+  h.compass_hog.narrow_range_deg = h.hog.narrow_range_deg;
+
+  h.alv.threshold_frac = ini.GetDouble("alv", "threshold_frac");
+  h.alv.difference = ReadChoice<nav::AlvDifference>(ini, "alv", "difference",
+                                                    {{"current_minus_home", nav::AlvDifference::kCurrentMinusHome},
+                                                     {"home_minus_current", nav::AlvDifference::kHomeMinusCurrent}});
+  h.alv.weight = ReadChoice<nav::CellWeight>(
+      ini, "alv", "weight", {{"magnitude", nav::CellWeight::kMagnitude}, {"log", nav::CellWeight::kLog}});
+  h.alv.log_scale = ini.GetDouble("alv", "log_scale");
+  h.alv.min_bins = ini.GetInt("alv", "min_bins");
+
+  h.equalize_histogram = ini.GetBool("preprocess", "equalize_histogram");
+  h.warp_compensation = ini.GetBool("preprocess", "warp_compensation");
+  h.warp.camera_height_m = ini.GetDouble("preprocess", "camera_height_m");
+  h.warp.height_bottom_m = ini.GetDouble("preprocess", "warp_height_bottom_m");
+  h.warp.height_top_m = ini.GetDouble("preprocess", "warp_height_top_m");
+
+  ini.CheckAllUsed();
+  c.Validate(ini.origin());
+  return c;
+}
+
+void HomingConfig::Validate(const std::string& origin) const {
+  try {
+    panorama.Validate();
+    mirror.Validate();
+    homing.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(origin + ": " + e.what());
+  }
+  CheckBand(homing.hog, panorama, "hog", origin);
+  if (homing.use_compass) CheckBand(homing.compass_hog, panorama, "compass", origin);
+  if (home == HomeSource::kImage && home_image.empty()) {
+    throw glue::ConfigError(origin + ": [homing] home = image needs home_image (or --home-image)");
+  }
+  if (home != HomeSource::kImage && !home_image.empty()) {
+    throw glue::ConfigError(origin + ": [homing] home_image '" + home_image +
+                            "' is only read with home = image (home is " + HomeName(home) + "); leave it empty");
+  }
+  if (home_snapshot_channel == input_channel()) {
+    throw glue::ConfigError(origin + ": [channels] home_snapshot and the input channel are both '" +
+                            home_snapshot_channel + "'");
+  }
+  if (homing_vector_channel == input_channel() || homing_vector_channel == home_snapshot_channel) {
+    throw glue::ConfigError(origin + ": [channels] homing_vector '" + homing_vector_channel +
+                            "' must differ from the input and home_snapshot channels");
+  }
+}
+
+void HomingConfig::Print(std::ostream& out) const {
+  auto print_hog = [&out](const nav::HogOptions& o) {
+    out << "band_top_px = " << o.band_top_px << "\nband_height_px = " << o.band_height_px
+        << "\ncell_size_px = " << o.cell_size_px << "\nbins = " << o.bins
+        << "\nrange = " << nav::OrientationRangeName(o.range) << "\n";
+  };
+  const auto& h = homing;
+  out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel
+      << "\nhome_snapshot = " << home_snapshot_channel << "\nhoming_vector = " << homing_vector_channel << "\n"
+      << "[homing]\ninput = " << InputName(input) << "\nhome = " << HomeName(home) << "\nhome_image = " << home_image
+      << "\nhome_image_kind = " << (home_image_raw ? "raw" : "panorama") << "\n"
+      << "[panorama]\nwidth_px = " << panorama.width_px << "\nheight_px = " << panorama.height_px
+      << "\nelevation_top_deg = " << panorama.elevation_top_rad / kDeg
+      << "\nelevation_bottom_deg = " << panorama.elevation_bottom_rad / kDeg << "\n"
+      << "[mirror]\ncenter_x_px = " << mirror.center_x_px << "\ncenter_y_px = " << mirror.center_y_px
+      << "\ninner_radius_px = " << mirror.inner_radius_px << "\nouter_radius_px = " << mirror.outer_radius_px
+      << "\nelevation_inner_deg = " << mirror.elevation_inner_rad / kDeg
+      << "\nelevation_outer_deg = " << mirror.elevation_outer_rad / kDeg << "\n[hog]\n";
+  print_hog(h.hog);
+  out << "narrow_range_deg = " << h.hog.narrow_range_deg
+      << "\n[compass]\nenabled = " << (h.use_compass ? "true" : "false") << "\n";
+  print_hog(h.compass_hog);
+  out << "[alv]\nthreshold_frac = " << h.alv.threshold_frac << "\ndifference = "
+      << (h.alv.difference == nav::AlvDifference::kCurrentMinusHome ? "current_minus_home" : "home_minus_current")
+      << "\nweight = " << (h.alv.weight == nav::CellWeight::kLog ? "log" : "magnitude")
+      << "\nlog_scale = " << h.alv.log_scale << "\nmin_bins = " << h.alv.min_bins << "\n"
+      << "[preprocess]\nequalize_histogram = " << (h.equalize_histogram ? "true" : "false")
+      << "\nwarp_compensation = " << (h.warp_compensation ? "true" : "false")
+      << "\ncamera_height_m = " << h.warp.camera_height_m << "\nwarp_height_bottom_m = " << h.warp.height_bottom_m
+      << "\nwarp_height_top_m = " << h.warp.height_top_m << "\n";
+}
+
+cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& config) {
+  const std::string what = "home image '" + path + "'";
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw std::runtime_error(what + " does not exist");
+  if (std::filesystem::is_directory(path, ec)) throw std::runtime_error(what + " is a folder, not an image file");
+  cv::Mat image;
+  try {
+    image = cv::imread(path, cv::IMREAD_COLOR);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(what + " cannot be read: " + e.what());
+  }
+  if (image.empty()) throw std::runtime_error(what + " cannot be read as an image (unreadable or not an image file)");
+  const nav::PanoramaModel& p = config.panorama;
+  if (!raw) {
+    if (image.cols != p.width_px || image.rows != p.height_px) {
+      throw std::runtime_error(what + " is " + SizeText(image.cols, image.rows) + ", not the " +
+                               SizeText(p.width_px, p.height_px) +
+                               " of [panorama] (home_image_kind = panorama; raw for a catadioptric image)");
+    }
+    return image;
+  }
+  try {
+    const nav::Unwrapper unwrapper(config.mirror, p, image.size());
+    cv::Mat panorama;
+    unwrapper.Unwrap(image, &panorama);
+    return panorama;
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(what + " (" + SizeText(image.cols, image.rows) +
+                             ") cannot be unwrapped with [mirror]: " + e.what());
+  }
+}
+
+HomingNode::HomingNode(glue::Bus& bus, const HomingConfig& config)
+    : bus_(bus), config_(config), homer_(config.homing, config.panorama) {
+  if (config_.home == HomeSource::kImage) SetHome(LoadHomeImage(config_.home_image, config_.home_image_raw, config_));
+  bus_.Subscribe(config_.input_channel(), &HomingNode::OnFrame, this);
+  bus_.Subscribe(config_.home_snapshot_channel, &HomingNode::OnHomeSnapshot, this);
+}
+
+int64_t HomingNode::rejected_total() const {
+  int64_t n = 0;
+  for (const auto& [_, count] : rejected_) n += count;
+  return n;
+}
+
+void HomingNode::Report(std::ostream& out) const {
+  out << "homing: frames " << frames_ << ", before any home " << before_home_ << ", homes set " << homes_set_
+      << ", vectors published " << published() << " (valid " << published_valid_ << ", no estimate "
+      << published_invalid_ << "), unwrapper builds " << unwrapper_builds_ << ", rejected " << rejected_total() << "\n";
+  for (const auto& [reason, count] : rejected_) out << "homing:   rejected (" << reason << "): " << count << "\n";
+}
+
+void HomingNode::Reject(const std::string& reason, const std::string& detail) {
+  ++rejected_[reason];
+  bus_.CountDecodeError(reason + ": " + detail);  // per channel; printed to stderr, rate-limited
+}
+
+void HomingNode::SetHome(const cv::Mat& panorama) {
+  homer_.SetHome(panorama);
+  ++homes_set_;
+}
+
+std::optional<cv::Mat> HomingNode::ToPanorama(const omni_frame_t& f) {
+  if (f.kind != omni_frame_t::RAW_OMNI && f.kind != omni_frame_t::PANORAMA) {
+    Reject("unknown kind", "kind " + std::to_string(f.kind) + " (RAW_OMNI 0 or PANORAMA 1)");
+    return std::nullopt;
+  }
+  if (f.encoding < omni_frame_t::GRAY8 || f.encoding > omni_frame_t::PNG) {
+    Reject("unknown encoding", "encoding " + std::to_string(f.encoding) + " (GRAY8 0, RGB8 1, JPEG 2, PNG 3)");
+    return std::nullopt;
+  }
+  if (f.width <= 0 || f.height <= 0 || f.data.empty()) {
+    Reject("empty image", SizeText(f.width, f.height) + " with " + std::to_string(f.data.size()) + " bytes");
+    return std::nullopt;
+  }
+  const bool raw = f.kind == omni_frame_t::RAW_OMNI;
+  const nav::PanoramaModel& p = config_.panorama;
+  if (!raw) {
+    if (f.width != p.width_px || f.height != p.height_px) {
+      Reject("wrong size",
+             "panorama is " + SizeText(f.width, f.height) + ", [panorama] is " + SizeText(p.width_px, p.height_px));
+      return std::nullopt;
+    }
+    if (std::abs(nav::WrapAngle(f.bearing_col0_rad - p.bearing_col0_rad)) > kGeometryTolerance_rad ||
+        std::abs(f.elevation_top_rad - p.elevation_top_rad) > kGeometryTolerance_rad ||
+        std::abs(f.elevation_bottom_rad - p.elevation_bottom_rad) > kGeometryTolerance_rad) {
+      Reject("wrong geometry", "panorama bearing_col0 " + std::to_string(f.bearing_col0_rad / kDeg) +
+                                   " deg, elevations " + std::to_string(f.elevation_top_rad / kDeg) + ".." +
+                                   std::to_string(f.elevation_bottom_rad / kDeg) + " deg differ from [panorama] (" +
+                                   std::to_string(p.bearing_col0_rad / kDeg) + " deg, " +
+                                   std::to_string(p.elevation_top_rad / kDeg) + ".." +
+                                   std::to_string(p.elevation_bottom_rad / kDeg) + " deg)");
+      return std::nullopt;
+    }
+  }
+  cv::Mat image;
+  try {
+    image = glue::FrameToImage(f);
+  } catch (const std::exception& e) {
+    Reject("undecodable image", e.what());
+    return std::nullopt;
+  }
+  if (image.empty()) {
+    Reject("empty image", "decoded to no pixels");
+    return std::nullopt;
+  }
+  if (!raw) return image;
+
+  // Raw: unwrap with the frame's calibration (the config's when the frame has none). The map is
+  // rebuilt only when the calibration or the image size changes.
+  const nav::MirrorModel mirror = IsZeroMirror(f) ? config_.mirror : glue::MirrorOf(f);
+  const cv::Size size = image.size();
+  if (!unwrapper_ || !SameMirror(unwrapper_->mirror(), mirror) || unwrapper_size_ != size) {
+    if (refused_calibration_ && SameMirror(refused_calibration_->first, mirror) &&
+        refused_calibration_->second == size) {
+      Reject("bad mirror calibration", refused_reason_);
+      return std::nullopt;
+    }
+    try {
+      unwrapper_ = nav::Unwrapper(mirror, p, size);
+      unwrapper_size_ = size;
+      ++unwrapper_builds_;
+    } catch (const std::exception& e) {
+      refused_calibration_ = std::make_pair(mirror, size);
+      refused_reason_ = std::string(e.what()) + " (" + SizeText(size.width, size.height) + " image)";
+      Reject("bad mirror calibration", refused_reason_);
+      return std::nullopt;
+    }
+  }
+  cv::Mat panorama;
+  unwrapper_->Unwrap(image, &panorama);
+  return panorama;
+}
+
+void HomingNode::OnFrame(const omni_frame_t& frame) {
+  ++frames_;
+  const auto panorama = ToPanorama(frame);
+  if (!panorama) return;
+  std::optional<nav::HomingEstimate> estimate;
+  try {
+    if (!homer_.has_home()) {
+      if (config_.home != HomeSource::kFirst) {
+        ++before_home_;
+        return;
+      }
+      SetHome(*panorama);  // this frame is the home: no vector for it
+      std::cerr << "homing: home set from the first frame (" << bus_.current().channel << ", utime " << frame.utime
+                << ")\n";
+      return;
+    }
+    estimate = homer_.Home(*panorama);
+  } catch (const std::exception& e) {
+    ++rejected_["homing error"];
+    throw std::runtime_error(std::string("homing: ") + e.what());  // the bus counts it as a handler error
+  }
+  if (estimate && !(std::isfinite(estimate->direction_rad) && std::isfinite(estimate->magnitude) &&
+                    std::isfinite(estimate->compass_rotation_rad))) {
+    estimate.reset();
+  }
+  homing_vector_t v{};
+  v.utime = frame.utime;
+  v.method = landmark_set_t::HOG;
+  v.alv_variant = "hog";
+  v.valid = estimate.has_value();
+  if (estimate) {
+    v.direction_rad = static_cast<float>(estimate->direction_rad);
+    v.magnitude = static_cast<float>(estimate->magnitude);
+    v.compass_rotation_rad = static_cast<float>(estimate->compass_rotation_rad);
+    v.nlandmarks_used = estimate->bins_used;
+  }
+  bus_.Publish(config_.homing_vector_channel, v);
+  if (estimate) {
+    ++published_valid_;
+  } else {
+    ++published_invalid_;
+  }
+}
+
+void HomingNode::OnHomeSnapshot(const omni_frame_t& frame) {
+  const auto panorama = ToPanorama(frame);
+  if (!panorama) return;
+  try {
+    SetHome(*panorama);
+  } catch (const std::exception& e) {
+    ++rejected_["homing error"];
+    throw std::runtime_error(std::string("home snapshot: ") + e.what());
+  }
+  std::cerr << "homing: home set from " << bus_.current().channel << " (utime " << frame.utime << ")\n";
+}
+
+}  // namespace snapnav::processes

@@ -1,0 +1,97 @@
+#pragma once
+// homing: snapshot homing with HOG landmarks (thesis chapter 3). Omni frames (raw
+// catadioptric images, unwrapped here, or panoramas) are compared with a home
+// snapshot; each frame yields one homing_vector_t once a home is set.
+
+#include <cstdint>
+#include <iosfwd>
+#include <map>
+#include <optional>
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/omni_frame_t.hpp"
+
+namespace snapnav::processes {
+
+enum class HomingInput { kRaw, kPanorama };          // which channel the frames come from
+enum class HomeSource { kMessage, kImage, kFirst };  // how the home snapshot is set at first
+
+struct HomingConfig {
+  std::string omni_channel;           // omni_frame_t in (input = raw)
+  std::string panorama_channel;       // omni_frame_t in (input = panorama)
+  std::string home_snapshot_channel;  // omni_frame_t in: replaces the home
+  std::string homing_vector_channel;  // homing_vector_t out
+  HomingInput input = HomingInput::kRaw;
+  HomeSource home = HomeSource::kMessage;
+  std::string home_image;       // home = image: the file (resolved against the config's folder)
+  bool home_image_raw = true;   // home_image holds a raw catadioptric image (else a panorama)
+  nav::PanoramaModel panorama;  // every frame is turned into this panorama
+  nav::MirrorModel mirror;      // of home_image, and of raw frames without a calibration
+  nav::HogHomingConfig homing;
+
+  // The channel the node takes frames from.
+  const std::string& input_channel() const { return input == HomingInput::kRaw ? omni_channel : panorama_channel; }
+
+  // Reads [channels], [homing], [panorama], [mirror], [hog], [compass], [alv] and [preprocess];
+  // every key is required, unknown keys and invalid values are glue::ConfigError.
+  static HomingConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
+  // Throws glue::ConfigError (naming `origin`) when the options do not fit together.
+  void Validate(const std::string& origin) const;
+  // The effective configuration, as an INI file FromIni reads back (channels with their prefix).
+  void Print(std::ostream& out) const;
+};
+
+// The image file `path` as a panorama of config.panorama (a raw image is unwrapped with
+// config.mirror). Throws std::runtime_error naming the file when it is missing, unreadable or
+// does not fit.
+cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& config);
+
+class HomingNode {
+ public:
+  // Subscribes to the input and home-snapshot channels; with home = image loads the home image
+  // (throws std::runtime_error naming the file when it cannot be used).
+  HomingNode(glue::Bus& bus, const HomingConfig& config);
+
+  bool has_home() const { return homer_.has_home(); }
+  int64_t frames() const { return frames_; }            // decoded frames on the input channel
+  int64_t before_home() const { return before_home_; }  // frames that arrived before any home
+  int64_t homes_set() const { return homes_set_; }
+  int64_t published() const { return published_valid_ + published_invalid_; }
+  int64_t published_valid() const { return published_valid_; }
+  int64_t published_invalid() const { return published_invalid_; }  // no estimate (valid = false)
+  int64_t unwrapper_builds() const { return unwrapper_builds_; }    // once per mirror calibration / size
+  // Frames (input and home snapshots) skipped, by reason ("wrong size", "undecodable image", ...).
+  const std::map<std::string, int64_t>& rejected() const { return rejected_; }
+  int64_t rejected_total() const;
+  // The node's counts, one line each.
+  void Report(std::ostream& out) const;
+
+ private:
+  void OnFrame(const omni_frame_t& frame);
+  void OnHomeSnapshot(const omni_frame_t& frame);
+  // The frame as a panorama of config_.panorama; nullopt when it is rejected (counted).
+  std::optional<cv::Mat> ToPanorama(const omni_frame_t& frame);
+  void Reject(const std::string& reason, const std::string& detail);
+  void SetHome(const cv::Mat& panorama);
+
+  glue::Bus& bus_;
+  HomingConfig config_;
+  nav::HogHomer homer_;
+  std::optional<nav::Unwrapper> unwrapper_;  // for the last raw calibration and size seen
+  cv::Size unwrapper_size_;
+  // The last calibration the Unwrapper refused, so it is not rebuilt per frame.
+  std::optional<std::pair<nav::MirrorModel, cv::Size>> refused_calibration_;
+  std::string refused_reason_;
+  int64_t frames_ = 0, before_home_ = 0, homes_set_ = 0;
+  int64_t published_valid_ = 0, published_invalid_ = 0, unwrapper_builds_ = 0;
+  std::map<std::string, int64_t> rejected_;
+};
+
+}  // namespace snapnav::processes
