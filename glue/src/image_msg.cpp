@@ -1,5 +1,7 @@
 #include "snapnav/glue/image_msg.hpp"
 
+#include <cmath>
+
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -132,6 +134,28 @@ nav::PanoramaModel PanoramaOf(const omni_frame_t& f) {
   p.bearing_col0_rad = f.bearing_col0_rad;
   p.elevation_top_rad = f.elevation_top_rad;
   p.elevation_bottom_rad = f.elevation_bottom_rad;
+  return p;
+}
+
+nav::MirrorModel ReadMirrorConfig(const IniFile& ini, const std::string& section) {
+  constexpr double kDeg = M_PI / 180;
+  nav::MirrorModel m;
+  m.center_x_px = ini.GetDouble(section, "center_x_px");
+  m.center_y_px = ini.GetDouble(section, "center_y_px");
+  m.inner_radius_px = ini.GetDouble(section, "inner_radius_px");
+  m.outer_radius_px = ini.GetDouble(section, "outer_radius_px");
+  m.elevation_inner_rad = ini.GetDouble(section, "elevation_inner_deg") * kDeg;
+  m.elevation_outer_rad = ini.GetDouble(section, "elevation_outer_deg") * kDeg;
+  return m;
+}
+
+nav::PanoramaModel ReadPanoramaConfig(const IniFile& ini, const std::string& section) {
+  constexpr double kDeg = M_PI / 180;
+  nav::PanoramaModel p;
+  p.width_px = ini.GetInt(section, "width_px");
+  p.height_px = ini.GetInt(section, "height_px");
+  p.elevation_top_rad = ini.GetDouble(section, "elevation_top_deg") * kDeg;
+  p.elevation_bottom_rad = ini.GetDouble(section, "elevation_bottom_deg") * kDeg;
   return p;
 }
 

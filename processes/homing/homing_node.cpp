@@ -111,17 +111,8 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   }
   c.home_image_raw = ReadChoice<bool>(ini, "homing", "home_image_kind", {{"raw", true}, {"panorama", false}});
 
-  c.panorama.width_px = ini.GetInt("panorama", "width_px");
-  c.panorama.height_px = ini.GetInt("panorama", "height_px");
-  c.panorama.elevation_top_rad = ini.GetDouble("panorama", "elevation_top_deg") * kDeg;
-  c.panorama.elevation_bottom_rad = ini.GetDouble("panorama", "elevation_bottom_deg") * kDeg;
-
-  c.mirror.center_x_px = ini.GetDouble("mirror", "center_x_px");
-  c.mirror.center_y_px = ini.GetDouble("mirror", "center_y_px");
-  c.mirror.inner_radius_px = ini.GetDouble("mirror", "inner_radius_px");
-  c.mirror.outer_radius_px = ini.GetDouble("mirror", "outer_radius_px");
-  c.mirror.elevation_inner_rad = ini.GetDouble("mirror", "elevation_inner_deg") * kDeg;
-  c.mirror.elevation_outer_rad = ini.GetDouble("mirror", "elevation_outer_deg") * kDeg;
+  c.panorama = glue::ReadPanoramaConfig(ini);
+  c.mirror = glue::ReadMirrorConfig(ini);
 
   auto& h = c.homing;
   h.hog = ReadHog(ini, "hog");

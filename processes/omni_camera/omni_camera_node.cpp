@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/shutdown.hpp"
 #include "snapnav/glue/time.hpp"
 
@@ -39,12 +40,9 @@ OmniCameraConfig OmniCameraConfig::FromIni(const glue::IniFile& ini, const std::
   c.capture.loop = ini.GetBool("camera", "loop");
   const std::string encoding = ini.GetString("camera", "encoding");
   c.frame.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
-  c.frame.mirror.center_x_px = ini.GetDouble("mirror", "center_x_px");
-  c.frame.mirror.center_y_px = ini.GetDouble("mirror", "center_y_px");
-  c.frame.mirror.inner_radius_px = ini.GetDouble("mirror", "inner_radius_px");
-  c.frame.mirror.outer_radius_px = ini.GetDouble("mirror", "outer_radius_px");
-  c.frame.mirror.elevation_inner_rad = ini.GetDouble("mirror", "elevation_inner_rad");
-  c.frame.mirror.elevation_outer_rad = ini.GetDouble("mirror", "elevation_outer_rad");
+  const nav::MirrorModel mirror = glue::ReadMirrorConfig(ini);
+  c.frame.mirror = {mirror.center_x_px,     mirror.center_y_px,         mirror.inner_radius_px,
+                    mirror.outer_radius_px, mirror.elevation_inner_rad, mirror.elevation_outer_rad};
   ini.CheckAllUsed();
   try {
     c.capture.source = FrameSourceSpec::Parse(source);
@@ -72,8 +70,8 @@ void OmniCameraConfig::Print(std::ostream& out) const {
       << "[mirror]\ncenter_x_px = " << frame.mirror.center_x_px << "\ncenter_y_px = " << frame.mirror.center_y_px
       << "\ninner_radius_px = " << frame.mirror.inner_radius_px
       << "\nouter_radius_px = " << frame.mirror.outer_radius_px
-      << "\nelevation_inner_rad = " << frame.mirror.elevation_inner_rad
-      << "\nelevation_outer_rad = " << frame.mirror.elevation_outer_rad << "\n";
+      << "\nelevation_inner_deg = " << frame.mirror.elevation_inner_rad * 180 / M_PI
+      << "\nelevation_outer_deg = " << frame.mirror.elevation_outer_rad * 180 / M_PI << "\n";
 }
 
 OmniCameraNode::OmniCameraNode(glue::Bus& bus, const OmniCameraConfig& config, std::ostream* log)

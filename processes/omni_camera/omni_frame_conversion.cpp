@@ -60,7 +60,7 @@ void MirrorCalibration::Validate() const {
   if (elevation_inner_rad == elevation_outer_rad || std::abs(elevation_inner_rad) >= M_PI / 2 ||
       std::abs(elevation_outer_rad) >= M_PI / 2) {
     throw std::invalid_argument(
-        "mirror elevation_inner_rad and elevation_outer_rad must differ and lie within "
+        "mirror elevation_inner_deg and elevation_outer_deg must differ and lie within "
         "(-pi/2, pi/2)");
   }
 }

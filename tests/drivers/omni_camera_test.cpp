@@ -35,7 +35,7 @@ std::string ConfigText(const std::string& source, const std::string& encoding, b
     << "\nheight_px = " << height_px << "\nrate_hz = " << rate_hz << "\nloop = " << (loop ? "true" : "false")
     << "\nencoding = " << encoding << "\njpeg_quality = 90\n"
     << "[mirror]\ncenter_x_px = 31.5\ncenter_y_px = 23.25\ninner_radius_px = 5\nouter_radius_px = 22.5\n"
-    << "elevation_inner_rad = -0.5\nelevation_outer_rad = 0.25\n";
+    << "elevation_inner_deg = -30\nelevation_outer_deg = 15\n";
   return s.str();
 }
 
@@ -145,7 +145,7 @@ TEST(OmniCameraConfig, EveryShippedKeyIsRequired) {
   const std::string text = snapnav::testing::ReadTextFile(kShippedConfig);
   for (const char* key : {"frame", "sensor_name", "source", "width_px", "height_px", "rate_hz", "loop", "encoding",
                           "jpeg_quality", "center_x_px", "center_y_px", "inner_radius_px", "outer_radius_px",
-                          "elevation_inner_rad", "elevation_outer_rad"}) {
+                          "elevation_inner_deg", "elevation_outer_deg"}) {
     const std::string without = WithoutKey(text, key);
     ASSERT_NE(without, text) << key << " not found in the shipped config";
     EXPECT_NE(ConfigErrorOf(without).find("missing key '" + std::string(key) + "'"), std::string::npos) << key;
@@ -171,9 +171,9 @@ TEST(OmniCameraConfig, BadValuesAreErrorsNamingTheFile) {
   EXPECT_NE(ConfigErrorOf(replace("outer_radius_px = 22.5", "outer_radius_px = 4")).find("outer_radius_px"),
             std::string::npos);
   EXPECT_NE(ConfigErrorOf(replace("height_px = 0", "height_px = 48")).find("width_px"), std::string::npos);
-  EXPECT_NE(ConfigErrorOf(replace("elevation_outer_rad = 0.25", "elevation_outer_rad = -0.5")).find("elevation"),
+  EXPECT_NE(ConfigErrorOf(replace("elevation_outer_deg = 15", "elevation_outer_deg = -30")).find("elevation"),
             std::string::npos);
-  EXPECT_NE(ConfigErrorOf(replace("elevation_outer_rad = 0.25", "elevation_outer_rad = 1.6")).find("elevation"),
+  EXPECT_NE(ConfigErrorOf(replace("elevation_outer_deg = 15", "elevation_outer_deg = 95")).find("elevation"),
             std::string::npos);
   EXPECT_NE(ConfigErrorOf(replace("rate_hz = 0", "rate_hz = -1")).find("rate_hz"), std::string::npos);
   EXPECT_NE(ConfigErrorOf(replace("loop = false", "loop = maybe")).find("true or false"), std::string::npos);
@@ -356,8 +356,8 @@ TEST(OmniCameraNode, PublishesAFolderOfImagesInFileNameOrder) {
     EXPECT_FLOAT_EQ(f.mirror_center_y_px, 23.25f);
     EXPECT_FLOAT_EQ(f.mirror_inner_radius_px, 5.f);
     EXPECT_FLOAT_EQ(f.mirror_outer_radius_px, 22.5f);
-    EXPECT_FLOAT_EQ(f.mirror_elevation_inner_rad, -0.5f);
-    EXPECT_FLOAT_EQ(f.mirror_elevation_outer_rad, 0.25f);
+    EXPECT_FLOAT_EQ(f.mirror_elevation_inner_rad, static_cast<float>(-30 * M_PI / 180));
+    EXPECT_FLOAT_EQ(f.mirror_elevation_outer_rad, static_cast<float>(15 * M_PI / 180));
     ASSERT_EQ(f.data.size(), 64u * 48u);
     // Lossless formats: the pixels are exactly the image with id i (file-name order).
     const cv::Mat expected = TestImage(i);

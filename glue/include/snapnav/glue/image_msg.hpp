@@ -6,6 +6,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "snapnav/glue/ini.hpp"
 #include "snapnav/nav/omni_geometry.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
@@ -29,5 +30,12 @@ void SetMirror(const nav::MirrorModel& mirror, omni_frame_t* frame);
 void SetPanorama(const nav::PanoramaModel& panorama, omni_frame_t* frame);
 nav::MirrorModel MirrorOf(const omni_frame_t& frame);
 nav::PanoramaModel PanoramaOf(const omni_frame_t& frame);
+
+// The mirror calibration of a config section (keys center_x_px, center_y_px, inner_radius_px,
+// outer_radius_px, elevation_inner_deg, elevation_outer_deg), and the panorama geometry
+// (width_px, height_px, elevation_top_deg, elevation_bottom_deg). Missing keys and bad values
+// are glue::ConfigError naming file and line; the models are not validated here.
+nav::MirrorModel ReadMirrorConfig(const IniFile& ini, const std::string& section = "mirror");
+nav::PanoramaModel ReadPanoramaConfig(const IniFile& ini, const std::string& section = "panorama");
 
 }  // namespace snapnav::glue
