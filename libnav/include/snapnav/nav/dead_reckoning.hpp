@@ -15,6 +15,12 @@ struct DeadReckoningOptions {
   void Validate() const;                        // throws std::invalid_argument
 };
 
+// One odometry increment (robot frame of `pose`) applied to a pose and its covariance: the
+// prediction step of every odometry-driven filter here. Throws std::invalid_argument on a
+// non-finite increment (nothing changes).
+void PredictWithOdometry(const DeadReckoningOptions& noise, const Pose2& delta, Pose2* pose,
+                         Eigen::Matrix3d* covariance);
+
 class DeadReckoning {
  public:
   explicit DeadReckoning(const DeadReckoningOptions& options, const Pose2& start = {});

@@ -1,0 +1,133 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+
+#include "snapnav/nav/dead_reckoning.hpp"
+#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/sim/world.hpp"
+
+namespace snapnav::nav {
+namespace {
+
+TEST(EkfPoseUpdate, HandComputedCase) {
+  // Equal prediction and measurement covariances: K = I/2, the estimate is the midpoint and
+  // the covariance halves.
+  Eigen::Matrix3d p = Eigen::Vector3d(4, 4, 1).asDiagonal();
+  const Eigen::Matrix3d r = p;
+  const Pose2 out = EkfPoseUpdate({0, 0, 0}, &p, {2, -2, 0.4}, r);
+  EXPECT_NEAR(out.x_m, 1.0, 1e-12);
+  EXPECT_NEAR(out.y_m, -1.0, 1e-12);
+  EXPECT_NEAR(out.theta_rad, 0.2, 1e-12);
+  EXPECT_TRUE(p.isApprox(Eigen::Matrix3d(Eigen::Vector3d(2, 2, 0.5).asDiagonal()), 1e-12));
+  // A measurement 4x more certain: K = 0.8; the angle innovation is wrapped (3.1 -> -3.1).
+  Eigen::Matrix3d p2 = Eigen::Matrix3d::Identity();
+  const Pose2 wrapped = EkfPoseUpdate({0, 0, 3.1}, &p2, {1, 0, -3.1}, 0.25 * Eigen::Matrix3d::Identity());
+  EXPECT_NEAR(wrapped.x_m, 0.8, 1e-12);
+  EXPECT_NEAR(WrapAngle(wrapped.theta_rad - (3.1 + 0.8 * (2 * M_PI - 6.2))), 0.0, 1e-9);
+  EXPECT_NEAR(p2(0, 0), 0.2, 1e-12);
+}
+
+TEST(AlignPoints, RecoversAKnownTransform) {
+  const Pose2 truth{0.7, -0.3, 0.4};
+  std::vector<Eigen::Vector2d> src, dst;
+  for (int i = 0; i < 20; ++i) {
+    src.emplace_back(std::cos(i * 0.7) * (1 + 0.1 * i), std::sin(i * 1.3) * 2);
+    dst.push_back(truth.Transform(src.back()));
+  }
+  const auto t = AlignPoints(src, dst);
+  ASSERT_TRUE(t.has_value());
+  EXPECT_NEAR(t->x_m, truth.x_m, 1e-9);
+  EXPECT_NEAR(t->y_m, truth.y_m, 1e-9);
+  EXPECT_NEAR(t->theta_rad, truth.theta_rad, 1e-9);
+  EXPECT_FALSE(AlignPoints({{1, 1}}, {{2, 2}}).has_value());
+  EXPECT_FALSE(AlignPoints({{1, 1}, {1, 1}}, {{0, 0}, {0, 0}}).has_value());  // no spread: no rotation
+}
+
+TEST(ScanToPoints, DropsInvalidAndMaxRangeBeams) {
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const auto pts = ScanToPoints({1.0f, nan, 5.6f, 0.01f, inf, 2.0f}, -M_PI / 2, M_PI / 10, 0.02, 5.6, {0.1, 0, 0});
+  ASSERT_EQ(pts.size(), 2u);
+  EXPECT_NEAR(pts[0].x(), 0.1, 1e-9);
+  EXPECT_NEAR(pts[0].y(), -1.0, 1e-9);
+  const double a = -M_PI / 2 + 5 * M_PI / 10;
+  EXPECT_NEAR(pts[1].x(), 0.1 + 2 * std::cos(a), 1e-6);
+}
+
+TEST(PointGridMap, OnePointPerCellAndNearestWithinRadius) {
+  PointGridMap map(0.05, 0.25);
+  EXPECT_TRUE(map.Add({1.0, 1.0}));
+  EXPECT_FALSE(map.Add({1.01, 1.01}));  // same 5 cm cell
+  EXPECT_TRUE(map.Add({1.3, 1.0}));
+  ASSERT_TRUE(map.Nearest({1.2, 1.0}, 0.25).has_value());
+  EXPECT_NEAR(map.Nearest({1.2, 1.0}, 0.25)->x(), 1.3, 1e-12);
+  EXPECT_FALSE(map.Nearest({2.0, 2.0}, 0.25).has_value());
+  EXPECT_EQ(map.size(), 2u);
+}
+
+// A 6 x 5 m room with furniture; the robot drives a loop twice with poor odometry (heading
+// drift): the SLAM pose stays close to the truth while dead reckoning drifts away.
+TEST(LaserSlam, StaysOnTheTruthWhereDeadReckoningDrifts) {
+  sim::Scene scene;
+  scene.name = "square room";
+  scene.textures.push_back(sim::MakeTexture("plain", cv::Mat(4, 4, CV_8UC3, cv::Scalar(200, 200, 200)), 1, 1));
+  scene.walls = {{{0, 0}, {6, 0}, 2.5, 0, 0, 0}, {{6, 0}, {6, 5}, 2.5, 0, 0, 0},
+                 {{6, 5}, {0, 5}, 2.5, 0, 0, 0}, {{0, 5}, {0, 0}, 2.5, 0, 0, 0},
+                 {{2.5, 2.0}, {3.5, 2.0}, 1.0, 0, 0, 0}, {{3.5, 2.0}, {3.5, 3.0}, 1.0, 0, 0, 0},
+                 {{0.0, 4.0}, {0.8, 4.0}, 1.0, 0, 0, 0}, {{5.0, 0.0}, {5.0, 0.7}, 1.0, 0, 0, 0}};
+  sim::DriveOptions drive;
+  drive.heading_drift_deg_per_m = 2.0;
+  drive.odometry_linear_noise_frac = 0.03;
+  drive.odometry_angular_noise_frac = 0.05;
+  sim::LaserOptions laser;
+  sim::World world(scene, drive, laser, 5);
+  world.SetTruePose({1.2, 1.0, 0});
+  sim::RouteDriver driver({{4.8, 1.2}, {4.8, 3.8}, {1.2, 3.8}, {1.2, 1.2}}, 0.4, 0.15, true);
+  LaserSlamOptions options;
+  options.motion.translation_noise_m_per_m = 0.05;
+  options.motion.rotation_noise_rad_per_rad = 0.08;
+  options.motion.rotation_noise_rad_per_m = 0.04;
+  LaserSlam slam(options, world.true_pose());
+  DeadReckoning dr({}, world.true_pose());
+  double slam_max = 0, dr_final = 0;
+  int measured = 0, scans = 0;
+  for (int step = 0; step < 1000 && driver.laps() < 2; ++step) {  // 0.1 s steps
+    const Eigen::Vector2d cmd = driver.Command(world.true_pose());
+    for (int k = 0; k < 10; ++k) world.Step(cmd.x(), cmd.y(), 0.01);
+    const auto odo = world.TakeOdometry();
+    slam.Predict(odo.delta);
+    dr.AddOdometry(odo.delta);
+    const auto scan = world.Scan();
+    const auto u = slam.Update(ScanToPoints(scan, laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m,
+                                            laser.range_max_m, {laser.mount_x_m, 0, 0}));
+    measured += u.measured;
+    ++scans;
+    const Pose2& t = world.true_pose();
+    slam_max = std::max(slam_max, std::hypot(slam.pose().x_m - t.x_m, slam.pose().y_m - t.y_m));
+    dr_final = std::hypot(dr.pose().x_m - t.x_m, dr.pose().y_m - t.y_m);
+  }
+  std::cout << "laser slam: " << scans << " scans, " << measured << " measured, max error " << slam_max
+            << " m; dead reckoning final error " << dr_final << " m; map " << slam.map().size() << " points\n";
+  EXPECT_EQ(driver.laps(), 2);
+  EXPECT_GE(measured, scans - 2);
+  EXPECT_LT(slam_max, 0.15) << "dead reckoning ended " << dr_final << " m off";
+  EXPECT_GT(dr_final, 2 * slam_max);
+  EXPECT_LT(slam.map().size(), 20000u);  // bounded by the explored area
+  EXPECT_GT(slam.covariance()(0, 0), 0.0);
+}
+
+TEST(LaserSlam, EmptyScansAreSkipped) {
+  LaserSlam slam({}, {});
+  slam.Predict({0.1, 0, 0});
+  const auto u = slam.Update({});
+  EXPECT_FALSE(u.measured);
+  EXPECT_EQ(u.points, 0);
+  EXPECT_NEAR(slam.pose().x_m, 0.1, 1e-12);
+  LaserSlamOptions bad;
+  bad.match_distance_m = 0;
+  EXPECT_THROW(LaserSlam(bad, {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace snapnav::nav
