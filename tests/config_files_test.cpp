@@ -26,8 +26,9 @@ TEST(ConfigFiles, BusCheck) {
 TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // Configs with heavy dependencies are tested in their own test executables
   // (tests/drivers/): omni_camera.ini, laser_hokuyo.ini; (tests/homing/homing_node_test.cpp): homing.ini.
+  // laser_slam.ini: tests/laser_slam_node_test.cpp.
   const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini", "sim.ini", "omni_camera.ini",
-                                    "laser_hokuyo.ini", "homing.ini"};
+                                    "laser_hokuyo.ini", "homing.ini", "laser_slam.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();

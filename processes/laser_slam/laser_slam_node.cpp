@@ -1,0 +1,219 @@
+#include "laser_slam_node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <ostream>
+#include <stdexcept>
+#include <vector>
+
+#include "snapnav/glue/conversions.hpp"
+#include "snapnav/point_map_t.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegPerRad = 180.0 / kPi;
+
+bool Finite(double a, double b, double c) { return std::isfinite(a) && std::isfinite(b) && std::isfinite(c); }
+
+}  // namespace
+
+LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  LaserSlamConfig c;
+  c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
+  c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
+  c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
+  c.map_channel = channel_prefix + ini.GetString("channels", "map");
+  const char* s = "laser_slam";
+  nav::LaserSlamOptions& o = c.options;
+  o.motion.translation_noise_m_per_m = ini.GetDouble(s, "translation_noise_m_per_m");
+  o.motion.rotation_noise_rad_per_rad = ini.GetDouble(s, "rotation_noise_rad_per_rad");
+  o.motion.rotation_noise_rad_per_m = ini.GetDouble(s, "rotation_noise_rad_per_m");
+  o.initial_sigma_xy_m = ini.GetDouble(s, "initial_sigma_xy_m");
+  o.initial_sigma_theta_rad = ini.GetDouble(s, "initial_sigma_theta_deg") / kDegPerRad;
+  o.match_distance_m = ini.GetDouble(s, "match_distance_m");
+  o.icp_iterations = ini.GetInt(s, "icp_iterations");
+  o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
+  o.point_sigma_m = ini.GetDouble(s, "point_sigma_m");
+  o.min_matches = ini.GetInt(s, "min_matches");
+  o.map_resolution_m = ini.GetDouble(s, "map_resolution_m");
+  o.add_distance_m = ini.GetDouble(s, "add_distance_m");
+  o.scan_step = ini.GetInt(s, "scan_step");
+  c.map_every_n_scans = ini.GetInt(s, "map_every_n_scans");
+  ini.CheckAllUsed();
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": " + e.what());
+  }
+  if (c.map_every_n_scans < 0) {
+    throw glue::ConfigError(ini.origin() + ": [laser_slam] map_every_n_scans must be >= 0 (0: never publish the map)");
+  }
+  return c;
+}
+
+void LaserSlamConfig::Print(std::ostream& out) const {
+  const nav::LaserSlamOptions& o = options;
+  out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\npose = " << pose_channel
+      << "\nmap = " << map_channel << "\n"
+      << "[laser_slam]\ntranslation_noise_m_per_m = " << o.motion.translation_noise_m_per_m
+      << "\nrotation_noise_rad_per_rad = " << o.motion.rotation_noise_rad_per_rad
+      << "\nrotation_noise_rad_per_m = " << o.motion.rotation_noise_rad_per_m
+      << "\ninitial_sigma_xy_m = " << o.initial_sigma_xy_m
+      << "\ninitial_sigma_theta_deg = " << o.initial_sigma_theta_rad * kDegPerRad
+      << "\nmatch_distance_m = " << o.match_distance_m << "\nicp_iterations = " << o.icp_iterations
+      << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
+      << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
+      << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step
+      << "\nmap_every_n_scans = " << map_every_n_scans << "\n";
+}
+
+LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config) : bus_(bus), config_(config) {
+  config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
+  bus_.Subscribe(config_.odometry_channel, &LaserSlamNode::OnOdometry, this);
+  bus_.Subscribe(config_.scan_channel, &LaserSlamNode::OnScan, this);
+}
+
+int64_t LaserSlamNode::skipped(const std::string& reason) const {
+  const auto it = skipped_.find(reason);
+  return it == skipped_.end() ? 0 : it->second;
+}
+
+void LaserSlamNode::Skip(const std::string& reason, const std::string& detail, bool malformed) {
+  ++skipped_[reason];
+  if (malformed) bus_.CountDecodeError(reason + ": " + detail);  // per channel; printed, rate-limited
+}
+
+void LaserSlamNode::InternalError(const std::string& what) {
+  last_internal_error_ = what;
+  const int64_t n = ++internal_errors_;
+  if (n <= 5 || n % 100 == 0) std::cerr << "laser-slam: internal error #" << n << ": " << what << "\n";
+}
+
+// Nothing leaves a handler: inputs are checked before libnav sees them, and anything else
+// (a failed publish) is counted as an internal error and reported at exit.
+void LaserSlamNode::OnOdometry(const odometry_t& msg) {
+  try {
+    HandleOdometry(msg);
+  } catch (const std::exception& e) {
+    InternalError(std::string("odometry: ") + e.what());
+  }
+}
+
+void LaserSlamNode::OnScan(const laser_scan_t& msg) {
+  try {
+    HandleScan(msg);
+  } catch (const std::exception& e) {
+    InternalError(std::string("scan: ") + e.what());
+  }
+}
+
+void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
+  ++odometry_;
+  if (!odometry_seen_) {
+    // The first message fixes the start; its increment is relative to a message never seen.
+    if (!Finite(msg.x_m, msg.y_m, msg.theta_rad)) {
+      Skip("non-finite odometry", "cumulative pose is not finite", true);
+      return;
+    }
+    odometry_seen_ = true;
+    if (!slam_) slam_.emplace(config_.options, glue::OdometryPose(msg));
+    return;
+  }
+  if (!Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)) {
+    Skip("non-finite odometry", "increment is not finite", true);
+    return;
+  }
+  if (scans_ > 0 && msg.utime < last_scan_utime_) ++late_odometry_;  // applied anyway: arrival order
+  slam_->Predict(glue::OdometryDelta(msg));
+}
+
+void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
+  ++scans_;
+  // Malformed scans: counted, no update, no pose. (ranges_m.size() == nranges after decoding; the
+  // intensities are not used, so their count does not matter.)
+  if (msg.ranges_m.empty()) {
+    Skip("no ranges", "scan has 0 beams", true);
+    return;
+  }
+  if (msg.ranges_m.size() > kMaxLaserBeams) {
+    Skip("too many beams",
+         std::to_string(msg.ranges_m.size()) + " beams (at most " + std::to_string(kMaxLaserBeams) + ")", true);
+    return;
+  }
+  if (!std::isfinite(msg.angle_min_rad) || !std::isfinite(msg.angle_increment_rad) || msg.angle_increment_rad == 0) {
+    Skip("bad angles",
+         "angle_min_rad " + std::to_string(msg.angle_min_rad) + ", angle_increment_rad " +
+             std::to_string(msg.angle_increment_rad) + " (finite, increment != 0)",
+         true);
+    return;
+  }
+  // NaN fails these tests too. A bound on range_max_m keeps every point's map cell an integer.
+  if (!(msg.range_min_m >= 0) || !(msg.range_max_m > msg.range_min_m) || !(msg.range_max_m <= kMaxLaserRangeM)) {
+    Skip("bad range limits",
+         "range_min_m " + std::to_string(msg.range_min_m) + ", range_max_m " + std::to_string(msg.range_max_m) +
+             " (0 <= min < max <= " + std::to_string(kMaxLaserRangeM) + ")",
+         true);
+    return;
+  }
+  if (!Finite(msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad)) {
+    Skip("bad sensor pose", "sensor_x_m, sensor_y_m or sensor_theta_rad is not finite", true);
+    return;
+  }
+  last_scan_utime_ = msg.utime;
+  if (!slam_) slam_.emplace(config_.options, nav::Pose2{});  // no odometry yet: start at the origin
+
+  const auto points = nav::ScanToPoints(msg.ranges_m, msg.angle_min_rad, msg.angle_increment_rad, msg.range_min_m,
+                                        msg.range_max_m, {msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad});
+  if (points.empty()) {
+    // A well-formed scan that saw nothing (every beam NaN or no return, e.g. open space): no update,
+    // the prediction stands and its pose is still published, so every well-formed scan has a pose.
+    Skip("no valid points", "", false);
+  } else {
+    const auto t0 = std::chrono::steady_clock::now();
+    const nav::LaserSlamUpdate u = slam_->Update(points);
+    update_ms_total_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    ++updates_;
+    if (u.measured) ++measured_;
+  }
+  bus_.Publish(config_.pose_channel,
+               glue::ToPoseMsg(msg.utime, "laser_slam", "map", slam_->pose(), slam_->covariance()));
+  ++poses_published_;
+  if (!points.empty() && config_.map_every_n_scans > 0 && updates_ % config_.map_every_n_scans == 0) {
+    PublishMap(msg.utime);
+  }
+}
+
+void LaserSlamNode::PublishMap(int64_t utime) {
+  const std::vector<Eigen::Vector2d>& points = slam_->map().points();
+  point_map_t m{};
+  m.utime = utime;
+  m.estimator = "laser_slam";
+  m.resolution_m = static_cast<float>(slam_->map().resolution_m());
+  m.npoints = static_cast<int32_t>(points.size());
+  m.x_m.reserve(points.size());
+  m.y_m.reserve(points.size());
+  for (const auto& p : points) {
+    m.x_m.push_back(static_cast<float>(p.x()));
+    m.y_m.push_back(static_cast<float>(p.y()));
+  }
+  bus_.Publish(config_.map_channel, m);
+  ++maps_published_;
+}
+
+void LaserSlamNode::Report(std::ostream& out) const {
+  int64_t skipped_total = 0;
+  for (const auto& [_, n] : skipped_) skipped_total += n;
+  out << "laser-slam: scans " << scans_ << ", updates " << updates_ << ", measured " << measured_ << ", odometry "
+      << odometry_ << " (late " << late_odometry_ << "), poses published " << poses_published_ << ", maps published "
+      << maps_published_ << ", skipped " << skipped_total << ", internal errors " << internal_errors_ << "\n";
+  out << "laser-slam: mean update " << mean_update_ms() << " ms per scan";
+  if (slam_) out << ", map " << slam_->map().size() << " points";
+  out << "\n";
+  for (const auto& [reason, n] : skipped_) out << "laser-slam:   skipped (" << reason << "): " << n << "\n";
+  if (!last_internal_error_.empty()) out << "laser-slam:   last internal error: " << last_internal_error_ << "\n";
+}
+
+}  // namespace snapnav::processes

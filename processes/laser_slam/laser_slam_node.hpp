@@ -1,0 +1,96 @@
+#pragma once
+// laser-slam: libnav's 2D laser SLAM (EKF on the pose, ICP against a point map) on the bus.
+// ODOMETRY increments predict, each LASER_SCAN updates; one pose_t per scan on POSE_LASER_SLAM
+// and, every n-th updating scan, the map as point_map_t on POINT_MAP.
+//
+// Order: messages are processed in arrival order, never reordered by utime. A log (and the
+// simulator) is time ordered, so an odometry increment that ends before a scan arrives before
+// it. Live, an increment that arrives after a scan it precedes in time is applied to the next
+// scan's prediction instead (counted as "late odometry"; the map does not change).
+//
+// Frames: the first odometry message only fixes the start (its increment is relative to a
+// message never seen): the map frame is the odometry frame at the start, so POSE_LASER_SLAM is
+// comparable with POSE_DEAD_RECKONING and, in the simulator, with the ground truth. A scan
+// before any odometry starts the filter at the origin instead.
+
+#include <cstdint>
+#include <iosfwd>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/laser_scan_t.hpp"
+#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/odometry_t.hpp"
+
+namespace snapnav::processes {
+
+struct LaserSlamConfig {
+  std::string odometry_channel;  // odometry_t in
+  std::string scan_channel;      // laser_scan_t in
+  std::string pose_channel;      // pose_t out
+  std::string map_channel;       // point_map_t out
+  nav::LaserSlamOptions options;
+  int map_every_n_scans = 10;  // publish the map after every n-th updating scan; 0: never
+
+  // Reads [channels] and [laser_slam]; every key is required, unknown keys and invalid values
+  // are glue::ConfigError.
+  static LaserSlamConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
+  void Print(std::ostream& out) const;
+};
+
+// Scans with more beams than this are rejected as garbage (real scanners have a few thousand).
+inline constexpr size_t kMaxLaserBeams = 100000;
+// Scans whose range_max_m exceeds this are rejected as garbage [m].
+inline constexpr double kMaxLaserRangeM = 10000.0;
+
+class LaserSlamNode {
+ public:
+  LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config);
+
+  int64_t scans() const { return scans_; }                  // decoded scans on the scan channel, skipped ones included
+  int64_t updates() const { return updates_; }              // scans given to LaserSlam::Update
+  int64_t measured() const { return measured_; }            // updates whose ICP measurement was accepted
+  int64_t odometry() const { return odometry_; }            // decoded odometry messages, skipped ones included
+  int64_t late_odometry() const { return late_odometry_; }  // older than the last scan, applied anyway
+  int64_t poses_published() const { return poses_published_; }
+  int64_t maps_published() const { return maps_published_; }
+  // Scans and odometry messages skipped, by reason ("no ranges", "no valid points", ...).
+  const std::map<std::string, int64_t>& skipped() const { return skipped_; }
+  int64_t skipped(const std::string& reason) const;
+  // Unexpected exceptions caught in a handler (e.g. a failed publish); that message's work is lost.
+  int64_t internal_errors() const { return internal_errors_; }
+  // Mean wall time of LaserSlam::Update per updating scan [ms] (a statistic only; 0 before any).
+  double mean_update_ms() const { return updates_ > 0 ? update_ms_total_ / static_cast<double>(updates_) : 0.0; }
+  // The filter; nullptr before the first usable message.
+  const nav::LaserSlam* slam() const { return slam_ ? &*slam_ : nullptr; }
+  // The node's counts, one line each.
+  void Report(std::ostream& out) const;
+
+ private:
+  void OnOdometry(const odometry_t& msg);
+  void OnScan(const laser_scan_t& msg);
+  void HandleOdometry(const odometry_t& msg);
+  void HandleScan(const laser_scan_t& msg);
+  // Counts a skipped message. A malformed one (`malformed`) is also counted as rejected on its
+  // channel by the bus, which reports it (rate-limited) with `detail`.
+  void Skip(const std::string& reason, const std::string& detail, bool malformed);
+  // Counts and prints (rate-limited) an unexpected exception of a handler.
+  void InternalError(const std::string& what);
+  void PublishMap(int64_t utime);
+
+  glue::Bus& bus_;
+  LaserSlamConfig config_;
+  std::optional<nav::LaserSlam> slam_;
+  bool odometry_seen_ = false;
+  int64_t last_scan_utime_ = 0;
+  int64_t scans_ = 0, updates_ = 0, measured_ = 0, odometry_ = 0, late_odometry_ = 0;
+  int64_t poses_published_ = 0, maps_published_ = 0, internal_errors_ = 0;
+  double update_ms_total_ = 0.0;
+  std::map<std::string, int64_t> skipped_;
+  std::string last_internal_error_;
+};
+
+}  // namespace snapnav::processes

@@ -1,0 +1,354 @@
+// Node test: laser-slam on memq:// — publish odometry and scans of a ray-cast room, handle,
+// assert on the decoded poses and maps; bad input is counted, never a crash.
+#include "laser_slam_node.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "snapnav/glue/bus.hpp"
+#include "snapnav/point_map_t.hpp"
+#include "snapnav/pose_t.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+constexpr double kRoom = 6.0;  // square room [0, 6] x [0, 6] m
+constexpr int kBeams = 681;
+constexpr double kAngleMin = -120.0 * M_PI / 180.0;
+constexpr double kAngleIncrement = 240.0 * M_PI / 180.0 / (kBeams - 1);
+constexpr double kRangeMin = 0.02, kRangeMax = 5.6;
+constexpr double kMountX = 0.1;  // laser 10 cm ahead of the robot centre
+
+// [laser_slam] keys with libnav's defaults; map_every_n_scans = 10.
+const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translation_noise_m_per_m", "0.05"},
+                                                                    {"rotation_noise_rad_per_rad", "0.05"},
+                                                                    {"rotation_noise_rad_per_m", "0.0052"},
+                                                                    {"initial_sigma_xy_m", "0.01"},
+                                                                    {"initial_sigma_theta_deg", "0.5729578"},
+                                                                    {"match_distance_m", "0.25"},
+                                                                    {"icp_iterations", "15"},
+                                                                    {"icp_convergence_m", "0.0001"},
+                                                                    {"point_sigma_m", "0.03"},
+                                                                    {"min_matches", "20"},
+                                                                    {"map_resolution_m", "0.05"},
+                                                                    {"add_distance_m", "0.08"},
+                                                                    {"scan_step", "1"},
+                                                                    {"map_every_n_scans", "10"}};
+
+// The config as INI text; `drop` leaves a [laser_slam] key out, `extra` is appended to [laser_slam],
+// `replace` overrides one key's value.
+std::string IniText(const std::string& drop = "", const std::string& extra = "",
+                    const std::pair<std::string, std::string>& replace = {}) {
+  std::ostringstream s;
+  s << "[channels]\nodometry = ODOMETRY\nscan = LASER_SCAN\npose = POSE_LASER_SLAM\nmap = POINT_MAP\n[laser_slam]\n";
+  for (const auto& [key, value] : kSlamKeys) {
+    if (key == drop) continue;
+    s << key << " = " << (key == replace.first ? replace.second : value) << "\n";
+  }
+  s << extra;
+  return s.str();
+}
+
+LaserSlamConfig TestConfig(const std::string& prefix) {
+  return LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText(), "test.ini"), prefix);
+}
+
+// Ranges of a laser at `robot` (mount kMountX ahead) inside the empty square room: the exit
+// distance of each ray from the box, max range where the wall is farther, Gaussian noise.
+std::vector<float> CastRoom(const nav::Pose2& robot, std::mt19937* rng) {
+  std::normal_distribution<double> noise(0.0, 0.005);
+  const Eigen::Vector2d p = robot.Transform({kMountX, 0.0});
+  std::vector<float> ranges(kBeams);
+  for (int i = 0; i < kBeams; ++i) {
+    const double a = robot.theta_rad + kAngleMin + kAngleIncrement * i;
+    const double dx = std::cos(a), dy = std::sin(a);
+    double t = std::numeric_limits<double>::infinity();
+    if (dx > 1e-12) t = std::min(t, (kRoom - p.x()) / dx);
+    if (dx < -1e-12) t = std::min(t, -p.x() / dx);
+    if (dy > 1e-12) t = std::min(t, (kRoom - p.y()) / dy);
+    if (dy < -1e-12) t = std::min(t, -p.y() / dy);
+    ranges[i] = t >= kRangeMax ? static_cast<float>(kRangeMax) : static_cast<float>(t + noise(*rng));
+  }
+  return ranges;
+}
+
+laser_scan_t Scan(int64_t utime, std::vector<float> ranges) {
+  laser_scan_t s{};
+  s.utime = utime;
+  s.sensor_name = "test";
+  s.sensor_x_m = static_cast<float>(kMountX);
+  s.angle_min_rad = static_cast<float>(kAngleMin);
+  s.angle_increment_rad = static_cast<float>(kAngleIncrement);
+  s.range_min_m = static_cast<float>(kRangeMin);
+  s.range_max_m = static_cast<float>(kRangeMax);
+  s.nranges = static_cast<int32_t>(ranges.size());
+  s.ranges_m = std::move(ranges);
+  s.nintensities = 0;
+  return s;
+}
+
+odometry_t Odo(int64_t utime, const nav::Pose2& cumulative, const nav::Pose2& delta) {
+  odometry_t o{};
+  o.utime = utime;
+  o.sensor_name = "test";
+  o.x_m = cumulative.x_m;
+  o.y_m = cumulative.y_m;
+  o.theta_rad = cumulative.theta_rad;
+  o.delta_x_m = delta.x_m;
+  o.delta_y_m = delta.y_m;
+  o.delta_theta_rad = delta.theta_rad;
+  o.delta_t_s = 0.1;
+  return o;
+}
+
+void Drain(glue::Bus& bus) {
+  while (bus.HandleOnce(0)) {
+  }
+}
+
+double Distance(const pose_t& p, const nav::Pose2& q) { return std::hypot(p.x_m - q.x_m, p.y_m - q.y_m); }
+
+// The robot drives 1.3 times around a circle of 1.5 m radius in the room, 5 cm per step; the
+// odometry reads 2 % too far and turns 0.003 rad too much per step.
+TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
+  glue::Bus bus("memq://");
+  const LaserSlamConfig config = TestConfig("LS1_");
+  LaserSlamNode node(bus, config);
+  std::vector<pose_t> poses;
+  std::vector<point_map_t> maps;
+  bus.Subscribe<pose_t>("LS1_POSE_LASER_SLAM", [&](const pose_t& p) { poses.push_back(p); });
+  bus.Subscribe<point_map_t>("LS1_POINT_MAP", [&](const point_map_t& m) { maps.push_back(m); });
+
+  constexpr int kSteps = 250;
+  constexpr double kRadius = 1.5, kStep = 0.05, kScale = 1.02, kHeadingBias = 0.003;
+  const double turn = kStep / kRadius;
+  const nav::Pose2 true_delta{kRadius * std::sin(turn), kRadius * (1 - std::cos(turn)), turn};  // arc of 5 cm
+  const nav::Pose2 odo_delta{kScale * true_delta.x_m, kScale * true_delta.y_m, true_delta.theta_rad + kHeadingBias};
+  std::mt19937 rng(7);
+  nav::Pose2 truth{kRoom / 2, kRoom / 2 - kRadius, 0.0}, odometry = truth;
+  std::vector<int64_t> scan_utimes;
+  std::vector<nav::Pose2> truths;
+  double slam_max = 0;
+  for (int k = 0; k <= kSteps; ++k) {
+    const int64_t utime = 1'700'000'000'000'000 + k * 100'000;
+    if (k > 0) {
+      truth = truth.Compose(true_delta);
+      odometry = odometry.Compose(odo_delta);
+    }
+    // In time order: the odometry of the step, then the scan at the new pose.
+    bus.Publish("LS1_ODOMETRY", Odo(utime, odometry, k > 0 ? odo_delta : nav::Pose2{}));
+    bus.Publish("LS1_LASER_SCAN", Scan(utime, CastRoom(truth, &rng)));
+    scan_utimes.push_back(utime);
+    truths.push_back(truth);
+    Drain(bus);
+    ASSERT_EQ(poses.size(), scan_utimes.size());
+    slam_max = std::max(slam_max, Distance(poses.back(), truth));
+  }
+  const double slam_final = Distance(poses.back(), truth);
+  const double odometry_final = std::hypot(odometry.x_m - truth.x_m, odometry.y_m - truth.y_m);
+  std::cout << "laser-slam node: " << node.scans() << " scans, " << node.measured() << " measured, final error "
+            << slam_final << " m (max " << slam_max << " m), odometry alone " << odometry_final << " m, "
+            << node.mean_update_ms() << " ms per update, map " << node.slam()->map().size() << " points\n";
+
+  ASSERT_EQ(poses.size(), static_cast<size_t>(kSteps + 1));
+  for (size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_EQ(poses[i].utime, scan_utimes[i]) << "pose " << i;
+    EXPECT_EQ(poses[i].estimator, "laser_slam");
+    EXPECT_EQ(poses[i].frame, "map");
+  }
+  EXPECT_LT(slam_final, 0.1);
+  EXPECT_LT(slam_max, 0.1);
+  EXPECT_GT(odometry_final, 0.3);
+  EXPECT_GT(odometry_final, 3 * slam_final);
+  EXPECT_NEAR(nav::WrapAngle(poses.back().theta_rad - truth.theta_rad), 0.0, 0.03);
+  EXPECT_GT(poses.back().covariance[0], 0.0);  // from the filter
+  EXPECT_GT(poses.back().covariance[8], 0.0);
+
+  EXPECT_EQ(node.scans(), kSteps + 1);
+  EXPECT_EQ(node.updates(), kSteps + 1);
+  EXPECT_GE(node.measured(), kSteps - 2);  // every scan but the first (it builds the map)
+  EXPECT_EQ(node.odometry(), kSteps + 1);
+  EXPECT_EQ(node.poses_published(), kSteps + 1);
+  EXPECT_TRUE(node.skipped().empty());
+  EXPECT_EQ(node.internal_errors(), 0);
+  EXPECT_GT(node.mean_update_ms(), 0.0);
+
+  // A map after every 10th scan, stamped with that scan's time, its points on the walls.
+  ASSERT_EQ(maps.size(), static_cast<size_t>((kSteps + 1) / 10));
+  EXPECT_EQ(node.maps_published(), static_cast<int64_t>(maps.size()));
+  for (size_t j = 0; j < maps.size(); ++j) EXPECT_EQ(maps[j].utime, scan_utimes[10 * j + 9]);
+  const point_map_t& map = maps.back();
+  EXPECT_EQ(map.estimator, "laser_slam");
+  EXPECT_FLOAT_EQ(map.resolution_m, 0.05f);
+  ASSERT_EQ(map.npoints, static_cast<int32_t>(map.x_m.size()));
+  ASSERT_EQ(map.x_m.size(), map.y_m.size());
+  EXPECT_GT(map.npoints, 200);
+  EXPECT_GE(map.npoints, maps.front().npoints);
+  int off_wall = 0;
+  for (int i = 0; i < map.npoints; ++i) {
+    const double x = map.x_m[i], y = map.y_m[i];
+    if (std::min({std::abs(x), std::abs(kRoom - x), std::abs(y), std::abs(kRoom - y)}) > 0.1) ++off_wall;
+  }
+  EXPECT_EQ(off_wall, 0);
+  EXPECT_EQ(bus.total_errors(), 0u);
+}
+
+// Malformed scans are counted and publish nothing; a well-formed scan without a single valid
+// return skips the update but still publishes its (predicted) pose; nothing reaches the bus as
+// a handler error.
+TEST(LaserSlamNode, BadInputIsCountedAndNeverCrashes) {
+  glue::Bus bus("memq://");
+  LaserSlamNode node(bus, TestConfig("LS2_"));
+  std::vector<pose_t> poses;
+  bus.Subscribe<pose_t>("LS2_POSE_LASER_SLAM", [&](const pose_t& p) { poses.push_back(p); });
+  std::mt19937 rng(3);
+  const nav::Pose2 start{3.0, 2.0, 0.3};
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+
+  bus.Publish("LS2_ODOMETRY", Odo(1000, start, {}));
+  bus.Publish("LS2_LASER_SCAN", Scan(2000, CastRoom(start, &rng)));  // builds the map
+  bus.Publish("LS2_ODOMETRY", Odo(3000, start, {nan, 0, 0}));        // non-finite
+  bus.Publish("LS2_ODOMETRY", Odo(4000, start, {0.01, 0, 0}));
+  bus.Publish("LS2_LASER_SCAN", Scan(5000, std::vector<float>(kBeams, static_cast<float>(kRangeMax))));  // no return
+  laser_scan_t bad_increment = Scan(6000, CastRoom(start, &rng));
+  bad_increment.angle_increment_rad = nan;
+  bus.Publish("LS2_LASER_SCAN", bad_increment);
+  bus.Publish("LS2_LASER_SCAN", Scan(7000, {}));  // 0 beams
+  laser_scan_t bad_limits = Scan(8000, CastRoom(start, &rng));
+  bad_limits.range_max_m = bad_limits.range_min_m;
+  bus.Publish("LS2_LASER_SCAN", bad_limits);
+  laser_scan_t infinite_limit = Scan(8500, CastRoom(start, &rng));
+  infinite_limit.range_max_m = std::numeric_limits<float>::infinity();
+  bus.Publish("LS2_LASER_SCAN", infinite_limit);
+  bus.Publish("LS2_LASER_SCAN", Scan(9000, std::vector<float>(kMaxLaserBeams + 1, 1.0f)));
+  bus.Publish("LS2_LASER_SCAN", Scan(10000, std::vector<float>(kBeams, nan)));  // all NaN
+  laser_scan_t with_intensities = Scan(11000, CastRoom({3.01, 2.0, 0.3}, &rng));
+  with_intensities.intensities = {1, 2, 3};  // fewer than the ranges: not used, fine
+  with_intensities.nintensities = 3;
+  bus.Publish("LS2_LASER_SCAN", with_intensities);
+  bus.Publish("LS2_ODOMETRY", Odo(10500, start, {0.0, 0, 0}));  // older than the last scan: applied, counted
+  Drain(bus);
+
+  // Poses for the good scans and the two scans without a valid return, at their scans' times.
+  ASSERT_EQ(poses.size(), 4u);
+  EXPECT_EQ(poses[0].utime, 2000);
+  EXPECT_EQ(poses[1].utime, 5000);
+  EXPECT_EQ(poses[2].utime, 10000);
+  EXPECT_EQ(poses[3].utime, 11000);
+  // The scan without returns kept the prediction: 1 cm forward along the heading, more uncertain.
+  EXPECT_NEAR(poses[1].x_m, start.x_m + 0.01 * std::cos(start.theta_rad), 1e-9);
+  EXPECT_NEAR(poses[1].y_m, start.y_m + 0.01 * std::sin(start.theta_rad), 1e-9);
+  EXPECT_GT(poses[1].covariance[0], poses[0].covariance[0]);
+  EXPECT_NEAR(poses[3].x_m, 3.01, 0.02);
+
+  EXPECT_EQ(node.scans(), 9);
+  EXPECT_EQ(node.updates(), 2);
+  EXPECT_EQ(node.measured(), 1);
+  EXPECT_EQ(node.odometry(), 4);
+  EXPECT_EQ(node.late_odometry(), 1);
+  EXPECT_EQ(node.skipped("no valid points"), 2);
+  EXPECT_EQ(node.skipped("bad angles"), 1);
+  EXPECT_EQ(node.skipped("no ranges"), 1);
+  EXPECT_EQ(node.skipped("bad range limits"), 2);
+  EXPECT_EQ(node.skipped("too many beams"), 1);
+  EXPECT_EQ(node.skipped("non-finite odometry"), 1);
+  EXPECT_EQ(node.internal_errors(), 0);
+  // Malformed messages are rejected on their channel too; no handler ever threw.
+  EXPECT_EQ(bus.stats().at("LS2_LASER_SCAN").decode_errors, 5u);
+  EXPECT_EQ(bus.stats().at("LS2_ODOMETRY").decode_errors, 1u);
+  EXPECT_EQ(bus.stats().at("LS2_LASER_SCAN").handler_errors, 0u);
+  EXPECT_EQ(bus.stats().at("LS2_ODOMETRY").handler_errors, 0u);
+
+  std::ostringstream report;
+  node.Report(report);
+  EXPECT_NE(report.str().find("skipped (no valid points): 2"), std::string::npos) << report.str();
+  EXPECT_NE(report.str().find("mean update"), std::string::npos);
+}
+
+// A scan before any odometry starts the filter at the origin; the first odometry only sets the
+// reference (its increment is relative to a message never seen).
+TEST(LaserSlamNode, ScanBeforeOdometryStartsAtTheOrigin) {
+  glue::Bus bus("memq://");
+  LaserSlamNode node(bus, TestConfig("LS3_"));
+  std::vector<pose_t> poses;
+  bus.Subscribe<pose_t>("LS3_POSE_LASER_SLAM", [&](const pose_t& p) { poses.push_back(p); });
+  bus.Publish("LS3_LASER_SCAN", Scan(1000, std::vector<float>(kBeams, static_cast<float>(kRangeMax))));
+  bus.Publish("LS3_ODOMETRY", Odo(2000, {5, 5, 1}, {0.5, 0, 0}));
+  bus.Publish("LS3_LASER_SCAN", Scan(3000, std::vector<float>(kBeams, static_cast<float>(kRangeMax))));
+  Drain(bus);
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[1].x_m, 0.0);
+  EXPECT_EQ(poses[1].theta_rad, 0.0);
+}
+
+TEST(LaserSlamConfig, MissingKeyIsNamed) {
+  try {
+    LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("min_matches"), "x.ini"), "");
+    FAIL() << "no error";
+  } catch (const glue::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("min_matches"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(LaserSlamConfig::FromIni(glue::IniFile::Parse("[channels]\nodometry = O\n", "x.ini"), ""),
+               glue::ConfigError);
+}
+
+TEST(LaserSlamConfig, UnknownKeyIsAnError) {
+  try {
+    LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "icp_iteration = 3\n"), "x.ini"), "");
+    FAIL() << "no error";
+  } catch (const glue::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("icp_iteration"), std::string::npos) << e.what();
+  }
+}
+
+TEST(LaserSlamConfig, InvalidValuesAreConfigErrors) {
+  EXPECT_THROW(LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"min_matches", "2"}), "x.ini"), ""),
+               glue::ConfigError);
+  EXPECT_THROW(
+      LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"map_every_n_scans", "-1"}), "x.ini"), ""),
+      glue::ConfigError);
+  EXPECT_THROW(LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"scan_step", "1.5"}), "x.ini"), ""),
+               glue::ConfigError);
+}
+
+// The shipped config/laser_slam.ini loads and holds libnav's defaults.
+TEST(LaserSlamConfig, ShippedConfigHasTheLibnavDefaults) {
+  const auto c = LaserSlamConfig::FromIni(glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/laser_slam.ini"), "P_");
+  EXPECT_EQ(c.odometry_channel, "P_ODOMETRY");
+  EXPECT_EQ(c.scan_channel, "P_LASER_SCAN");
+  EXPECT_EQ(c.pose_channel, "P_POSE_LASER_SLAM");
+  EXPECT_EQ(c.map_channel, "P_POINT_MAP");
+  EXPECT_EQ(c.map_every_n_scans, 10);
+  const nav::LaserSlamOptions d, &o = c.options;
+  EXPECT_DOUBLE_EQ(o.motion.translation_noise_m_per_m, d.motion.translation_noise_m_per_m);
+  EXPECT_DOUBLE_EQ(o.motion.rotation_noise_rad_per_rad, d.motion.rotation_noise_rad_per_rad);
+  EXPECT_DOUBLE_EQ(o.motion.rotation_noise_rad_per_m, d.motion.rotation_noise_rad_per_m);
+  EXPECT_DOUBLE_EQ(o.initial_sigma_xy_m, d.initial_sigma_xy_m);
+  EXPECT_NEAR(o.initial_sigma_theta_rad, d.initial_sigma_theta_rad, 1e-9);
+  EXPECT_DOUBLE_EQ(o.match_distance_m, d.match_distance_m);
+  EXPECT_EQ(o.icp_iterations, d.icp_iterations);
+  EXPECT_DOUBLE_EQ(o.icp_convergence_m, d.icp_convergence_m);
+  EXPECT_DOUBLE_EQ(o.point_sigma_m, d.point_sigma_m);
+  EXPECT_EQ(o.min_matches, d.min_matches);
+  EXPECT_DOUBLE_EQ(o.map_resolution_m, d.map_resolution_m);
+  EXPECT_DOUBLE_EQ(o.add_distance_m, d.add_distance_m);
+  EXPECT_EQ(o.scan_step, d.scan_step);
+  // Print writes what FromIni reads back.
+  std::ostringstream printed;
+  c.Print(printed);
+  const auto again = LaserSlamConfig::FromIni(glue::IniFile::Parse(printed.str(), "printed"), "");
+  EXPECT_EQ(again.scan_channel, c.scan_channel);
+  EXPECT_NEAR(again.options.initial_sigma_theta_rad, o.initial_sigma_theta_rad, 1e-6);
+}
+
+}  // namespace
+}  // namespace snapnav::processes
