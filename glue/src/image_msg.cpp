@@ -20,6 +20,16 @@ int8_t ParseFrameEncoding(const std::string& name) {
   throw std::invalid_argument("unknown encoding '" + name + "' (gray8, rgb8, jpeg or png)");
 }
 
+std::string FrameEncodingName(int8_t encoding) {
+  switch (encoding) {
+    case omni_frame_t::GRAY8: return "gray8";
+    case omni_frame_t::RGB8: return "rgb8";
+    case omni_frame_t::JPEG: return "jpeg";
+    case omni_frame_t::PNG: return "png";
+    default: return "?";
+  }
+}
+
 omni_frame_t ImageToFrame(const cv::Mat& input, int8_t encoding, int jpeg_quality) {
   if (input.empty()) throw std::invalid_argument("cannot make a frame from an empty image");
   if (input.depth() != CV_8U || (input.channels() != 1 && input.channels() != 3 && input.channels() != 4)) {

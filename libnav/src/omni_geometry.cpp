@@ -2,21 +2,26 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
 
 void MirrorModel::Validate() const {
+  for (double v : {center_x_px, center_y_px, inner_radius_px, outer_radius_px, elevation_inner_rad, elevation_outer_rad}) {
+    if (!std::isfinite(v)) throw std::invalid_argument("mirror: calibration values must be finite numbers");
+  }
+  if (center_x_px < 0 || center_y_px < 0) {
+    throw std::invalid_argument("mirror: centre (" + std::to_string(center_x_px) + ", " + std::to_string(center_y_px) +
+                                ") px must not be negative");
+  }
   if (!(inner_radius_px >= 0) || !(outer_radius_px > inner_radius_px)) {
     throw std::invalid_argument("mirror: need 0 <= inner_radius_px < outer_radius_px");
   }
   if (!(elevation_outer_rad != elevation_inner_rad) || std::abs(elevation_inner_rad) >= M_PI / 2 ||
       std::abs(elevation_outer_rad) >= M_PI / 2) {
     throw std::invalid_argument("mirror: elevations must differ and lie within (-90, 90) degrees");
-  }
-  if (!std::isfinite(center_x_px) || !std::isfinite(center_y_px)) {
-    throw std::invalid_argument("mirror: centre must be finite");
   }
 }
 

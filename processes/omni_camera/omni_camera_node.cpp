@@ -40,13 +40,11 @@ OmniCameraConfig OmniCameraConfig::FromIni(const glue::IniFile& ini, const std::
   c.capture.loop = ini.GetBool("camera", "loop");
   const std::string encoding = ini.GetString("camera", "encoding");
   c.frame.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
-  const nav::MirrorModel mirror = glue::ReadMirrorConfig(ini);
-  c.frame.mirror = {mirror.center_x_px,     mirror.center_y_px,         mirror.inner_radius_px,
-                    mirror.outer_radius_px, mirror.elevation_inner_rad, mirror.elevation_outer_rad};
+  c.frame.mirror = glue::ReadMirrorConfig(ini);
   ini.CheckAllUsed();
   try {
     c.capture.source = FrameSourceSpec::Parse(source);
-    c.frame.encoding = ParseFrameEncoding(encoding);
+    c.frame.encoding = glue::ParseFrameEncoding(encoding);
     c.Validate();
   } catch (const std::invalid_argument& e) {
     throw glue::ConfigError(ini.origin() + ": " + e.what());
@@ -58,7 +56,7 @@ void OmniCameraConfig::Validate() const {
   if (frame_channel.empty()) throw std::invalid_argument("[channels] frame must not be empty");
   capture.Validate();
   frame.Validate();
-  if (capture.width_px > 0) frame.mirror.CheckFitsImage(capture.width_px, capture.height_px);
+  if (capture.width_px > 0) CheckMirrorFitsImage(frame.mirror, capture.width_px, capture.height_px);
 }
 
 void OmniCameraConfig::Print(std::ostream& out) const {
@@ -66,7 +64,7 @@ void OmniCameraConfig::Print(std::ostream& out) const {
       << "[camera]\nsensor_name = " << frame.sensor_name << "\nsource = " << capture.source.ToString()
       << "\nwidth_px = " << capture.width_px << "\nheight_px = " << capture.height_px
       << "\nrate_hz = " << capture.rate_hz << "\nloop = " << (capture.loop ? "true" : "false")
-      << "\nencoding = " << FrameEncodingName(frame.encoding) << "\njpeg_quality = " << frame.jpeg_quality << "\n"
+      << "\nencoding = " << glue::FrameEncodingName(frame.encoding) << "\njpeg_quality = " << frame.jpeg_quality << "\n"
       << "[mirror]\ncenter_x_px = " << frame.mirror.center_x_px << "\ncenter_y_px = " << frame.mirror.center_y_px
       << "\ninner_radius_px = " << frame.mirror.inner_radius_px
       << "\nouter_radius_px = " << frame.mirror.outer_radius_px
@@ -106,7 +104,7 @@ OmniCameraNode::StepResult OmniCameraNode::Step() {
 
   if (expected_width_px_ == 0) {
     // No size configured: the first frame fixes it, and the mirror centre must lie inside.
-    config_.frame.mirror.CheckFitsImage(image.cols, image.rows);
+    CheckMirrorFitsImage(config_.frame.mirror, image.cols, image.rows);
     expected_width_px_ = image.cols;
     expected_height_px_ = image.rows;
   }

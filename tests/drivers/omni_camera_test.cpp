@@ -103,7 +103,7 @@ cv::Mat DecodeCompressed(const omni_frame_t& f) {
                       cv::IMREAD_UNCHANGED);
 }
 
-OmniFrameOptions Options(FrameEncoding encoding) {
+OmniFrameOptions Options(int8_t encoding) {
   OmniFrameOptions o;
   o.sensor_name = "omni_test";
   o.encoding = encoding;
@@ -112,7 +112,7 @@ OmniFrameOptions Options(FrameEncoding encoding) {
   return o;
 }
 
-void ExpectCalibration(const omni_frame_t& f, const MirrorCalibration& m) {
+void ExpectCalibration(const omni_frame_t& f, const nav::MirrorModel& m) {
   EXPECT_FLOAT_EQ(f.mirror_center_x_px, m.center_x_px);
   EXPECT_FLOAT_EQ(f.mirror_center_y_px, m.center_y_px);
   EXPECT_FLOAT_EQ(f.mirror_inner_radius_px, m.inner_radius_px);
@@ -196,7 +196,7 @@ TEST(FrameSourceSpec, ParsesTheThreeKinds) {
 
 TEST(MatToOmniFrame, Gray8KeepsEveryPixelAndTheCalibration) {
   const cv::Mat gray = RandomImage(23, 37, CV_8UC1, 1);  // odd width: no padding assumptions
-  const auto options = Options(FrameEncoding::kGray8);
+  const auto options = Options(omni_frame_t::GRAY8);
   const omni_frame_t f = MatToOmniFrame(gray, 123456789, options);
   EXPECT_EQ(f.utime, 123456789);
   EXPECT_EQ(f.sensor_name, "omni_test");
@@ -228,14 +228,14 @@ TEST(MatToOmniFrame, Gray8FromColourIsTheGrayConversion) {
   const cv::Mat bgr = RandomImage(10, 12, CV_8UC3, 2);
   cv::Mat expected;
   cv::cvtColor(bgr, expected, cv::COLOR_BGR2GRAY);
-  const omni_frame_t f = MatToOmniFrame(bgr, 0, Options(FrameEncoding::kGray8));
+  const omni_frame_t f = MatToOmniFrame(bgr, 0, Options(omni_frame_t::GRAY8));
   ASSERT_EQ(f.data.size(), 120u);
   for (int i = 0; i < 120; ++i) ASSERT_EQ(f.data[i], expected.at<uint8_t>(i / 12, i % 12));
 }
 
 TEST(MatToOmniFrame, Rgb8IsInRedGreenBlueOrder) {
   const cv::Mat red(4, 5, CV_8UC3, cv::Scalar(0, 0, 255));  // OpenCV stores B,G,R
-  const omni_frame_t f = MatToOmniFrame(red, 0, Options(FrameEncoding::kRgb8));
+  const omni_frame_t f = MatToOmniFrame(red, 0, Options(omni_frame_t::RGB8));
   EXPECT_EQ(f.encoding, omni_frame_t::RGB8);
   EXPECT_EQ(f.row_stride, 15);
   ASSERT_EQ(f.data.size(), 60u);
@@ -245,7 +245,7 @@ TEST(MatToOmniFrame, Rgb8IsInRedGreenBlueOrder) {
     EXPECT_EQ(f.data[i + 2], 0);
   }
   const cv::Mat bgr = RandomImage(9, 7, CV_8UC3, 3);
-  const omni_frame_t g = MatToOmniFrame(bgr, 0, Options(FrameEncoding::kRgb8));
+  const omni_frame_t g = MatToOmniFrame(bgr, 0, Options(omni_frame_t::RGB8));
   for (int r = 0; r < 9; ++r) {
     for (int c = 0; c < 7; ++c) {
       const cv::Vec3b p = bgr.at<cv::Vec3b>(r, c);
@@ -256,13 +256,13 @@ TEST(MatToOmniFrame, Rgb8IsInRedGreenBlueOrder) {
     }
   }
   // Gray input becomes R = G = B.
-  const omni_frame_t h = MatToOmniFrame(cv::Mat(2, 2, CV_8UC1, cv::Scalar(77)), 0, Options(FrameEncoding::kRgb8));
+  const omni_frame_t h = MatToOmniFrame(cv::Mat(2, 2, CV_8UC1, cv::Scalar(77)), 0, Options(omni_frame_t::RGB8));
   EXPECT_EQ(h.data, std::vector<uint8_t>(12, 77));
 }
 
 TEST(MatToOmniFrame, JpegDecodesBackCloseToTheImage) {
   const cv::Mat bgr = SmoothColorImage(48, 64);
-  const auto options = Options(FrameEncoding::kJpeg);
+  const auto options = Options(omni_frame_t::JPEG);
   const omni_frame_t f = MatToOmniFrame(bgr, 5, options);
   EXPECT_EQ(f.encoding, omni_frame_t::JPEG);
   EXPECT_EQ(f.row_stride, 0);
@@ -292,26 +292,26 @@ TEST(MatToOmniFrame, JpegDecodesBackCloseToTheImage) {
 
 TEST(MatToOmniFrame, PngDecodesBackExactly) {
   const cv::Mat bgr = RandomImage(31, 45, CV_8UC3, 5);
-  const omni_frame_t f = MatToOmniFrame(bgr, 0, Options(FrameEncoding::kPng));
+  const omni_frame_t f = MatToOmniFrame(bgr, 0, Options(omni_frame_t::PNG));
   EXPECT_EQ(f.encoding, omni_frame_t::PNG);
   EXPECT_EQ(f.row_stride, 0);
   const cv::Mat back = DecodeCompressed(f);
   ASSERT_EQ(back.type(), CV_8UC3);
   EXPECT_EQ(cv::norm(back, bgr, cv::NORM_INF), 0);
   const cv::Mat gray = RandomImage(13, 17, CV_8UC1, 6);
-  const cv::Mat gray_back = DecodeCompressed(MatToOmniFrame(gray, 0, Options(FrameEncoding::kPng)));
+  const cv::Mat gray_back = DecodeCompressed(MatToOmniFrame(gray, 0, Options(omni_frame_t::PNG)));
   ASSERT_EQ(gray_back.type(), CV_8UC1);
   EXPECT_EQ(cv::norm(gray_back, gray, cv::NORM_INF), 0);
   // BGRA loses its alpha, keeps its colours.
   cv::Mat bgra;
   cv::cvtColor(bgr, bgra, cv::COLOR_BGR2BGRA);
-  const cv::Mat no_alpha = DecodeCompressed(MatToOmniFrame(bgra, 0, Options(FrameEncoding::kPng)));
+  const cv::Mat no_alpha = DecodeCompressed(MatToOmniFrame(bgra, 0, Options(omni_frame_t::PNG)));
   ASSERT_EQ(no_alpha.type(), CV_8UC3);
   EXPECT_EQ(cv::norm(no_alpha, bgr, cv::NORM_INF), 0);
 }
 
 TEST(MatToOmniFrame, RejectsWhatItCannotEncode) {
-  const auto options = Options(FrameEncoding::kGray8);
+  const auto options = Options(omni_frame_t::GRAY8);
   EXPECT_THROW(MatToOmniFrame(cv::Mat(), 0, options), std::invalid_argument);
   EXPECT_THROW(MatToOmniFrame(cv::Mat(4, 4, CV_16UC1, cv::Scalar(1)), 0, options), std::invalid_argument);
   EXPECT_THROW(MatToOmniFrame(cv::Mat(4, 4, CV_8UC2, cv::Scalar(1)), 0, options), std::invalid_argument);

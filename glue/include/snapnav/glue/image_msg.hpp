@@ -14,6 +14,8 @@ namespace snapnav::glue {
 
 // "gray8" | "rgb8" | "jpeg" | "png" -> omni_frame_t::GRAY8 ...; throws std::invalid_argument.
 int8_t ParseFrameEncoding(const std::string& name);
+// omni_frame_t::GRAY8 ... -> "gray8" ...; "?" for an unknown value.
+std::string FrameEncodingName(int8_t encoding);
 
 // A frame holding `image` (8-bit: CV_8UC1 grey, CV_8UC3 BGR or CV_8UC4 BGRA, whose alpha is
 // dropped; a padded ROI is fine) in `encoding` (omni_frame_t::GRAY8, RGB8 in R,G,B order, JPEG
