@@ -122,8 +122,11 @@ void LaserSlam::Predict(const Pose2& odometry_delta) {
 
 LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points) {
   LaserSlamUpdate u;
-  std::vector<Eigen::Vector2d> points;
-  for (size_t i = 0; i < all_points.size(); i += options_.scan_step) points.push_back(all_points[i]);
+  std::vector<Eigen::Vector2d> decimated;
+  if (options_.scan_step > 1) {
+    for (size_t i = 0; i < all_points.size(); i += options_.scan_step) decimated.push_back(all_points[i]);
+  }
+  const std::vector<Eigen::Vector2d>& points = options_.scan_step > 1 ? decimated : all_points;
   u.points = static_cast<int>(points.size());
   ++scans_;
   if (map_.size() > 0 && !points.empty()) {
@@ -146,8 +149,9 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
       if (static_cast<int>(src.size()) < options_.min_matches) break;
       const auto next = AlignPoints(src, dst);
       if (!next) break;
+      // Convergence: translation plus rotation (radians count as metres at 1 m range).
       const double step = std::hypot(next->x_m - estimate.x_m, next->y_m - estimate.y_m) +
-                          std::abs(WrapAngle(next->theta_rad - estimate.theta_rad)) * 1.0;
+                          std::abs(WrapAngle(next->theta_rad - estimate.theta_rad));
       estimate = *next;
       if (step < options_.icp_convergence_m) break;
     }

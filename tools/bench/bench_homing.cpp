@@ -4,7 +4,6 @@
 // (gradients, compass, ALV), against the thesis configuration as the baseline.
 // Prints medians of several runs and writes summary.json into --out.
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -13,6 +12,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "bench_timing.hpp"
 #include "homing_node.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
@@ -25,19 +25,10 @@
 namespace {
 
 using namespace snapnav;
-using Clock = std::chrono::steady_clock;
 
-// Median over `runs` of the mean time per call [ms] of `per_run` calls.
 template <class Fn>
 double MedianMs(int runs, int per_run, Fn&& fn) {
-  std::vector<double> ms;
-  for (int r = 0; r < runs; ++r) {
-    const auto t0 = Clock::now();
-    for (int i = 0; i < per_run; ++i) fn(i);
-    ms.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count() / per_run);
-  }
-  std::sort(ms.begin(), ms.end());
-  return ms[ms.size() / 2];
+  return 1000.0 * bench::MedianSecondsPerCall(runs, per_run, fn);
 }
 
 int Main(int argc, char** argv) {

@@ -2,13 +2,13 @@
 // panorama) and laser scans per second, on the shipped indoor scene. Prints the
 // median of several runs and writes summary.json into --out.
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <vector>
 
+#include "bench_timing.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -20,18 +20,10 @@
 namespace {
 
 using namespace snapnav;
-using Clock = std::chrono::steady_clock;
 
 template <class Fn>
 double MedianRate(int runs, int per_run, Fn&& fn) {
-  std::vector<double> rates;
-  for (int r = 0; r < runs; ++r) {
-    const auto t0 = Clock::now();
-    for (int i = 0; i < per_run; ++i) fn(r * per_run + i);
-    rates.push_back(per_run / std::chrono::duration<double>(Clock::now() - t0).count());
-  }
-  std::sort(rates.begin(), rates.end());
-  return rates[rates.size() / 2];
+  return 1.0 / bench::MedianSecondsPerCall(runs, per_run, fn);
 }
 
 int Main(int argc, char** argv) {

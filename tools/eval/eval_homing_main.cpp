@@ -223,7 +223,8 @@ int Main(int argc, char** argv) {
   const double rotation_median = rotation_errors[rotation_errors.size() / 2];
   std::cerr << "eval-homing: visual compass on pure rotations at home: median error " << Fixed(rotation_median)
             << " deg, max " << Fixed(rotation_errors.back()) << " deg\n";
-  const double thesis_aae = Aae(db, panos, ThesisConfig(config), pm);
+  eval::GridResult thesis_result;
+  const double thesis_aae = Aae(db, panos, ThesisConfig(config), pm, &thesis_result);
   nav::HogHomingConfig thesis_lambrinos = ThesisConfig(config);
   thesis_lambrinos.alv.difference = nav::AlvDifference::kCurrentMinusHome;
   const double thesis_lambrinos_aae = Aae(db, panos, thesis_lambrinos, pm);
@@ -247,12 +248,8 @@ int Main(int argc, char** argv) {
                                (no_return ? std::string() : ", return ratio " + Fixed(returns.ratio, 2)),
                            no_return ? nullptr : &returns),
        "vector_map.png");
-  {
-    eval::GridResult thesis_result;
-    Aae(db, panos, ThesisConfig(config), pm, &thesis_result);
-    save(eval::DrawVectorMap(db, thesis_result, scene.name + " thesis configuration: AAE " + Fixed(thesis_aae, 1) + " deg"),
-         "vector_map_thesis_config.png");
-  }
+  save(eval::DrawVectorMap(db, thesis_result, scene.name + " thesis configuration: AAE " + Fixed(thesis_aae, 1) + " deg"),
+       "vector_map_thesis_config.png");
 
   std::ostringstream report;
   report << "# Homing evaluation: " << scene.name << "\n\n"
@@ -269,7 +266,7 @@ int Main(int argc, char** argv) {
          << " deg, max " << Fixed(rotation_errors.back()) << " deg.\n\n";
 
   // Cell sizes of the figures; a band lower than a cell is widened to one cell.
-  const std::vector<int> cells = {10, 20, 30, 40, 60};
+  const std::vector<int> cells = {10, 20, 30, 40, 60, 80};
   const std::vector<nav::OrientationRange> ranges = {nav::OrientationRange::kAll, nav::OrientationRange::kVertical,
                                                       nav::OrientationRange::kHorizontal,
                                                       nav::OrientationRange::kNarrowVertical};

@@ -146,14 +146,6 @@ GridResult EvaluatePanoramas(const GridDatabase& db, const std::vector<cv::Mat>&
   return r;
 }
 
-GridResult EvaluateGrid(const GridDatabase& db, HomingMethod& method, ViewRenderer& renderer,
-                        const CameraPipeline& pipeline) {
-  std::vector<cv::Mat> panoramas;
-  panoramas.reserve(db.sensor.size());
-  for (const auto& s : db.sensor) panoramas.push_back(renderer.ToPanorama(s, pipeline));
-  return EvaluatePanoramas(db, panoramas, method);
-}
-
 ReturnResult EvaluateReturn(const GridDatabase& db, HomingMethod& method, ViewRenderer& renderer,
                             const CameraPipeline& pipeline, const ReturnOptions& options,
                             const std::function<void(int, int)>& progress) {

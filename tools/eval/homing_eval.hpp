@@ -92,10 +92,8 @@ struct GridResult {
   double seconds_in_method = 0;   // time spent in Home() calls
   int method_calls = 0;
 };
-// Angular error at every grid position (thesis' AAE). The panoramas are made with `pipeline`.
-GridResult EvaluateGrid(const GridDatabase& db, HomingMethod& method, ViewRenderer& renderer,
-                        const CameraPipeline& pipeline);
-// Same on precomputed panoramas (index as db.poses).
+// Angular error at every grid position (thesis' AAE), on the database's panoramas (index as
+// db.poses).
 GridResult EvaluatePanoramas(const GridDatabase& db, const std::vector<cv::Mat>& panoramas, HomingMethod& method);
 
 struct ReturnOptions {
