@@ -15,7 +15,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "importers.hpp"
+#include "slam_log.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -32,94 +32,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace snapnav;
-using Clock = std::chrono::steady_clock;
-
-// The ranges of a scan as a key: scans of the same reading are byte-identical floats.
-std::string RangesKey(const laser_scan_t& s) {
-  return std::string(reinterpret_cast<const char*>(s.ranges_m.data()), s.ranges_m.size() * sizeof(float));
-}
-
-struct ScanRecord {
-  int64_t utime = 0;
-  std::string key;
-  nav::Pose2 slam, dead_reckoning;
-};
-
-// Reference poses keyed by scan ranges (CARMEN) or by time (CSV).
-struct Reference {
-  std::map<std::string, nav::Pose2> by_ranges;
-  std::vector<nav::StampedPose> by_time;
-};
-
-class VectorSink : public importers::Sink {
- public:
-  void Write(const std::string& channel, int64_t utime, const std::string& payload) override {
-    events.push_back({channel, utime, payload});
-  }
-  struct Event {
-    std::string channel;
-    int64_t utime;
-    std::string payload;
-  };
-  std::vector<Event> events;
-};
-
-Reference LoadReference(const std::string& path) {
-  Reference ref;
-  const bool csv = path.size() > 4 && path.substr(path.size() - 4) == ".csv";
-  if (csv) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error("cannot open reference " + path);
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-      ++n;
-      if (line.empty() || line[0] == '#' || line.rfind("utime", 0) == 0) continue;
-      std::replace(line.begin(), line.end(), ',', ' ');
-      std::istringstream s(line);
-      nav::StampedPose p;
-      if (!(s >> p.utime >> p.pose.x_m >> p.pose.y_m >> p.pose.theta_rad)) {
-        throw std::runtime_error(path + ":" + std::to_string(n) + ": expected utime,x,y,theta");
-      }
-      ref.by_time.push_back(p);
-    }
-    std::sort(ref.by_time.begin(), ref.by_time.end(), [](auto& a, auto& b) { return a.utime < b.utime; });
-    return ref;
-  }
-  VectorSink sink;
-  importers::CarmenOptions options;
-  options.time_source = importers::TimeSource::kLog;
-  const auto report = importers::ImportCarmenFile(path, sink, options);
-  // Each FLASER line gives a scan and its pose, next to each other in the output (the
-  // corrected log's times are truncated, so times do not tell lines apart).
-  std::optional<std::string> pending_scan;
-  std::optional<nav::Pose2> pending_pose;
-  for (const auto& e : sink.events) {
-    if (e.channel == channels::kLaserScan) {
-      laser_scan_t s;
-      if (s.decode(e.payload.data(), 0, static_cast<int>(e.payload.size())) <= 0) continue;
-      if (pending_pose) {
-        ref.by_ranges.emplace(RangesKey(s), *pending_pose);
-        pending_pose.reset();
-      } else {
-        pending_scan = RangesKey(s);
-      }
-    } else if (e.channel == importers::kPoseCarmen) {
-      pose_t p;
-      if (p.decode(e.payload.data(), 0, static_cast<int>(e.payload.size())) <= 0) continue;
-      if (pending_scan) {
-        ref.by_ranges.emplace(*pending_scan, glue::FromPoseMsg(p));
-        pending_scan.reset();
-      } else {
-        pending_pose = glue::FromPoseMsg(p);
-      }
-    }
-  }
-  (void)report;
-  std::cerr << "eval-slam: reference " << path << ": " << ref.by_ranges.size() << " scans with poses\n";
-  if (ref.by_ranges.empty()) throw std::runtime_error("reference " + path + " holds no scans with poses");
-  return ref;
-}
 
 cv::Mat DrawRun(const std::vector<std::vector<nav::Pose2>>& tracks, const std::vector<std::string>& names,
                 const std::vector<Eigen::Vector2d>& map, const std::string& title) {
@@ -173,70 +85,23 @@ int Main(int argc, char** argv) {
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
 
-  lcm::LogFile log(log_path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open LCM log " + log_path);
-  nav::LaserSlam slam(options);
-  nav::DeadReckoning dr({});
-  std::vector<ScanRecord> records;
-  int64_t odometry = 0, bad = 0, events = 0;
-  double update_s = 0;
-  while (const lcm::LogEvent* e = log.readNextEvent()) {
-    ++events;
-    const std::string channel = e->channel;
-    if (channel == channels::kOdometry) {
-      odometry_t m;
-      if (m.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) { ++bad; continue; }
-      const nav::Pose2 d = glue::OdometryDelta(m);
-      if (!std::isfinite(d.x_m) || !std::isfinite(d.y_m) || !std::isfinite(d.theta_rad)) { ++bad; continue; }
-      slam.Predict(d);
-      dr.AddOdometry(d);
-      ++odometry;
-    } else if (channel == channels::kLaserScan) {
-      laser_scan_t s;
-      if (s.decode(e->data, 0, static_cast<int>(e->datalen)) < 0 || s.ranges_m.empty() ||
-          !std::isfinite(s.angle_increment_rad)) { ++bad; continue; }
-      const auto points = nav::ScanToPoints(s.ranges_m, s.angle_min_rad, s.angle_increment_rad, s.range_min_m,
-                                            s.range_max_m, nav::Pose2{s.sensor_x_m, s.sensor_y_m, s.sensor_theta_rad});
-      const auto t0 = Clock::now();
-      slam.Update(points);
-      update_s += std::chrono::duration<double>(Clock::now() - t0).count();
-      records.push_back({s.utime, RangesKey(s), slam.pose(), dr.pose()});
-      if (records.size() % 200 == 0) std::cerr << "eval-slam: " << records.size() << " scans\r" << std::flush;
-    }
-  }
-  if (records.empty()) throw std::runtime_error(log_path + " holds no " + std::string(channels::kLaserScan) + " messages");
-  const double ms_per_scan = 1000 * update_s / records.size();
-  std::cerr << "eval-slam: " << records.size() << " scans, " << odometry << " odometry, " << bad
-            << " undecodable or invalid, " << events << " events; laser slam " << ms_per_scan << " ms/scan, map "
-            << slam.map().size() << " points\n";
+  const eval::SlamLog log = eval::LoadSlamLog(log_path);
+  const eval::SlamRun run = eval::RunSlam(log, options);
+  const double ms_per_scan = run.ms_per_scan();
+  std::cerr << "eval-slam: laser slam " << ms_per_scan << " ms/scan, map " << run.map.size() << " points\n";
 
   std::ostringstream json;
-  json << std::fixed << std::setprecision(4) << "{\n  \"log\": \"" << log_path << "\",\n  \"scans\": " << records.size()
-       << ",\n  \"odometry\": " << odometry << ",\n  \"rejected\": " << bad << ",\n  \"laser_slam_ms_per_scan\": "
-       << ms_per_scan << ",\n  \"map_points\": " << slam.map().size();
-  std::vector<nav::Pose2> ref_track, slam_track, dr_track;
-  for (const auto& r : records) {
-    slam_track.push_back(r.slam);
-    dr_track.push_back(r.dead_reckoning);
-  }
-  std::vector<std::vector<nav::Pose2>> tracks = {slam_track, dr_track};
+  json << std::fixed << std::setprecision(4) << "{\n  \"log\": \"" << log_path << "\",\n  \"scans\": " << log.scans
+       << ",\n  \"odometry\": " << log.odometry << ",\n  \"rejected\": " << log.rejected << ",\n  \"laser_slam_ms_per_scan\": "
+       << ms_per_scan << ",\n  \"map_points\": " << run.map.size();
+  std::vector<nav::Pose2> ref_track;
+  std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
   std::vector<std::string> names = {"laser slam", "dead reckoning"};
   std::string title = "laser slam on " + fs::path(log_path).filename().string();
   if (!reference_path.empty()) {
-    const Reference ref = LoadReference(reference_path);
-    std::vector<std::pair<nav::Pose2, nav::Pose2>> slam_pairs, dr_pairs;
-    for (const auto& r : records) {
-      std::optional<nav::Pose2> truth;
-      if (!ref.by_ranges.empty()) {
-        const auto it = ref.by_ranges.find(r.key);
-        if (it != ref.by_ranges.end()) truth = it->second;
-      } else if (const auto i = nav::NearestInTime(ref.by_time, r.utime, 50000)) {
-        truth = ref.by_time[*i].pose;
-      }
-      if (!truth) continue;
-      slam_pairs.push_back({r.slam, *truth});
-      dr_pairs.push_back({r.dead_reckoning, *truth});
-    }
+    const eval::Reference ref = eval::LoadReference(reference_path);
+    const auto slam_pairs = eval::PairWithReference(run.slam, run, ref);
+    const auto dr_pairs = eval::PairWithReference(run.dead_reckoning, run, ref);
     if (slam_pairs.size() < 2) throw std::runtime_error("fewer than 2 scans of the log pair with the reference");
     const auto slam_ate = nav::ComputeAte(slam_pairs, nav::AlignSE2(slam_pairs));
     const auto dr_ate = nav::ComputeAte(dr_pairs, nav::AlignSE2(dr_pairs));
@@ -256,13 +121,14 @@ int Main(int argc, char** argv) {
   }
   json << "\n}\n";
   std::ofstream(out / "summary.json") << json.str();
-  plot::SavePng(DrawRun(tracks, names, slam.map().points(), title), (out / "trajectories.png").string());
+  plot::SavePng(DrawRun(tracks, names, run.map, title), (out / "trajectories.png").string());
   {
     std::ofstream csv(out / "trajectories.csv");
     csv << "utime,slam_x_m,slam_y_m,slam_theta_rad,dr_x_m,dr_y_m,dr_theta_rad\n" << std::setprecision(9);
-    for (const auto& r : records) {
-      csv << r.utime << "," << r.slam.x_m << "," << r.slam.y_m << "," << r.slam.theta_rad << "," << r.dead_reckoning.x_m
-          << "," << r.dead_reckoning.y_m << "," << r.dead_reckoning.theta_rad << "\n";
+    for (size_t i = 0; i < run.slam.size(); ++i) {
+      const nav::Pose2 &s = run.slam[i], &d = run.dead_reckoning[i];
+      csv << run.utime[i] << "," << s.x_m << "," << s.y_m << "," << s.theta_rad << "," << d.x_m << "," << d.y_m << ","
+          << d.theta_rad << "\n";
     }
   }
   std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv\n";

@@ -1,0 +1,188 @@
+#include "slam_log.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "importers.hpp"
+#include "snapnav/glue/codec.hpp"
+#include "snapnav/glue/conversions.hpp"
+#include "snapnav/laser_scan_t.hpp"
+#include "snapnav/nav/dead_reckoning.hpp"
+#include "snapnav/odometry_t.hpp"
+#include "snapnav/pose_t.hpp"
+
+namespace snapnav::eval {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// The ranges of a scan as a key: scans of the same reading are byte-identical floats.
+std::string RangesKey(const laser_scan_t& s) {
+  return std::string(reinterpret_cast<const char*>(s.ranges_m.data()), s.ranges_m.size() * sizeof(float));
+}
+
+class VectorSink : public importers::Sink {
+ public:
+  void Write(const std::string& channel, int64_t utime, const std::string& payload) override {
+    events.push_back({channel, utime, payload});
+  }
+  struct Event {
+    std::string channel;
+    int64_t utime;
+    std::string payload;
+  };
+  std::vector<Event> events;
+};
+
+}  // namespace
+
+SlamLog LoadSlamLog(const std::string& path, bool progress) {
+  lcm::LogFile file(path, "r");
+  if (!file.good()) throw std::runtime_error("cannot open LCM log " + path);
+  SlamLog log;
+  log.path = path;
+  while (const lcm::LogEvent* e = file.readNextEvent()) {
+    ++log.events;
+    const std::string channel = e->channel;
+    if (channel == channels::kOdometry) {
+      odometry_t m;
+      if (m.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) { ++log.rejected; continue; }
+      SlamStep step;
+      step.utime = m.utime;
+      step.odometry_delta = glue::OdometryDelta(m);
+      const nav::Pose2& d = step.odometry_delta;
+      if (!std::isfinite(d.x_m) || !std::isfinite(d.y_m) || !std::isfinite(d.theta_rad)) { ++log.rejected; continue; }
+      log.steps.push_back(std::move(step));
+      ++log.odometry;
+    } else if (channel == channels::kLaserScan) {
+      laser_scan_t s;
+      if (s.decode(e->data, 0, static_cast<int>(e->datalen)) < 0 || s.ranges_m.empty() ||
+          !std::isfinite(s.angle_increment_rad)) { ++log.rejected; continue; }
+      SlamStep step;
+      step.is_scan = true;
+      step.utime = s.utime;
+      step.points = nav::ScanToPoints(s.ranges_m, s.angle_min_rad, s.angle_increment_rad, s.range_min_m, s.range_max_m,
+                                      nav::Pose2{s.sensor_x_m, s.sensor_y_m, s.sensor_theta_rad});
+      step.ranges_key = RangesKey(s);
+      if (log.beams == 0) log.beams = static_cast<int>(s.ranges_m.size());
+      log.steps.push_back(std::move(step));
+      ++log.scans;
+      if (progress && log.scans % 500 == 0) std::cerr << "eval-slam: read " << log.scans << " scans\r" << std::flush;
+    }
+  }
+  if (log.scans == 0) throw std::runtime_error(path + " holds no " + std::string(channels::kLaserScan) + " messages");
+  if (progress) {
+    std::cerr << "eval-slam: " << path << ": " << log.scans << " scans of " << log.beams << " beams, " << log.odometry
+              << " odometry, " << log.rejected << " undecodable or invalid, " << log.events << " events\n";
+  }
+  return log;
+}
+
+std::optional<nav::Pose2> Reference::Find(const std::string& ranges_key, int64_t utime, int64_t max_dt_us) const {
+  if (!by_ranges.empty()) {
+    const auto it = by_ranges.find(ranges_key);
+    if (it == by_ranges.end()) return std::nullopt;
+    return it->second;
+  }
+  if (const auto i = nav::NearestInTime(by_time, utime, max_dt_us)) return by_time[*i].pose;
+  return std::nullopt;
+}
+
+Reference LoadReference(const std::string& path) {
+  Reference ref;
+  ref.path = path;
+  const bool csv = path.size() > 4 && path.substr(path.size() - 4) == ".csv";
+  if (csv) {
+    std::ifstream in(path);
+    if (!in) throw std::runtime_error("cannot open reference " + path);
+    std::string line;
+    int n = 0;
+    while (std::getline(in, line)) {
+      ++n;
+      if (line.empty() || line[0] == '#' || line.rfind("utime", 0) == 0) continue;
+      std::replace(line.begin(), line.end(), ',', ' ');
+      std::istringstream s(line);
+      nav::StampedPose p;
+      if (!(s >> p.utime >> p.pose.x_m >> p.pose.y_m >> p.pose.theta_rad)) {
+        throw std::runtime_error(path + ":" + std::to_string(n) + ": expected utime,x,y,theta");
+      }
+      ref.by_time.push_back(p);
+    }
+    std::sort(ref.by_time.begin(), ref.by_time.end(), [](auto& a, auto& b) { return a.utime < b.utime; });
+    if (ref.by_time.empty()) throw std::runtime_error("reference " + path + " holds no poses");
+    return ref;
+  }
+  VectorSink sink;
+  importers::CarmenOptions options;
+  options.time_source = importers::TimeSource::kLog;
+  importers::ImportCarmenFile(path, sink, options);
+  // Each FLASER line gives a scan and its pose, next to each other in the output (the
+  // corrected log's times are truncated, so times do not tell lines apart).
+  std::optional<std::string> pending_scan;
+  std::optional<nav::Pose2> pending_pose;
+  for (const auto& e : sink.events) {
+    if (e.channel == channels::kLaserScan) {
+      laser_scan_t s;
+      if (s.decode(e.payload.data(), 0, static_cast<int>(e.payload.size())) <= 0) continue;
+      if (pending_pose) {
+        ref.by_ranges.emplace(RangesKey(s), *pending_pose);
+        pending_pose.reset();
+      } else {
+        pending_scan = RangesKey(s);
+      }
+    } else if (e.channel == importers::kPoseCarmen) {
+      pose_t p;
+      if (p.decode(e.payload.data(), 0, static_cast<int>(e.payload.size())) <= 0) continue;
+      if (pending_scan) {
+        ref.by_ranges.emplace(*pending_scan, glue::FromPoseMsg(p));
+        pending_scan.reset();
+      } else {
+        pending_pose = glue::FromPoseMsg(p);
+      }
+    }
+  }
+  std::cerr << "eval-slam: reference " << path << ": " << ref.by_ranges.size() << " scans with poses\n";
+  if (ref.by_ranges.empty()) throw std::runtime_error("reference " + path + " holds no scans with poses");
+  return ref;
+}
+
+SlamRun RunSlam(const SlamLog& log, const nav::LaserSlamOptions& options) {
+  nav::LaserSlam slam(options);
+  nav::DeadReckoning dr({});
+  SlamRun run;
+  run.slam.reserve(log.scans);
+  for (const SlamStep& step : log.steps) {
+    if (!step.is_scan) {
+      slam.Predict(step.odometry_delta);
+      dr.AddOdometry(step.odometry_delta);
+      continue;
+    }
+    const auto t0 = Clock::now();
+    slam.Update(step.points);
+    run.update_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    run.utime.push_back(step.utime);
+    run.ranges_key.push_back(step.ranges_key);
+    run.slam.push_back(slam.pose());
+    run.dead_reckoning.push_back(dr.pose());
+  }
+  run.map = slam.map().points();
+  return run;
+}
+
+std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vector<nav::Pose2>& estimate,
+                                                                 const SlamRun& run, const Reference& reference) {
+  std::vector<std::pair<nav::Pose2, nav::Pose2>> pairs;
+  for (size_t i = 0; i < estimate.size() && i < run.utime.size(); ++i) {
+    if (const auto truth = reference.Find(run.ranges_key[i], run.utime[i])) pairs.push_back({estimate[i], *truth});
+  }
+  return pairs;
+}
+
+}  // namespace snapnav::eval

@@ -1,0 +1,68 @@
+#pragma once
+// Laser SLAM evaluation inputs: an LCM log of LASER_SCAN and ODOMETRY read into memory (so
+// runs and benchmarks replay it without decoding again), a reference trajectory (a CSV of
+// utime,x,y,theta or a CARMEN log of corrected poses whose scans pair with the log's by
+// identical ranges), and a run of dead reckoning and laser SLAM in lockstep over the log.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/pose2.hpp"
+#include "snapnav/nav/trajectory.hpp"
+
+namespace snapnav::eval {
+
+// One step of a SLAM log, in log order: an odometry increment or a scan.
+struct SlamStep {
+  bool is_scan = false;
+  int64_t utime = 0;
+  nav::Pose2 odometry_delta;                 // !is_scan: increment in the robot frame
+  std::vector<Eigen::Vector2d> points;       // is_scan: valid points in the robot frame
+  std::string ranges_key;                    // is_scan: the raw ranges, for pairing with a reference
+};
+
+struct SlamLog {
+  std::string path;
+  std::vector<SlamStep> steps;
+  int64_t scans = 0, odometry = 0, rejected = 0, events = 0;
+  int beams = 0;                             // beams of the first scan
+};
+
+// Reads a log made by log-import (or recorded on the bus). Undecodable or invalid messages are
+// counted in `rejected`. Throws std::runtime_error naming the file if it cannot be opened or
+// holds no scans. Progress goes to stderr when `progress`.
+SlamLog LoadSlamLog(const std::string& path, bool progress = true);
+
+// Reference poses keyed by scan ranges (CARMEN) or by time (CSV).
+struct Reference {
+  std::string path;
+  std::map<std::string, nav::Pose2> by_ranges;
+  std::vector<nav::StampedPose> by_time;
+  // The reference pose of a scan: by identical ranges, else nearest in time within max_dt_us.
+  std::optional<nav::Pose2> Find(const std::string& ranges_key, int64_t utime, int64_t max_dt_us = 50000) const;
+};
+// Throws std::runtime_error naming the file and line on malformed input.
+Reference LoadReference(const std::string& path);
+
+// The pose of every scan of a run.
+struct SlamRun {
+  std::vector<int64_t> utime;
+  std::vector<std::string> ranges_key;
+  std::vector<nav::Pose2> slam, dead_reckoning;
+  double update_seconds = 0;                  // time spent in LaserSlam::Update
+  std::vector<Eigen::Vector2d> map;           // the final point map
+  double ms_per_scan() const { return slam.empty() ? 0 : 1000 * update_seconds / static_cast<double>(slam.size()); }
+};
+// Runs dead reckoning and laser SLAM in lockstep over the log.
+SlamRun RunSlam(const SlamLog& log, const nav::LaserSlamOptions& options);
+
+// (estimate, reference) pairs of the scans that have a reference pose.
+std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vector<nav::Pose2>& estimate,
+                                                                 const SlamRun& run, const Reference& reference);
+
+}  // namespace snapnav::eval
