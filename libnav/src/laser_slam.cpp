@@ -9,6 +9,52 @@
 
 namespace snapnav::nav {
 
+const char* IcpMetricName(IcpMetric m) {
+  return m == IcpMetric::kPointToPoint ? "point_to_point" : "point_to_line";
+}
+
+std::optional<IcpMetric> ParseIcpMetric(const std::string& name) {
+  if (name == "point_to_point") return IcpMetric::kPointToPoint;
+  if (name == "point_to_line") return IcpMetric::kPointToLine;
+  return std::nullopt;
+}
+
+std::vector<Eigen::Vector2d> ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours, double max_gap_m) {
+  std::vector<Eigen::Vector2d> normals(points.size(), Eigen::Vector2d::Zero());
+  const int n = static_cast<int>(points.size());
+  for (int i = 0; i < n; ++i) {
+    // Neighbours may be farther apart at long range (beams diverge): 5 % of the range.
+    const double gap = std::max(max_gap_m, 0.05 * points[i].norm());
+    Eigen::Vector2d sum = points[i];
+    Eigen::Matrix2d outer = points[i] * points[i].transpose();
+    int count = 1;
+    // Walk outwards on each side while the neighbours stay close to the point.
+    for (const int dir : {-1, 1}) {
+      for (int k = 1; k <= neighbours; ++k) {
+        const int j = i + dir * k;
+        if (j < 0 || j >= n || (points[j] - points[i]).norm() > gap * k) break;
+        sum += points[j];
+        outer += points[j] * points[j].transpose();
+        ++count;
+      }
+    }
+    if (count < 3) continue;
+    const Eigen::Vector2d mean = sum / count;
+    const Eigen::Matrix2d cov = outer / count - mean * mean.transpose();
+    // Closed-form eigen decomposition of the symmetric 2x2 covariance.
+    const double a = cov(0, 0), b = cov(0, 1), c = cov(1, 1);
+    const double half_trace = 0.5 * (a + c), det = a * c - b * b;
+    const double root = std::sqrt(std::max(0.0, half_trace * half_trace - det));
+    const double large = half_trace + root, small = half_trace - root;
+    if (!(large > 0) || small > 0.1 * large) continue;  // not a line
+    // Eigenvector of the small eigenvalue: the normal.
+    const Eigen::Vector2d v = std::abs(b) > 1e-15 ? Eigen::Vector2d(b, small - a)
+                                                  : (a < c ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
+    normals[i] = v.normalized();
+  }
+  return normals;
+}
+
 Pose2 EkfPoseUpdate(const Pose2& pose, Eigen::Matrix3d* covariance, const Pose2& z, const Eigen::Matrix3d& r) {
   const Eigen::Matrix3d& p = *covariance;
   const Eigen::Matrix3d k = p * (p + r).inverse();
@@ -63,22 +109,23 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m) : resolution_(r
   if (!(resolution_m > 0) || !(bucket_m > 0)) throw std::invalid_argument("point map: cell sizes must be > 0");
 }
 
-bool PointGridMap::Add(const Eigen::Vector2d& p) {
+bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
   const uint64_t fine = Key(static_cast<int64_t>(std::floor(p.x() / resolution_)),
                             static_cast<int64_t>(std::floor(p.y() / resolution_)));
   if (!cells_.emplace(fine, static_cast<uint32_t>(points_.size())).second) return false;
   buckets_[Key(static_cast<int64_t>(std::floor(p.x() / bucket_)), static_cast<int64_t>(std::floor(p.y() / bucket_)))]
       .push_back(static_cast<uint32_t>(points_.size()));
   points_.push_back(p);
+  normals_.push_back(normal);
   return true;
 }
 
-std::optional<Eigen::Vector2d> PointGridMap::Nearest(const Eigen::Vector2d& p, double max_distance_m) const {
+int PointGridMap::NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const {
   const int64_t bx = static_cast<int64_t>(std::floor(p.x() / bucket_));
   const int64_t by = static_cast<int64_t>(std::floor(p.y() / bucket_));
   const int64_t reach = std::max<int64_t>(1, static_cast<int64_t>(std::ceil(max_distance_m / bucket_)));
   double best = max_distance_m * max_distance_m;
-  const Eigen::Vector2d* found = nullptr;
+  int found = -1;
   for (int64_t dx = -reach; dx <= reach; ++dx) {
     for (int64_t dy = -reach; dy <= reach; ++dy) {
       const auto it = buckets_.find(Key(bx + dx, by + dy));
@@ -87,19 +134,33 @@ std::optional<Eigen::Vector2d> PointGridMap::Nearest(const Eigen::Vector2d& p, d
         const double d = (points_[i] - p).squaredNorm();
         if (d < best) {
           best = d;
-          found = &points_[i];
+          found = static_cast<int>(i);
         }
       }
     }
   }
-  if (!found) return std::nullopt;
-  return *found;
+  return found;
+}
+
+std::optional<Eigen::Vector2d> PointGridMap::Nearest(const Eigen::Vector2d& p, double max_distance_m) const {
+  const int i = NearestIndex(p, max_distance_m);
+  if (i < 0) return std::nullopt;
+  return points_[static_cast<size_t>(i)];
 }
 
 void LaserSlamOptions::Validate() const {
   motion.Validate();
   if (!(initial_sigma_xy_m >= 0) || !(initial_sigma_theta_rad >= 0)) throw std::invalid_argument("laser slam: initial sigmas must be >= 0");
   if (!(match_distance_m > 0)) throw std::invalid_argument("laser slam: match_distance_m must be > 0");
+  if (!(match_distance_start_m >= match_distance_m)) {
+    throw std::invalid_argument("laser slam: match_distance_start_m must be >= match_distance_m");
+  }
+  if (!(robust_scale_m > 0)) throw std::invalid_argument("laser slam: robust_scale_m must be > 0");
+  if (!(max_range_m >= 0)) throw std::invalid_argument("laser slam: max_range_m must be >= 0 (0: no limit)");
+  if (!(recovery_fit >= 0 && recovery_fit <= 1)) throw std::invalid_argument("laser slam: recovery_fit must be in [0, 1]");
+  if (!(search_sigmas >= 0) || !(search_window_max_rad >= 0) || !(search_step_rad > 0)) {
+    throw std::invalid_argument("laser slam: search_sigmas and search_window_max must be >= 0, search_step > 0");
+  }
   if (icp_iterations < 1) throw std::invalid_argument("laser slam: icp_iterations must be >= 1");
   if (!(point_sigma_m > 0)) throw std::invalid_argument("laser slam: point_sigma_m must be > 0");
   if (min_matches < 3) throw std::invalid_argument("laser slam: min_matches must be >= 3");
@@ -108,7 +169,7 @@ void LaserSlamOptions::Validate() const {
 }
 
 LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
-    : options_(options), pose_(start), map_(options.map_resolution_m, options.match_distance_m) {
+    : options_(options), pose_(start), map_(options.map_resolution_m, std::max(0.25, options.match_distance_m)) {
   options_.Validate();
   covariance_ = Eigen::Vector3d(options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_xy_m * options.initial_sigma_xy_m,
@@ -120,18 +181,63 @@ void LaserSlam::Predict(const Pose2& odometry_delta) {
   PredictWithOdometry(options_.motion, odometry_delta, &pose_, &covariance_);
 }
 
-LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points) {
-  LaserSlamUpdate u;
-  std::vector<Eigen::Vector2d> decimated;
-  if (options_.scan_step > 1) {
-    for (size_t i = 0; i < all_points.size(); i += options_.scan_step) decimated.push_back(all_points[i]);
-  }
-  const std::vector<Eigen::Vector2d>& points = options_.scan_step > 1 ? decimated : all_points;
-  u.points = static_cast<int>(points.size());
-  ++scans_;
-  if (map_.size() > 0 && !points.empty()) {
-    // ICP: nearest map point of every scan point, closed-form alignment, repeated.
-    Pose2 estimate = pose_;
+namespace {
+
+Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
+
+}  // namespace
+
+LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
+                                const std::vector<Eigen::Vector2d>& normals) const {
+  Icp r;
+  r.estimate = start;
+  double distance = options_.match_distance_start_m;
+  const auto next_distance = [&] { distance = std::max(options_.match_distance_m, 0.5 * distance); };
+  if (options_.metric == IcpMetric::kPointToLine) {
+    // Gauss-Newton on sum w_i (n_i . (R p_i + t - q_i))^2, n_i the map point's normal (or the
+    // scan point's, rotated, if the map point has none), w_i a Cauchy weight of the residual.
+    const double scale2 = options_.robust_scale_m * options_.robust_scale_m;
+    for (int it = 0; it < options_.icp_iterations; ++it) {
+      const double c = std::cos(r.estimate.theta_rad), s = std::sin(r.estimate.theta_rad);
+      Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      int matches = 0;
+      double residual2 = 0, weight_sum = 0;
+      for (size_t i = 0; i < points.size(); ++i) {
+        const Eigen::Vector2d w = r.estimate.Transform(points[i]);
+        const int j = map_.NearestIndex(w, distance);
+        if (j < 0) continue;
+        const Eigen::Vector2d scan_normal = Rotate(c, s, normals[i]);
+        Eigen::Vector2d n = map_.normals()[static_cast<size_t>(j)];
+        if (n.isZero()) n = scan_normal;
+        if (n.isZero()) continue;
+        // Surfaces facing differently (more than 45 degrees apart) are not the same surface.
+        if (!scan_normal.isZero() && std::abs(scan_normal.dot(n)) < 0.7071) continue;
+        const double res = n.dot(w - map_.points()[static_cast<size_t>(j)]);
+        const Eigen::Vector2d d_theta(-s * points[i].x() - c * points[i].y(), c * points[i].x() - s * points[i].y());
+        const Eigen::Vector3d jac(n.x(), n.y(), n.dot(d_theta));
+        const double weight = 1.0 / (1.0 + res * res / scale2);
+        h += weight * jac * jac.transpose();
+        g += weight * res * jac;
+        residual2 += weight * res * res;
+        weight_sum += weight;
+        ++matches;
+      }
+      ++r.iterations;
+      r.matches = matches;
+      if (matches < options_.min_matches) break;
+      r.info = h;
+      r.residual2 = residual2;
+      r.weight_sum = weight_sum;
+      // A small damping keeps directions the scan cannot see (a corridor's axis) where they were.
+      const Eigen::Vector3d step = -(h + 1e-6 * (h.trace() + 1.0) * Eigen::Matrix3d::Identity()).ldlt().solve(g);
+      r.estimate = {r.estimate.x_m + step.x(), r.estimate.y_m + step.y(), WrapAngle(r.estimate.theta_rad + step.z())};
+      const bool coarse = distance > options_.match_distance_m;
+      next_distance();
+      if (!coarse && std::hypot(step.x(), step.y()) + std::abs(step.z()) < options_.icp_convergence_m) break;
+    }
+  } else {
+    // Thesis 5.3.1: nearest map point of every scan point, closed-form alignment, repeated.
     std::vector<Eigen::Vector2d> src, dst;
     std::vector<size_t> index;
     for (int it = 0; it < options_.icp_iterations; ++it) {
@@ -139,57 +245,148 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
       dst.clear();
       index.clear();
       for (size_t i = 0; i < points.size(); ++i) {
-        const auto q = map_.Nearest(estimate.Transform(points[i]), options_.match_distance_m);
-        if (!q) continue;
+        const int j = map_.NearestIndex(r.estimate.Transform(points[i]), distance);
+        if (j < 0) continue;
         src.push_back(points[i]);
-        dst.push_back(*q);
+        dst.push_back(map_.points()[static_cast<size_t>(j)]);
         index.push_back(i);
       }
-      ++u.iterations;
-      if (static_cast<int>(src.size()) < options_.min_matches) break;
+      ++r.iterations;
+      r.matches = static_cast<int>(src.size());
+      if (r.matches < options_.min_matches) break;
       const auto next = AlignPoints(src, dst);
       if (!next) break;
       // Convergence: translation plus rotation (radians count as metres at 1 m range).
-      const double step = std::hypot(next->x_m - estimate.x_m, next->y_m - estimate.y_m) +
-                          std::abs(WrapAngle(next->theta_rad - estimate.theta_rad));
-      estimate = *next;
-      if (step < options_.icp_convergence_m) break;
+      const double step = std::hypot(next->x_m - r.estimate.x_m, next->y_m - r.estimate.y_m) +
+                          std::abs(WrapAngle(next->theta_rad - r.estimate.theta_rad));
+      r.estimate = *next;
+      const bool coarse = distance > options_.match_distance_m;
+      next_distance();
+      if (!coarse && step < options_.icp_convergence_m) break;
     }
-    u.matches = static_cast<int>(src.size());
-    if (u.matches >= options_.min_matches) {
-      // Measurement covariance from the point-to-line information of the matches: the normal of
-      // the scan's surface at each match (from its scan neighbours) constrains the pose along it
-      // only, so a corridor leaves its axis to the prediction.
-      const double c = std::cos(estimate.theta_rad), s = std::sin(estimate.theta_rad);
-      double residual2 = 0;
-      Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+    if (r.matches >= options_.min_matches) {
+      // Information from the point-to-line geometry of the matches: the normal of the scan's
+      // surface at each match constrains the pose along it only, so a corridor leaves its axis
+      // to the prediction.
+      const double c = std::cos(r.estimate.theta_rad), s = std::sin(r.estimate.theta_rad);
       for (size_t k = 0; k < src.size(); ++k) {
-        const Eigen::Vector2d w = estimate.Transform(src[k]);
-        residual2 += (w - dst[k]).squaredNorm();
-        const size_t i = index[k];
-        const Eigen::Vector2d a = points[i > 0 ? i - 1 : i], b = points[i + 1 < points.size() ? i + 1 : i];
-        Eigen::Vector2d tangent = b - a;
-        if (tangent.norm() < 1e-9 || tangent.norm() > 0.5) continue;  // isolated point: no surface
-        tangent = Eigen::Vector2d(c * tangent.x() - s * tangent.y(), s * tangent.x() + c * tangent.y()).normalized();
-        const Eigen::Vector2d n(-tangent.y(), tangent.x());
+        r.residual2 += (r.estimate.Transform(src[k]) - dst[k]).squaredNorm() / 2.0;
+        r.weight_sum += 1;
+        const Eigen::Vector2d n = Rotate(c, s, normals[index[k]]);
+        if (n.isZero()) continue;  // isolated point or corner: no surface
         const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());
-        const Eigen::RowVector3d j(n.x(), n.y(), n.dot(d_theta));
-        info += j.transpose() * j;
+        const Eigen::Vector3d jac(n.x(), n.y(), n.dot(d_theta));
+        r.info += jac * jac.transpose();
       }
-      const double sigma2 = std::max(options_.point_sigma_m * options_.point_sigma_m, residual2 / (2.0 * u.matches));
-      info /= sigma2;
-      info += Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();  // unobservable directions: huge R, not singular
-      u.measured = true;
-      u.measurement = estimate;
-      u.measurement_covariance = info.inverse();
-      pose_ = EkfPoseUpdate(pose_, &covariance_, estimate, u.measurement_covariance);
     }
   }
-  // Unmatched points join the map at the updated pose.
-  for (const auto& p : points) {
-    const Eigen::Vector2d w = pose_.Transform(p);
+  r.ok = r.matches >= options_.min_matches && r.weight_sum > 0;
+  return r;
+}
+
+double LaserSlam::Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
+  const double tau = options_.match_distance_m, tau2 = tau * tau;
+  double score = 0;
+  for (size_t i = 0; i < points.size(); i += stride) {
+    const Eigen::Vector2d w = pose.Transform(points[i]);
+    const int j = map_.NearestIndex(w, tau);
+    if (j >= 0) score += 1.0 - (map_.points()[static_cast<size_t>(j)] - w).squaredNorm() / tau2;
+  }
+  return score;
+}
+
+Pose2 LaserSlam::SearchHeading(const Pose2& around, double window_rad, double shift_m,
+                               const std::vector<Eigen::Vector2d>& points, size_t stride) const {
+  const double step = options_.search_step_rad;
+  const int n = static_cast<int>(std::ceil(window_rad / step));
+  const int m = shift_m > 0 ? 1 : 0;
+  double best_score = -1;
+  Pose2 best = around;
+  for (int k = -n; k <= n; ++k) {
+    for (int dx = -m; dx <= m; ++dx) {
+      for (int dy = -m; dy <= m; ++dy) {
+        const Pose2 candidate{around.x_m + dx * shift_m, around.y_m + dy * shift_m, WrapAngle(around.theta_rad + k * step)};
+        const double score = Score(candidate, points, stride);
+        // Ties keep the candidate nearest the prediction (k = 0 comes first only for k >= 0).
+        if (score > best_score + 1e-9 || (std::abs(score - best_score) <= 1e-9 && std::abs(k) < 1)) {
+          best_score = score;
+          best = candidate;
+        }
+      }
+    }
+  }
+  return best;
+}
+
+double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
+  size_t near = 0, total = 0;
+  for (size_t i = 0; i < points.size(); i += stride, ++total) {
+    near += map_.HasPointWithin(pose.Transform(points[i]), 0.5 * options_.match_distance_m);
+  }
+  return total > 0 ? static_cast<double>(near) / static_cast<double>(total) : 0.0;
+}
+
+LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points) {
+  LaserSlamUpdate u;
+  std::vector<Eigen::Vector2d> points;
+  points.reserve(all_points.size() / static_cast<size_t>(options_.scan_step) + 1);
+  const double max_range2 = options_.max_range_m > 0 ? options_.max_range_m * options_.max_range_m
+                                                     : std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < all_points.size(); i += static_cast<size_t>(options_.scan_step)) {
+    if (all_points[i].squaredNorm() <= max_range2) points.push_back(all_points[i]);
+  }
+  const std::vector<Eigen::Vector2d> normals = ScanNormals(points);
+  u.points = static_cast<int>(points.size());
+  ++scans_;
+  if (map_.size() > 0 && !points.empty()) {
+    // Heading search: the prediction's heading may be off by more than ICP can pull in (a fast
+    // turn, odometry late against the laser). Headings within search_sigmas standard deviations
+    // of the prediction are scored on a subset of the points, and ICP starts from the best.
+    const size_t stride = std::max<size_t>(1, points.size() / 90);
+    const double step = options_.search_step_rad;
+    Pose2 start = pose_;
+    const double window = std::min(options_.search_window_max_rad, options_.search_sigmas * std::sqrt(covariance_(2, 2)));
+    if (window >= step) {
+      start = SearchHeading(pose_, window, 0.0, points, stride);
+      ++u.searches;
+    }
+    Icp icp = Align(start, points, normals);
+    u.fit = icp.ok ? Fit(icp.estimate, points, 1) : 0.0;
+    if (u.fit < options_.recovery_fit && options_.search_window_max_rad >= step) {
+      // Poor fit: search the whole window, and positions around the prediction, then align again.
+      const Icp again = Align(SearchHeading(pose_, options_.search_window_max_rad, options_.match_distance_start_m / 2,
+                                            points, stride),
+                              points, normals);
+      const double again_fit = again.ok ? Fit(again.estimate, points, 1) : 0.0;
+      ++u.recoveries;
+      if (again_fit > u.fit) {
+        icp = again;
+        u.fit = again_fit;
+        // The prediction was off by this much, whatever its covariance said: widen it so the
+        // update does not pull the pose back towards it.
+        const Eigen::Vector3d off(icp.estimate.x_m - pose_.x_m, icp.estimate.y_m - pose_.y_m,
+                                  WrapAngle(icp.estimate.theta_rad - pose_.theta_rad));
+        covariance_ += off.cwiseProduct(off).asDiagonal();
+      }
+    }
+    u.iterations = icp.iterations;
+    u.matches = icp.matches;
+    if (icp.ok) {
+      const double sigma2 = std::max(options_.point_sigma_m * options_.point_sigma_m, icp.residual2 / icp.weight_sum);
+      Eigen::Matrix3d info = icp.info / sigma2;
+      info += Eigen::Vector3d(1e-6, 1e-6, 1e-6).asDiagonal();  // unobservable directions: huge R, not singular
+      u.measured = true;
+      u.measurement = icp.estimate;
+      u.measurement_covariance = info.inverse();
+      pose_ = EkfPoseUpdate(pose_, &covariance_, icp.estimate, u.measurement_covariance);
+    }
+  }
+  // Points with no map point near them join the map at the updated pose, with their normals.
+  const double c = std::cos(pose_.theta_rad), s = std::sin(pose_.theta_rad);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector2d w = pose_.Transform(points[i]);
     if (map_.size() > 0 && map_.HasPointWithin(w, options_.add_distance_m)) continue;
-    if (map_.Add(w)) ++u.added;
+    if (map_.Add(w, Rotate(c, s, normals[i]))) ++u.added;
   }
   return u;
 }

@@ -33,7 +33,21 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.motion.rotation_noise_rad_per_m = ini.GetDouble(s, "rotation_noise_rad_per_m");
   o.initial_sigma_xy_m = ini.GetDouble(s, "initial_sigma_xy_m");
   o.initial_sigma_theta_rad = ini.GetDouble(s, "initial_sigma_theta_deg") / kDegPerRad;
+  const std::string metric = ini.GetString(s, "metric");
+  const auto parsed = nav::ParseIcpMetric(metric);
+  if (!parsed) {
+    throw glue::ConfigError(ini.origin() + ": [laser_slam] metric = " + metric +
+                            ": expected point_to_point or point_to_line");
+  }
+  o.metric = *parsed;
   o.match_distance_m = ini.GetDouble(s, "match_distance_m");
+  o.match_distance_start_m = ini.GetDouble(s, "match_distance_start_m");
+  o.robust_scale_m = ini.GetDouble(s, "robust_scale_m");
+  o.max_range_m = ini.GetDouble(s, "max_range_m");
+  o.search_sigmas = ini.GetDouble(s, "search_sigmas");
+  o.search_window_max_rad = ini.GetDouble(s, "search_window_max_deg") / kDegPerRad;
+  o.search_step_rad = ini.GetDouble(s, "search_step_deg") / kDegPerRad;
+  o.recovery_fit = ini.GetDouble(s, "recovery_fit");
   o.icp_iterations = ini.GetInt(s, "icp_iterations");
   o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
   o.point_sigma_m = ini.GetDouble(s, "point_sigma_m");
@@ -63,7 +77,12 @@ void LaserSlamConfig::Print(std::ostream& out) const {
       << "\nrotation_noise_rad_per_m = " << o.motion.rotation_noise_rad_per_m
       << "\ninitial_sigma_xy_m = " << o.initial_sigma_xy_m
       << "\ninitial_sigma_theta_deg = " << o.initial_sigma_theta_rad * kDegPerRad
-      << "\nmatch_distance_m = " << o.match_distance_m << "\nicp_iterations = " << o.icp_iterations
+      << "\nmetric = " << nav::IcpMetricName(o.metric) << "\nmatch_distance_m = " << o.match_distance_m
+      << "\nmatch_distance_start_m = " << o.match_distance_start_m << "\nrobust_scale_m = " << o.robust_scale_m
+      << "\nmax_range_m = " << o.max_range_m << "\nsearch_sigmas = " << o.search_sigmas
+      << "\nsearch_window_max_deg = " << o.search_window_max_rad * kDegPerRad
+      << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nrecovery_fit = " << o.recovery_fit
+      << "\nicp_iterations = " << o.icp_iterations
       << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
       << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
       << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step

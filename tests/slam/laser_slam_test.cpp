@@ -66,9 +66,7 @@ TEST(PointGridMap, OnePointPerCellAndNearestWithinRadius) {
   EXPECT_EQ(map.size(), 2u);
 }
 
-// A 6 x 5 m room with furniture; the robot drives a loop twice with poor odometry (heading
-// drift): the SLAM pose stays close to the truth while dead reckoning drifts away.
-TEST(LaserSlam, StaysOnTheTruthWhereDeadReckoningDrifts) {
+sim::Scene SquareRoom() {
   sim::Scene scene;
   scene.name = "square room";
   scene.textures.push_back(sim::MakeTexture("plain", cv::Mat(4, 4, CV_8UC3, cv::Scalar(200, 200, 200)), 1, 1));
@@ -76,6 +74,69 @@ TEST(LaserSlam, StaysOnTheTruthWhereDeadReckoningDrifts) {
                  {{6, 5}, {0, 5}, 2.5, 0, 0, 0}, {{0, 5}, {0, 0}, 2.5, 0, 0, 0},
                  {{2.5, 2.0}, {3.5, 2.0}, 1.0, 0, 0, 0}, {{3.5, 2.0}, {3.5, 3.0}, 1.0, 0, 0, 0},
                  {{0.0, 4.0}, {0.8, 4.0}, 1.0, 0, 0, 0}, {{5.0, 0.0}, {5.0, 0.7}, 1.0, 0, 0, 0}};
+  return scene;
+}
+
+TEST(ScanNormals, LinesGiveTheirNormalCornersAndLoneNeighboursNone) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < 10; ++i) pts.push_back({0.1 * i, 1.0});   // a wall along x at y = 1
+  for (int i = 1; i < 10; ++i) pts.push_back({0.9, 1.0 + 0.1 * i});  // turning a corner up along y
+  pts.push_back({5.0, 5.0});                                     // a lone return far away
+  const auto n = ScanNormals(pts, 2, 0.3);
+  ASSERT_EQ(n.size(), pts.size());
+  EXPECT_NEAR(std::abs(n[3].y()), 1.0, 1e-9);
+  EXPECT_NEAR(n[3].x(), 0.0, 1e-9);
+  EXPECT_NEAR(std::abs(n[14].x()), 1.0, 1e-9);
+  EXPECT_TRUE(n[9].isZero()) << "the corner point's neighbours do not lie on one line";
+  EXPECT_TRUE(n.back().isZero()) << "a point with no close neighbours has no normal";
+  EXPECT_EQ(ParseIcpMetric("point_to_line"), IcpMetric::kPointToLine);
+  EXPECT_EQ(ParseIcpMetric(IcpMetricName(IcpMetric::kPointToPoint)), IcpMetric::kPointToPoint);
+  EXPECT_FALSE(ParseIcpMetric("p2p").has_value());
+}
+
+// Odometry misses a 20 degree turn (a slip, or odometry late against the laser): ICP alone from
+// the prediction locks onto the wrong heading; the heading search after the poor fit finds it.
+TEST(LaserSlam, HeadingSearchRecoversATurnOdometryMissed) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const Pose2 start{2.0, 3.5, 0.3};
+  world.SetTruePose(start);
+  const auto points = [&] {
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
+                        {laser.mount_x_m, 0, 0});
+  };
+  const auto first = points();
+  const double turn = 20.0 * M_PI / 180.0;
+  world.SetTruePose({start.x_m, start.y_m, start.theta_rad + turn});
+  const auto second = points();
+  for (const bool search : {true, false}) {
+    LaserSlamOptions options;
+    if (!search) options.search_window_max_rad = 0;
+    LaserSlam slam(options, start);
+    slam.Update(first);
+    slam.Predict({0, 0, 0});  // odometry saw nothing
+    const LaserSlamUpdate u = slam.Update(second);
+    const double heading_error = std::abs(WrapAngle(slam.pose().theta_rad - start.theta_rad - turn)) * 180 / M_PI;
+    std::cout << (search ? "with" : "without") << " heading search: fit " << u.fit << ", heading error " << heading_error
+              << " deg\n";
+    if (search) {
+      EXPECT_EQ(u.recoveries, 1);
+      EXPECT_LT(heading_error, 0.5);
+      EXPECT_LT(std::hypot(slam.pose().x_m - start.x_m, slam.pose().y_m - start.y_m), 0.03);
+      EXPECT_GT(u.fit, 0.9);
+    } else {
+      EXPECT_GT(heading_error, 5.0) << "ICP alone should not pull in 20 degrees; the test would prove nothing";
+    }
+  }
+}
+
+// A 6 x 5 m room with furniture; the robot drives a loop twice with poor odometry (heading
+// drift): the SLAM pose stays close to the truth while dead reckoning drifts away.
+class LaserSlamMetric : public ::testing::TestWithParam<IcpMetric> {};
+
+TEST_P(LaserSlamMetric, StaysOnTheTruthWhereDeadReckoningDrifts) {
+  const sim::Scene scene = SquareRoom();
   sim::DriveOptions drive;
   drive.heading_drift_deg_per_m = 2.0;
   drive.odometry_linear_noise_frac = 0.03;
@@ -85,6 +146,7 @@ TEST(LaserSlam, StaysOnTheTruthWhereDeadReckoningDrifts) {
   world.SetTruePose({1.2, 1.0, 0});
   sim::RouteDriver driver({{4.8, 1.2}, {4.8, 3.8}, {1.2, 3.8}, {1.2, 1.2}}, 0.4, 0.15, true);
   LaserSlamOptions options;
+  options.metric = GetParam();
   options.motion.translation_noise_m_per_m = 0.05;
   options.motion.rotation_noise_rad_per_rad = 0.08;
   options.motion.rotation_noise_rad_per_m = 0.04;
@@ -117,6 +179,10 @@ TEST(LaserSlam, StaysOnTheTruthWhereDeadReckoningDrifts) {
   EXPECT_GT(slam.covariance()(0, 0), 0.0);
 }
 
+INSTANTIATE_TEST_SUITE_P(BothMetrics, LaserSlamMetric,
+                         ::testing::Values(IcpMetric::kPointToPoint, IcpMetric::kPointToLine),
+                         [](const auto& info) { return std::string(IcpMetricName(info.param)); });
+
 TEST(LaserSlam, EmptyScansAreSkipped) {
   LaserSlam slam({}, {});
   slam.Predict({0.1, 0, 0});
@@ -127,6 +193,9 @@ TEST(LaserSlam, EmptyScansAreSkipped) {
   LaserSlamOptions bad;
   bad.match_distance_m = 0;
   EXPECT_THROW(LaserSlam(bad, {}), std::invalid_argument);
+  LaserSlamOptions coarse_below_fine;
+  coarse_below_fine.match_distance_start_m = 0.1;  // below match_distance_m
+  EXPECT_THROW(LaserSlam(coarse_below_fine, {}), std::invalid_argument);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -22,6 +23,21 @@
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
+
+// How ICP measures the distance of a scan point to its matched map point.
+enum class IcpMetric {
+  kPointToPoint,  // thesis 5.3.1: closed-form alignment of the matched pairs (AlignPoints), iterated
+  kPointToLine,   // Gauss-Newton on the distance along the surface normal, robust (Cauchy) weights
+};
+const char* IcpMetricName(IcpMetric m);
+std::optional<IcpMetric> ParseIcpMetric(const std::string& name);
+
+// Unit surface normals of scan points from their neighbours in scan order: a line fitted
+// (principal axes) through the point and up to `neighbours` points on each side that lie
+// within `max_gap_m` of it. Zero where there are too few neighbours or they do not lie on a
+// line (a corner, clutter). The gap grows to 5 % of the range for far points.
+std::vector<Eigen::Vector2d> ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours = 2,
+                                         double max_gap_m = 0.3);
 
 // The EKF update with a direct pose measurement z (H = I): K = P (P + R)^-1. The angle
 // innovation is wrapped. Returns the updated pose; `covariance` is updated in place.
@@ -43,14 +59,18 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
 class PointGridMap {
  public:
   PointGridMap(double resolution_m, double bucket_m);
-  // Adds p unless its cell is taken; returns whether it was added.
-  bool Add(const Eigen::Vector2d& p);
+  // Adds p (with its unit surface normal, or zero if unknown) unless its cell is taken;
+  // returns whether it was added.
+  bool Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal = Eigen::Vector2d::Zero());
   // The nearest stored point within max_distance_m, if any.
   std::optional<Eigen::Vector2d> Nearest(const Eigen::Vector2d& p, double max_distance_m) const;
+  // Its index in points() / normals(), or -1.
+  int NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const;
   // Whether a stored point lies within `distance_m` of p.
   bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return Nearest(p, distance_m).has_value(); }
   size_t size() const { return points_.size(); }
   const std::vector<Eigen::Vector2d>& points() const { return points_; }
+  const std::vector<Eigen::Vector2d>& normals() const { return normals_; }
   double resolution_m() const { return resolution_; }
 
  private:
@@ -60,14 +80,36 @@ class PointGridMap {
   double resolution_, bucket_;
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
-  std::vector<Eigen::Vector2d> points_;
+  std::vector<Eigen::Vector2d> points_, normals_;
 };
 
 struct LaserSlamOptions {
-  DeadReckoningOptions motion;              // odometry noise Q (prediction)
+  // Odometry noise Q of the prediction. The heading noise per radian turned is 0.4, not dead
+  // reckoning's 0.05: on a real robot turning fast, odometry and laser are out of step (CSAIL:
+  // 10-25 deg between a scan and its odometry while turning at 60 deg/s), and the heading search
+  // window follows this uncertainty.
+  DeadReckoningOptions motion = [] {
+    DeadReckoningOptions m;
+    m.rotation_noise_rad_per_rad = 0.4;
+    return m;
+  }();
   double initial_sigma_xy_m = 0.01;         // initial covariance
   double initial_sigma_theta_rad = 0.01;
-  double match_distance_m = 0.25;           // a scan point matches a map point closer than this
+  IcpMetric metric = IcpMetric::kPointToPoint;
+  double match_distance_m = 0.2;            // a scan point matches a map point closer than this
+  double match_distance_start_m = 0.5;      // first iteration's match distance, halved each iteration
+                                            // down to match_distance_m (coarse to fine)
+  double robust_scale_m = 0.05;             // point-to-line: Cauchy weight 1 / (1 + (r / scale)^2)
+  double max_range_m = 0;                   // ignore points farther than this (0: no limit)
+  // Heading search before ICP: headings within +-search_sigmas predicted standard deviations
+  // (at most search_window_max_rad) in search_step_rad steps are scored against the map and ICP
+  // starts from the best. Recovery: when fewer than recovery_fit of the points lie within
+  // match_distance_m / 2 of the map after ICP, the whole window (and positions +-
+  // match_distance_start_m / 2) is searched and ICP runs again; the better fit wins.
+  double search_sigmas = 3;
+  double search_window_max_rad = 0.5236;    // 30 deg; 0: no search, no recovery
+  double search_step_rad = 0.00873;         // 0.5 deg
+  double recovery_fit = 0.6;
   int icp_iterations = 15;
   double icp_convergence_m = 1e-4;          // stop when an iteration moves less than this
   double point_sigma_m = 0.03;              // noise of one matched point, floor of the residual estimate
@@ -81,6 +123,9 @@ struct LaserSlamOptions {
 struct LaserSlamUpdate {
   bool measured = false;       // the scan gave a pose measurement
   int points = 0, matches = 0, added = 0, iterations = 0;
+  double fit = 0;              // fraction of the points within match_distance_m / 2 of the map after ICP
+  int searches = 0;            // 1 if the heading was searched before ICP
+  int recoveries = 0;          // 1 if a poor fit started a wider search
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
 };
@@ -100,6 +145,22 @@ class LaserSlam {
   int64_t scans() const { return scans_; }
 
  private:
+  struct Icp {
+    bool ok = false;
+    Pose2 estimate;
+    int matches = 0, iterations = 0;
+    Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // unscaled information (sum of J^T J)
+    double residual2 = 0, weight_sum = 0;
+  };
+  Icp Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
+            const std::vector<Eigen::Vector2d>& normals) const;
+  // Sum over every stride-th point of 1 - (d / match_distance)^2, d its distance to the map.
+  double Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
+  Pose2 SearchHeading(const Pose2& around, double window_rad, double shift_m, const std::vector<Eigen::Vector2d>& points,
+                      size_t stride) const;
+  // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
+  double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
+
   LaserSlamOptions options_;
   Pose2 pose_;
   Eigen::Matrix3d covariance_;
