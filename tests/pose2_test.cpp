@@ -113,5 +113,51 @@ TEST(Trajectory, AssociatesNearestInTimeWithinBound) {
   EXPECT_NEAR(r.final_m, 6, 1e-12);
 }
 
+TEST(Trajectory, RelativePoseErrorOverOneMetreHandComputed) {
+  // The reference drives 2 m along x in 0.5 m steps. The estimate overshoots the third pose by
+  // 0.1 m and ends 0.1 rad off. Segments of 1 m: 0->2, 1->3, 2->4.
+  //   0->2: estimate moved (1.1, 0, 0), reference (1, 0, 0): error 0.1 m, 0 rad
+  //   1->3: (1.6 - 0.5, 0, 0) against (1, 0, 0): 0.1 m, 0 rad
+  //   2->4: (2.0 - 1.1, 0, 0.1) against (1, 0, 0): (1,0,0)^-1 (0.9,0,0.1) = (-0.1, 0, 0.1)
+  // Translation RMSE 0.1 m; rotation RMSE sqrt(0.1^2 / 3) rad = 3.3079 deg, max 5.7296 deg.
+  const std::vector<Pose2> ref = {{0, 0, 0}, {0.5, 0, 0}, {1, 0, 0}, {1.5, 0, 0}, {2, 0, 0}};
+  const std::vector<Pose2> est = {{0, 0, 0}, {0.5, 0, 0}, {1.1, 0, 0}, {1.6, 0, 0}, {2, 0, 0.1}};
+  std::vector<std::pair<Pose2, Pose2>> pairs;
+  for (size_t i = 0; i < ref.size(); ++i) pairs.emplace_back(est[i], ref[i]);
+  const RpeResult r = ComputeRpe(pairs, 1.0);
+  EXPECT_EQ(r.segments, 3);
+  EXPECT_NEAR(r.translation_rmse_m, 0.1, 1e-12);
+  EXPECT_NEAR(r.translation_mean_m, 0.1, 1e-12);
+  EXPECT_NEAR(r.translation_max_m, 0.1, 1e-12);
+  EXPECT_NEAR(r.rotation_rmse_deg, std::sqrt(0.01 / 3) * 180 / M_PI, 1e-9);
+  EXPECT_NEAR(r.rotation_max_deg, 0.1 * 180 / M_PI, 1e-9);
+  // Over 2 m only 0->4 is a segment: (2, 0, 0.1) against (2, 0, 0).
+  const RpeResult whole = ComputeRpe(pairs, 2.0);
+  EXPECT_EQ(whole.segments, 1);
+  EXPECT_NEAR(whole.translation_rmse_m, 0.0, 1e-12);
+  EXPECT_NEAR(whole.rotation_rmse_deg, 0.1 * 180 / M_PI, 1e-9);
+  // Longer than the path: no segment.
+  EXPECT_EQ(ComputeRpe(pairs, 2.5).segments, 0);
+  EXPECT_THROW(ComputeRpe(pairs, 0.0), std::invalid_argument);
+  EXPECT_THROW(ComputeRpe(pairs, std::nan("")), std::invalid_argument);
+}
+
+TEST(Trajectory, RelativePoseErrorIgnoresTheFrameAndCountsTenthsAsAMetre) {
+  // The estimate is the reference seen from another frame: ATE without alignment is large,
+  // RPE is zero. Steps of 0.1 m: ten of them make 1 m despite rounding.
+  const Pose2 frame{3.0, -1.0, 0.8};
+  std::vector<std::pair<Pose2, Pose2>> pairs;
+  Pose2 ref;
+  for (int i = 0; i < 40; ++i) {
+    pairs.emplace_back(frame.Compose(ref), ref);
+    ref = ref.Compose({0.1, 0, 0.05});
+  }
+  EXPECT_GT(ComputeAte(pairs).rmse_m, 1.0);
+  const RpeResult r = ComputeRpe(pairs, 1.0);
+  EXPECT_EQ(r.segments, 40 - 10);
+  EXPECT_NEAR(r.translation_max_m, 0.0, 1e-9);
+  EXPECT_NEAR(r.rotation_max_deg, 0.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace snapnav::nav

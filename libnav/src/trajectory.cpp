@@ -77,4 +77,42 @@ AteResult ComputeAte(const std::vector<std::pair<Pose2, Pose2>>& pairs, const Po
   return r;
 }
 
+RpeResult ComputeRpe(const std::vector<std::pair<Pose2, Pose2>>& pairs, double delta_m) {
+  if (!(delta_m > 0) || !std::isfinite(delta_m)) throw std::invalid_argument("RPE needs a positive, finite delta_m");
+  RpeResult r;
+  r.delta_m = delta_m;
+  // Travelled distance of the reference at each pair.
+  std::vector<double> travelled(pairs.size(), 0.0);
+  for (size_t i = 1; i < pairs.size(); ++i) {
+    const Pose2 &a = pairs[i - 1].second, &b = pairs[i].second;
+    travelled[i] = travelled[i - 1] + std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+  }
+  // A relative tolerance so that e.g. ten 0.1 m steps count as 1 m.
+  const double tolerance = 1e-9 * std::max(1.0, delta_m);
+  double sum_t2 = 0, sum_t = 0, sum_r2 = 0;
+  size_t j = 0;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    j = std::max(j, i + 1);
+    while (j < pairs.size() && travelled[j] - travelled[i] < delta_m - tolerance) ++j;
+    if (j >= pairs.size()) break;  // later i travel even less
+    const Pose2 estimate_motion = pairs[i].first.Between(pairs[j].first);
+    const Pose2 reference_motion = pairs[i].second.Between(pairs[j].second);
+    const Pose2 error = reference_motion.Between(estimate_motion);
+    const double t = std::hypot(error.x_m, error.y_m);
+    const double rot_deg = std::abs(WrapAngle(error.theta_rad)) * 180.0 / M_PI;
+    sum_t2 += t * t;
+    sum_t += t;
+    sum_r2 += rot_deg * rot_deg;
+    r.translation_max_m = std::max(r.translation_max_m, t);
+    r.rotation_max_deg = std::max(r.rotation_max_deg, rot_deg);
+    ++r.segments;
+  }
+  if (r.segments > 0) {
+    r.translation_rmse_m = std::sqrt(sum_t2 / r.segments);
+    r.translation_mean_m = sum_t / r.segments;
+    r.rotation_rmse_deg = std::sqrt(sum_r2 / r.segments);
+  }
+  return r;
+}
+
 }  // namespace snapnav::nav

@@ -1,21 +1,24 @@
 // eval-slam: dead reckoning and laser SLAM (thesis 5.3) run in lockstep over an LCM log of
 // laser scans and odometry (made by log-import), with the absolute trajectory error against a
 // reference: a CSV of utime,x,y,theta, or a CARMEN log of corrected poses whose scans are
-// paired with the log's by identical ranges.
+// paired with the log's by identical ranges. With --icp-slam, MRPT's icp-slam runs on the
+// rawlog or CARMEN log the LCM log was imported from (eval/icp_slam.hpp), beside ours: its
+// trajectory is paired with ours by scan time and compared (RMS difference after SE(2)
+// alignment, time per scan), and measured against the reference too.
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <optional>
 #include <sstream>
 
-#include <lcm/lcm-cpp.hpp>
-#include <opencv2/imgproc.hpp>
-
+#include "icp_slam.hpp"
 #include "slam_log.hpp"
+#include "slam_plot.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -33,46 +36,40 @@ namespace {
 namespace fs = std::filesystem;
 using namespace snapnav;
 
-cv::Mat DrawRun(const std::vector<std::vector<nav::Pose2>>& tracks, const std::vector<std::string>& names,
-                const std::vector<Eigen::Vector2d>& map, const std::string& title) {
-  double xmin = 1e18, xmax = -1e18, ymin = 1e18, ymax = -1e18;
-  auto grow = [&](double x, double y) {
-    xmin = std::min(xmin, x); xmax = std::max(xmax, x);
-    ymin = std::min(ymin, y); ymax = std::max(ymax, y);
-  };
-  for (const auto& p : map) grow(p.x(), p.y());
-  for (const auto& t : tracks) for (const auto& p : t) grow(p.x_m, p.y_m);
-  const int size = 900, top = 40;
-  const double scale = (size - 40) / std::max({xmax - xmin, ymax - ymin, 1e-3});
-  cv::Mat img(size + top, size, CV_8UC3, cv::Scalar(255, 255, 255));
-  auto px = [&](double x, double y) {
-    return cv::Point(static_cast<int>(20 + (x - xmin) * scale), static_cast<int>(top + size - 20 - (y - ymin) * scale));
-  };
-  for (const auto& p : map) img.at<cv::Vec3b>(px(p.x(), p.y())) = cv::Vec3b(80, 80, 80);
-  for (size_t k = 0; k < tracks.size(); ++k) {
-    const cv::Scalar c = plot::SeriesColour(static_cast<int>(k));
-    for (size_t i = 1; i < tracks[k].size(); ++i) {
-      cv::line(img, px(tracks[k][i - 1].x_m, tracks[k][i - 1].y_m), px(tracks[k][i].x_m, tracks[k][i].y_m), c, 2, cv::LINE_AA);
-    }
-    cv::putText(img, names[k], {size - 260, top + 20 + 22 * static_cast<int>(k)}, cv::FONT_HERSHEY_SIMPLEX, 0.55, c, 2, cv::LINE_AA);
+// Paths in summary.json (the Malaga rawlog's name has spaces; none has quotes, but be safe).
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
   }
-  cv::putText(img, title, {12, 28}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  const int bar = static_cast<int>(5.0 * scale);
-  cv::line(img, {20, top + size - 8}, {20 + bar, top + size - 8}, cv::Scalar(0, 0, 0), 2);
-  cv::putText(img, "5 m", {24 + bar, top + size - 4}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  return img;
+  return out + "\"";
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
 }
 
 int Main(int argc, char** argv) {
-  std::string log_path, reference_path, out_dir;
+  std::string log_path, reference_path, out_dir, icp_input;
   nav::LaserSlamOptions options;
+  eval::IcpSlamOptions icp_options;
   glue::Flags flags("eval-slam",
                     "Runs dead reckoning and laser SLAM in lockstep over an LCM log of LASER_SCAN and ODOMETRY\n"
                     "(see log-import) and writes trajectories, a map image and summary.json; with --reference,\n"
                     "the ATE (RMSE after SE(2) alignment) of each against a CSV (utime,x,y,theta) or a CARMEN log\n"
-                    "of corrected poses, paired with the log's scans by identical ranges.");
+                    "of corrected poses, paired with the log's scans by identical ranges. With --icp-slam, MRPT's\n"
+                    "icp-slam runs beside it on the rawlog or CARMEN log the LCM log was imported from (work files\n"
+                    "and the generated config in OUT/icp-slam/): time per scan, RMS difference from our trajectory\n"
+                    "(paired by scan time, after SE(2) alignment) and its ATE against the reference.");
   flags.AddString("log", &log_path, "LCM log (required)");
   flags.AddString("reference", &reference_path, "reference trajectory: .csv or CARMEN log (.log, .clf, .gz)");
+  flags.AddString("icp-slam", &icp_input,
+                  "rawlog (.rawlog[.gz]) or CARMEN log the LCM log was imported from: run MRPT's icp-slam on it");
+  flags.AddString("icp-slam-config", &icp_options.base_config, "icp-slam ini file the config is generated from");
+  flags.AddString("icp-slam-bin", &icp_options.icp_slam, "the icp-slam program (name on PATH or path)");
   flags.AddDouble("match-distance-m", &options.match_distance_m, "laser slam: match distance [m]");
   flags.AddInt("icp-iterations", &options.icp_iterations, "laser slam: ICP iterations per scan");
   flags.AddDouble("map-resolution-m", &options.map_resolution_m, "laser slam: map cell [m]");
@@ -82,6 +79,9 @@ int Main(int argc, char** argv) {
   if (!flags.Parse(argc, argv)) return 0;
   if (log_path.empty() || out_dir.empty()) throw glue::FlagError("--log LOG and --out DIR are required");
   options.Validate();
+  if (!icp_input.empty() && !fs::is_regular_file(icp_input)) {
+    throw glue::FlagError("--icp-slam " + icp_input + ": no such file");
+  }
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
 
@@ -89,15 +89,62 @@ int Main(int argc, char** argv) {
   const eval::SlamRun run = eval::RunSlam(log, options);
   const double ms_per_scan = run.ms_per_scan();
   std::cerr << "eval-slam: laser slam " << ms_per_scan << " ms/scan, map " << run.map.size() << " points\n";
+  // The thesis' own procedure (5.3.1) beside it: point-to-point ICP at one match distance, no
+  // heading search, the odometry noise of dead reckoning.
+  nav::LaserSlamOptions thesis = options;
+  thesis.metric = nav::IcpMetric::kPointToPoint;
+  thesis.match_distance_m = thesis.match_distance_start_m = 0.25;
+  thesis.search_window_max_rad = 0;
+  thesis.motion = nav::DeadReckoningOptions{};
+  const eval::SlamRun thesis_run = eval::RunSlam(log, thesis);
+  std::cerr << "eval-slam: thesis configuration " << thesis_run.ms_per_scan() << " ms/scan\n";
 
   std::ostringstream json;
-  json << std::fixed << std::setprecision(4) << "{\n  \"log\": \"" << log_path << "\",\n  \"scans\": " << log.scans
-       << ",\n  \"odometry\": " << log.odometry << ",\n  \"rejected\": " << log.rejected << ",\n  \"laser_slam_ms_per_scan\": "
-       << ms_per_scan << ",\n  \"map_points\": " << run.map.size();
-  std::vector<nav::Pose2> ref_track;
+  json << std::fixed << std::setprecision(4) << "{\n  \"log\": " << JsonString(log_path)
+       << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
+       << ",\n  \"rejected\": " << log.rejected << ",\n  \"laser_slam_ms_per_scan\": " << ms_per_scan
+       << ",\n  \"map_points\": " << run.map.size() << ",\n  \"thesis_slam_ms_per_scan\": " << thesis_run.ms_per_scan();
   std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
   std::vector<std::string> names = {"laser slam", "dead reckoning"};
   std::string title = "laser slam on " + fs::path(log_path).filename().string();
+
+  // MRPT's icp-slam beside it.
+  std::optional<eval::IcpSlamRun> icp;
+  std::optional<eval::IcpSlamComparison> cmp;
+  if (!icp_input.empty()) {
+    icp = eval::RunIcpSlam(icp_input, (out / "icp-slam").string(), icp_options);
+    cmp = eval::CompareWithIcpSlam(run.utime, run.slam, icp->poses);
+    const double ratio = ms_per_scan > 0 ? icp->ms_per_scan() / ms_per_scan : 0;
+    std::cerr << std::fixed << std::setprecision(3) << "eval-slam: side by side on " << cmp->paired << " of "
+              << run.slam.size() << " scans (icp-slam has " << icp->poses.size() << "):\n"
+              << "  laser slam  " << ms_per_scan << " ms/scan\n"
+              << "  icp-slam    " << icp->ms_per_scan() << " ms/scan (its own timing of its SLAM steps; "
+              << icp->wall_ms_per_scan() << " ms/scan wall, whole process)\n"
+              << "  ratio icp-slam/laser slam " << std::setprecision(2) << ratio << "x; trajectories differ by "
+              << std::setprecision(3) << cmp->difference.rmse_m << " m RMS (max " << cmp->difference.max_m
+              << " m) after SE(2) alignment\n";
+    json << ",\n  \"icp_slam_input\": " << JsonString(icp_input)
+         << ",\n  \"icp_slam_config\": " << JsonString(icp->config)
+         << ",\n  \"icp_slam_rawlog_entries\": " << icp->steps << ",\n  \"icp_slam_scans\": " << icp->poses.size()
+         << ",\n  \"icp_slam_scans_paired\": " << cmp->paired << ",\n  \"icp_slam_ms_per_scan\": " << icp->ms_per_scan()
+         << ",\n  \"icp_slam_wall_ms_per_scan\": " << icp->wall_ms_per_scan()
+         << ",\n  \"icp_slam_over_laser_slam_time_ratio\": " << ratio
+         << ",\n  \"laser_slam_vs_icp_slam_rms_m\": " << cmp->difference.rmse_m
+         << ",\n  \"laser_slam_vs_icp_slam_max_m\": " << cmp->difference.max_m;
+    // icp-slam's track in our frame.
+    const nav::Pose2 to_slam = cmp->slam_to_icp.Inverse();
+    std::vector<nav::Pose2> track;
+    for (const auto& p : cmp->icp_at_scans) {
+      if (p) track.push_back(to_slam.Compose(*p));
+    }
+    tracks.push_back(track);
+    names.push_back("icp-slam (MRPT)");
+    std::ofstream csv(out / "icp_slam_trajectory.csv");
+    csv << "utime,icp_x_m,icp_y_m,icp_theta_rad\n" << std::setprecision(9);
+    for (const auto& p : icp->poses)
+      csv << p.utime << "," << p.pose.x_m << "," << p.pose.y_m << "," << p.pose.theta_rad << "\n";
+  }
+
   if (!reference_path.empty()) {
     const eval::Reference ref = eval::LoadReference(reference_path);
     const auto slam_pairs = eval::PairWithReference(run.slam, run, ref);
@@ -105,23 +152,51 @@ int Main(int argc, char** argv) {
     if (slam_pairs.size() < 2) throw std::runtime_error("fewer than 2 scans of the log pair with the reference");
     const auto slam_ate = nav::ComputeAte(slam_pairs, nav::AlignSE2(slam_pairs));
     const auto dr_ate = nav::ComputeAte(dr_pairs, nav::AlignSE2(dr_pairs));
+    const auto thesis_pairs = eval::PairWithReference(thesis_run.slam, thesis_run, ref);
+    const auto thesis_ate = nav::ComputeAte(thesis_pairs, nav::AlignSE2(thesis_pairs));
     std::cerr << "eval-slam: " << slam_pairs.size() << " scans paired with the reference; ATE RMSE: laser slam "
-              << slam_ate.rmse_m << " m, dead reckoning " << dr_ate.rmse_m << " m\n";
-    json << ",\n  \"reference\": \"" << reference_path << "\",\n  \"reference_pairs\": " << slam_pairs.size()
+              << slam_ate.rmse_m << " m, thesis configuration " << thesis_ate.rmse_m << " m, dead reckoning "
+              << dr_ate.rmse_m << " m\n";
+    json << ",\n  \"thesis_slam_ate_rmse_m\": " << thesis_ate.rmse_m;
+    json << ",\n  \"reference\": " << JsonString(reference_path) << ",\n  \"reference_pairs\": " << slam_pairs.size()
          << ",\n  \"laser_slam_ate_rmse_m\": " << slam_ate.rmse_m << ",\n  \"laser_slam_ate_max_m\": " << slam_ate.max_m
-         << ",\n  \"dead_reckoning_ate_rmse_m\": " << dr_ate.rmse_m << ",\n  \"dead_reckoning_ate_max_m\": " << dr_ate.max_m;
+         << ",\n  \"dead_reckoning_ate_rmse_m\": " << dr_ate.rmse_m
+         << ",\n  \"dead_reckoning_ate_max_m\": " << dr_ate.max_m;
+    std::string ate_title =
+        "ATE " + Fixed(slam_ate.rmse_m, 3) + " m (dead reckoning " + Fixed(dr_ate.rmse_m, 3) + " m)";
+    if (cmp) {
+      // icp-slam's poses at our scans that have a reference pose.
+      std::vector<std::pair<nav::Pose2, nav::Pose2>> icp_pairs;
+      for (size_t i = 0; i < run.slam.size(); ++i) {
+        if (!cmp->icp_at_scans[i]) continue;
+        if (const auto truth = ref.Find(run.ranges_key[i], run.utime[i]))
+          icp_pairs.push_back({*cmp->icp_at_scans[i], *truth});
+      }
+      if (icp_pairs.size() < 2) throw std::runtime_error("fewer than 2 of icp-slam's poses pair with the reference");
+      const auto icp_ate = nav::ComputeAte(icp_pairs, nav::AlignSE2(icp_pairs));
+      std::cerr << "eval-slam: icp-slam ATE RMSE " << icp_ate.rmse_m << " m over " << icp_pairs.size() << " scans\n";
+      json << ",\n  \"icp_slam_reference_pairs\": " << icp_pairs.size()
+           << ",\n  \"icp_slam_ate_rmse_m\": " << icp_ate.rmse_m << ",\n  \"icp_slam_ate_max_m\": " << icp_ate.max_m;
+      // The title line holds about 85 characters.
+      ate_title = "ATE laser slam " + Fixed(slam_ate.rmse_m, 2) + ", dead reckoning " + Fixed(dr_ate.rmse_m, 2) +
+                  ", icp-slam " + Fixed(icp_ate.rmse_m, 2) + " m; slam vs icp-slam " +
+                  Fixed(cmp->difference.rmse_m, 2) + " m";
+    }
+    title = cmp ? ate_title : title + ": " + ate_title;
     // Draw the reference in the SLAM frame.
-    const nav::Pose2 to_ref = nav::AlignSE2(slam_pairs);
-    const nav::Pose2 to_slam = to_ref.Inverse();
+    const nav::Pose2 to_slam = nav::AlignSE2(slam_pairs).Inverse();
+    std::vector<nav::Pose2> ref_track;
     for (const auto& [est, truth] : slam_pairs) ref_track.push_back(to_slam.Compose(truth));
     tracks.push_back(ref_track);
     names.push_back("reference");
-    title += ": ATE " + std::to_string(slam_ate.rmse_m).substr(0, 5) + " m (dead reckoning " +
-             std::to_string(dr_ate.rmse_m).substr(0, 5) + " m)";
+  }
+  if (cmp && reference_path.empty()) {
+    title += "; vs icp-slam: " + Fixed(cmp->difference.rmse_m, 3) + " m RMS, time ratio " +
+             Fixed(icp->ms_per_scan() / std::max(ms_per_scan, 1e-9), 2);
   }
   json << "\n}\n";
   std::ofstream(out / "summary.json") << json.str();
-  plot::SavePng(DrawRun(tracks, names, run.map, title), (out / "trajectories.png").string());
+  plot::SavePng(eval::DrawRun(tracks, names, run.map, title), (out / "trajectories.png").string());
   {
     std::ofstream csv(out / "trajectories.csv");
     csv << "utime,slam_x_m,slam_y_m,slam_theta_rad,dr_x_m,dr_y_m,dr_theta_rad\n" << std::setprecision(9);
@@ -131,7 +206,8 @@ int Main(int argc, char** argv) {
           << d.theta_rad << "\n";
     }
   }
-  std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv\n";
+  std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv"
+            << (icp ? ", icp_slam_trajectory.csv, icp-slam/" : "") << "\n";
   return 0;
 }
 

@@ -1,0 +1,226 @@
+// bench-slam: our laser SLAM against MRPT's icp-slam, measured in one run on MRPT's Malaga loop
+// (Debian's mrpt-common): the rawlog is imported as log-import does into an LCM log, our
+// LaserSlam (default options) runs over it --runs times (median ms per scan, as eval-slam
+// times it: LaserSlam::Update), icp-slam runs --icp-runs times on the same rawlog (median of
+// its own per-scan timing, eval/icp_slam.hpp), and the trajectories are compared (RMS
+// difference of the positions at the same scans after SE(2) alignment). Then scans per second
+// on 681-beam scans (the simulated Hokuyo URG-04LX of config/sim.ini driving a scene's route).
+// Goals (issue): icp-slam/ours time ratio >= 2, RMS difference <= 0.05 m, >= 500 scans/s at
+// 681 beams on one core (the snapnav script pins it with taskset -c 0). Writes bench.json and
+// bench.md into --out.
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+#include <vector>
+
+#include "icp_slam.hpp"
+#include "importers.hpp"
+#include "slam_log.hpp"
+#include "slam_sim.hpp"
+#include "snapnav/glue/app.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/nav/laser_slam.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace snapnav;
+
+constexpr double kGoalTimeRatio = 2.0;        // icp-slam ms/scan over ours, at least
+constexpr double kGoalRmsDifferenceM = 0.05;  // ours against icp-slam, at most
+constexpr double kGoalScansPerSecond = 500;   // 681-beam scans, one core, at least
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0 : v[v.size() / 2];
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+// Median ms per scan of `runs` runs of our SLAM over `log`; the last run in *last.
+double OurMsPerScan(const eval::SlamLog& log, int runs, const std::string& what, eval::SlamRun* last) {
+  std::vector<double> ms;
+  for (int r = 0; r < runs; ++r) {
+    *last = eval::RunSlam(log, nav::LaserSlamOptions{});
+    ms.push_back(last->ms_per_scan());
+    std::cerr << "bench-slam: " << what << " run " << r + 1 << "/" << runs << ": " << Fixed(ms.back(), 3)
+              << " ms/scan\n";
+  }
+  return Median(ms);
+}
+
+int Main(int argc, char** argv) {
+  std::string rawlog = eval::kMalagaLoopRawlog, out_dir, sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini";
+  std::string sim_scene = "corridor";
+  int runs = 7, icp_runs = 5;
+  double sim_duration_s = 60;
+  eval::IcpSlamOptions icp_options;
+  icp_options.progress = false;
+  glue::Flags flags("bench-slam",
+                    "Our laser SLAM against MRPT's icp-slam on one rawlog (default: MRPT's Malaga loop): imports it\n"
+                    "into an LCM log, runs our SLAM --runs times and icp-slam --icp-runs times, and prints the\n"
+                    "median ms per scan of each, their ratio (goal >= 2), the RMS difference of the trajectories\n"
+                    "(goal <= 0.05 m), and our scans per second on 681-beam simulated scans (goal >= 500). Run it\n"
+                    "on one core (./snapnav bench slam uses taskset -c 0). Writes bench.json and bench.md to --out.");
+  flags.AddString("rawlog", &rawlog, "MRPT rawlog with laser scans and odometry");
+  flags.AddInt("runs", &runs, "runs of our laser SLAM per figure");
+  flags.AddInt("icp-runs", &icp_runs, "runs of icp-slam");
+  flags.AddString("icp-slam-config", &icp_options.base_config, "icp-slam ini file the config is generated from");
+  flags.AddString("icp-slam-bin", &icp_options.icp_slam, "the icp-slam program (name on PATH or path)");
+  flags.AddString("sim-config", &sim_config_path, "simulator config of the 681-beam scans (laser, robot)");
+  flags.AddString("sim-scene", &sim_scene, "scene the simulated robot drives (its route)");
+  flags.AddDouble("sim-duration-s", &sim_duration_s, "simulated seconds (10 scans/s)");
+  flags.AddString("out", &out_dir, "folder for bench.json, bench.md and the work files (default: a temporary folder)");
+  if (!flags.Parse(argc, argv)) return 0;
+  if (runs < 1 || icp_runs < 1) throw glue::FlagError("--runs and --icp-runs must be >= 1");
+  if (!(sim_duration_s > 0)) throw glue::FlagError("--sim-duration-s must be positive");
+  if (!fs::is_regular_file(rawlog)) {
+    throw glue::FlagError("rawlog " + rawlog + ": no such file" +
+                          (rawlog == eval::kMalagaLoopRawlog ? " (install Debian's mrpt-common)" : ""));
+  }
+  bool temporary = false;
+  if (out_dir.empty()) {
+    std::string pattern = (fs::temp_directory_path() / "bench-slam-XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) throw std::runtime_error("cannot create a temporary folder in /tmp");
+    out_dir = pattern;
+    temporary = true;
+  }
+  const fs::path out(out_dir);
+  fs::create_directories(out / "work");
+
+  // 1. The rawlog as an LCM log, as log-import writes it.
+  const std::string log_path = (out / "work" / "rawlog.lcmlog").string();
+  std::cerr << "bench-slam: importing " << rawlog << " -> " << log_path << "\n";
+  {
+    importers::LcmLogSink sink(log_path);
+    const importers::ImportReport report = importers::ImportRawlog(rawlog, sink, importers::RawlogOptions{});
+    sink.Close();
+    if (!report.ok()) {
+      std::ostringstream s;
+      importers::PrintSummary(report, s);
+      throw std::runtime_error("importing " + rawlog + " failed:\n" + s.str());
+    }
+  }
+  const eval::SlamLog log = eval::LoadSlamLog(log_path, false);
+  std::cerr << "bench-slam: " << log.scans << " scans of " << log.beams << " beams, " << log.odometry << " odometry\n";
+
+  // 2. Ours and icp-slam on the same scans, runs interleaved so that load from elsewhere on the
+  // machine falls on both alike.
+  eval::SlamRun run;
+  std::vector<double> ours_runs, icp_ms, icp_wall_ms;
+  eval::IcpSlamRun icp;
+  for (int r = 0; r < std::max(runs, icp_runs); ++r) {
+    if (r < runs) {
+      run = eval::RunSlam(log, nav::LaserSlamOptions{});
+      ours_runs.push_back(run.ms_per_scan());
+      std::cerr << "bench-slam: laser slam run " << r + 1 << "/" << runs << ": " << Fixed(ours_runs.back(), 3)
+                << " ms/scan\n";
+    }
+    if (r < icp_runs) {
+      icp = eval::RunIcpSlam(rawlog, (out / "work" / "icp-slam").string(), icp_options);
+      icp_ms.push_back(icp.ms_per_scan());
+      icp_wall_ms.push_back(icp.wall_ms_per_scan());
+      std::cerr << "bench-slam: icp-slam run " << r + 1 << "/" << icp_runs << ": " << Fixed(icp_ms.back(), 3)
+                << " ms/scan (wall " << Fixed(icp_wall_ms.back(), 3) << ")\n";
+    }
+  }
+  const double ours_ms = Median(ours_runs);
+  const double theirs_ms = Median(icp_ms), theirs_wall_ms = Median(icp_wall_ms);
+  const eval::IcpSlamComparison cmp = eval::CompareWithIcpSlam(run.utime, run.slam, icp.poses);
+  const double ratio = theirs_ms / std::max(ours_ms, 1e-9);
+
+  // 3. 681-beam scans per second.
+  const auto sim_config = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  eval::SimSlamOptions sim_options = eval::SimSlamOptions::FromSimConfig(sim_config);
+  sim_options.scene = sim_scene;
+  sim_options.laps = 0;
+  sim_options.duration_s = sim_duration_s;
+  sim_options.Validate();
+  std::cerr << "bench-slam: simulating " << sim_duration_s << " s in '" << sim_scene << "' (" << sim_options.laser.beams
+            << "-beam laser of " << sim_config_path << ")\n";
+  const eval::SimulatedSlamLog sim = eval::SimulateSlamLog(sim_options);
+  eval::SlamRun sim_run;
+  const double sim_ms = OurMsPerScan(sim.log, runs, std::to_string(sim.log.beams) + "-beam scans", &sim_run);
+  const double sim_scans_per_s = 1000.0 / std::max(sim_ms, 1e-9);
+
+  const bool ratio_met = ratio >= kGoalTimeRatio;
+  const bool rms_met = cmp.difference.rmse_m <= kGoalRmsDifferenceM;
+  const bool rate_met = sim.log.beams == 681 && sim_scans_per_s >= kGoalScansPerSecond;
+  auto mark = [](bool met) { return met ? "met" : "MISSED"; };
+  std::ostringstream report;
+  report << "bench-slam: " << fs::path(rawlog).filename().string() << ", " << log.scans << " scans of " << log.beams
+         << " beams; ours: median of " << runs << " runs, icp-slam: median of " << icp_runs << " runs\n"
+         << "  laser slam (ours)     " << Fixed(ours_ms, 3) << " ms/scan  (" << Fixed(1000 / std::max(ours_ms, 1e-9), 0)
+         << " scans/s)\n"
+         << "  icp-slam (MRPT)       " << Fixed(theirs_ms, 3) << " ms/scan  (its own timing of its SLAM steps; whole "
+         << "process " << Fixed(theirs_wall_ms, 3) << " ms/scan)\n"
+         << "  ratio icp-slam/ours   " << Fixed(ratio, 2) << "x           goal >= " << Fixed(kGoalTimeRatio, 0) << ": "
+         << mark(ratio_met) << "\n"
+         << "  trajectory difference " << Fixed(cmp.difference.rmse_m, 3) << " m RMS (max "
+         << Fixed(cmp.difference.max_m, 3) << " m) over " << cmp.paired
+         << " scans, after SE(2) alignment; goal <= " << Fixed(kGoalRmsDifferenceM, 2) << " m: " << mark(rms_met)
+         << "\n"
+         << "  " << sim.log.beams << "-beam scans       " << Fixed(sim_ms, 3)
+         << " ms/scan = " << Fixed(sim_scans_per_s, 0) << " scans/s (" << sim.log.scans << " simulated scans in '"
+         << sim.scene_name << "', median of " << runs << " runs); goal >= " << Fixed(kGoalScansPerSecond, 0) << ": "
+         << mark(rate_met) << "\n";
+  std::cout << report.str() << std::flush;
+
+  std::ofstream json(out / "bench.json");
+  json << std::fixed << std::setprecision(4) << "{\n  \"rawlog\": " << JsonString(rawlog)
+       << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"runs\": " << runs
+       << ",\n  \"icp_runs\": " << icp_runs << ",\n  \"laser_slam_ms_per_scan\": " << ours_ms
+       << ",\n  \"laser_slam_scans_per_s\": " << 1000 / std::max(ours_ms, 1e-9)
+       << ",\n  \"icp_slam_ms_per_scan\": " << theirs_ms << ",\n  \"icp_slam_wall_ms_per_scan\": " << theirs_wall_ms
+       << ",\n  \"icp_slam_config\": " << JsonString(icp.config) << ",\n  \"icp_slam_scans\": " << icp.poses.size()
+       << ",\n  \"icp_slam_scans_paired\": " << cmp.paired << ",\n  \"icp_slam_over_laser_slam_time_ratio\": " << ratio
+       << ",\n  \"laser_slam_vs_icp_slam_rms_m\": " << cmp.difference.rmse_m
+       << ",\n  \"laser_slam_vs_icp_slam_max_m\": " << cmp.difference.max_m
+       << ",\n  \"sim_scene\": " << JsonString(sim.scene_name) << ",\n  \"sim_beams\": " << sim.log.beams
+       << ",\n  \"sim_scans\": " << sim.log.scans << ",\n  \"sim_laser_slam_ms_per_scan\": " << sim_ms
+       << ",\n  \"sim_laser_slam_scans_per_s\": " << sim_scans_per_s
+       << ",\n  \"goal_time_ratio_met\": " << (ratio_met ? "true" : "false")
+       << ",\n  \"goal_rms_difference_met\": " << (rms_met ? "true" : "false")
+       << ",\n  \"goal_scans_per_s_met\": " << (rate_met ? "true" : "false") << "\n}\n";
+  json.close();
+  std::ofstream md(out / "bench.md");
+  md << "# bench-slam\n\n```\n"
+     << report.str() << "```\n\n"
+     << "| | laser slam (ours) | icp-slam (MRPT) | goal |\n|---|---|---|---|\n"
+     << "| ms/scan, " << log.beams << " beams | " << Fixed(ours_ms, 3) << " | " << Fixed(theirs_ms, 3) << " (wall "
+     << Fixed(theirs_wall_ms, 3) << ") | ratio " << Fixed(ratio, 2) << " >= 2 |\n"
+     << "| RMS difference | " << Fixed(cmp.difference.rmse_m, 3) << " m | | <= 0.05 m |\n"
+     << "| scans/s, " << sim.log.beams << " beams | " << Fixed(sim_scans_per_s, 0) << " | | >= 500 |\n\n"
+     << "icp-slam config: `" << icp.config << "`; its per-scan time is the sum of its log_times.txt (its own timing "
+     << "of CMetricMapBuilderICP's processing of each rawlog entry) over the scans.\n";
+  md.close();
+  if (temporary) {
+    std::cerr << "bench-slam: (no --out) removing " << out_dir << "\n";
+    fs::remove_all(out);
+  } else {
+    std::cerr << "bench-slam: wrote " << (out / "bench.json").string() << " and bench.md\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return glue::RunMain(argc, argv, Main); }
