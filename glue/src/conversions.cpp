@@ -1,8 +1,27 @@
 #include "snapnav/glue/conversions.hpp"
 
+#include <cmath>
+
 namespace snapnav::glue {
 
 nav::Pose2 OdometryDelta(const odometry_t& msg) { return {msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad}; }
+
+odometry_t ToOdometryMsg(int64_t utime, const std::string& sensor_name, const nav::Pose2& cumulative,
+                         const nav::Pose2& delta, double dt_s) {
+  odometry_t o{};
+  o.utime = utime;
+  o.sensor_name = sensor_name;
+  o.x_m = cumulative.x_m;
+  o.y_m = cumulative.y_m;
+  o.theta_rad = cumulative.theta_rad;
+  o.delta_x_m = delta.x_m;
+  o.delta_y_m = delta.y_m;
+  o.delta_theta_rad = delta.theta_rad;
+  o.delta_t_s = dt_s;
+  o.linear_velocity_mps = dt_s > 0 ? std::hypot(delta.x_m, delta.y_m) / dt_s : 0;
+  o.angular_velocity_radps = dt_s > 0 ? delta.theta_rad / dt_s : 0;
+  return o;
+}
 
 nav::Pose2 OdometryPose(const odometry_t& msg) { return {msg.x_m, msg.y_m, msg.theta_rad}; }
 

@@ -19,6 +19,7 @@
 
 #include "icp_slam.hpp"
 #include "importers.hpp"
+#include "report_text.hpp"
 #include "slam_log.hpp"
 #include "slam_sim.hpp"
 #include "snapnav/glue/app.hpp"
@@ -30,6 +31,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace snapnav;
+using eval::Fixed;
+using eval::JsonString;
 
 constexpr double kGoalTimeRatio = 2.0;        // icp-slam ms/scan over ours, at least
 constexpr double kGoalRmsDifferenceM = 0.05;  // ours against icp-slam, at most
@@ -38,21 +41,6 @@ constexpr double kGoalScansPerSecond = 500;   // 681-beam scans, one core, at le
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? 0 : v[v.size() / 2];
-}
-
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
 }
 
 // Median ms per scan of `runs` runs of our SLAM over `log`; the last run in *last.

@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "icp_slam.hpp"
+#include "report_text.hpp"
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
 #include "snapnav/glue/app.hpp"
@@ -35,22 +36,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace snapnav;
-
-// Paths in summary.json (the Malaga rawlog's name has spaces; none has quotes, but be safe).
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string Fixed(double v, int digits) {
-  std::ostringstream s;
-  s << std::fixed << std::setprecision(digits) << v;
-  return s.str();
-}
+using eval::Fixed;
+using eval::JsonString;
 
 int Main(int argc, char** argv) {
   std::string log_path, reference_path, out_dir, icp_input;

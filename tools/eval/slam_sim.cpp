@@ -109,18 +109,7 @@ SimulatedSlamLog SimulateSlamLog(const SimSlamOptions& options) {
     // Sensors first: what the robot sees at time t, then it moves to t + dt (as the sim process).
     if (step % odometry_every == 0) {
       const nav::sim::OdometryReading r = world.TakeOdometry();
-      odometry_t o{};
-      o.utime = utime;
-      o.sensor_name = "sim_wheels";
-      o.x_m = r.cumulative.x_m;
-      o.y_m = r.cumulative.y_m;
-      o.theta_rad = r.cumulative.theta_rad;
-      o.delta_x_m = r.delta.x_m;
-      o.delta_y_m = r.delta.y_m;
-      o.delta_theta_rad = r.delta.theta_rad;
-      o.delta_t_s = r.dt_s;
-      o.linear_velocity_mps = r.dt_s > 0 ? std::hypot(r.delta.x_m, r.delta.y_m) / r.dt_s : 0;
-      o.angular_velocity_radps = r.dt_s > 0 ? r.delta.theta_rad / r.dt_s : 0;
+      const odometry_t o = glue::ToOdometryMsg(utime, "sim_wheels", r.cumulative, r.delta, r.dt_s);
       SlamStep s;
       s.utime = utime;
       s.odometry_delta = glue::OdometryDelta(o);

@@ -13,6 +13,9 @@ namespace snapnav::glue {
 
 // The increment of an odometry message, in the previous robot frame.
 nav::Pose2 OdometryDelta(const odometry_t& msg);
+// An odometry message from the cumulative pose and the increment over dt_s (velocities derived).
+odometry_t ToOdometryMsg(int64_t utime, const std::string& sensor_name, const nav::Pose2& cumulative,
+                         const nav::Pose2& delta, double dt_s);
 // The cumulative odometry pose.
 nav::Pose2 OdometryPose(const odometry_t& msg);
 
