@@ -302,13 +302,14 @@ Pose2 LaserSlam::SearchHeading(const Pose2& around, double window_rad, double sh
   const int m = shift_m > 0 ? 1 : 0;
   double best_score = -1;
   Pose2 best = around;
-  for (int k = -n; k <= n; ++k) {
+  // Headings outwards from the prediction (0, -1, +1, -2, ...): on a tie the nearer one stays.
+  for (int i = 0; i <= 2 * n; ++i) {
+    const int k = (i % 2 == 0) ? i / 2 : -(i + 1) / 2;
     for (int dx = -m; dx <= m; ++dx) {
       for (int dy = -m; dy <= m; ++dy) {
         const Pose2 candidate{around.x_m + dx * shift_m, around.y_m + dy * shift_m, WrapAngle(around.theta_rad + k * step)};
         const double score = Score(candidate, points, stride);
-        // Ties keep the candidate nearest the prediction (k = 0 comes first only for k >= 0).
-        if (score > best_score + 1e-9 || (std::abs(score - best_score) <= 1e-9 && std::abs(k) < 1)) {
+        if (score > best_score) {
           best_score = score;
           best = candidate;
         }

@@ -31,6 +31,7 @@
 
 #include "import_util.hpp"
 #include "importers.hpp"
+#include "mrpt_time.hpp"
 #include "snapnav/laser_scan_t.hpp"
 
 namespace snapnav::eval {
@@ -39,19 +40,8 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-// mrpt::Clock counts 100 ns ticks since 1601-01-01; this many separate it from the Unix epoch
-// (as in log-import's rawlog reader).
-constexpr int64_t kMrptTicksAtUnixEpoch = 116444736000000000LL;
-
-std::optional<int64_t> MrptTimeToUtime(const mrpt::Clock::time_point& t) {
-  if (t == INVALID_TIMESTAMP) return std::nullopt;
-  const int64_t ticks = t.time_since_epoch().count() - kMrptTicksAtUnixEpoch;
-  return ticks >= 0 ? (ticks + 5) / 10 : -((-ticks + 5) / 10);  // nearest microsecond
-}
-
-mrpt::Clock::time_point UtimeToMrptTime(int64_t utime) {
-  return mrpt::Clock::time_point(mrpt::Clock::duration(utime * 10 + kMrptTicksAtUnixEpoch));
-}
+using importers::MrptTimeToUtime;
+using importers::UtimeToMrptTime;
 
 std::string FirstLine(const std::string& text) {
   // MRPT exception texts: keep the innermost "Message:" line if there is one.

@@ -46,6 +46,7 @@
 
 #include "import_util.hpp"
 #include "importers.hpp"
+#include "mrpt_time.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/pose2.hpp"
@@ -56,8 +57,6 @@ namespace {
 
 constexpr char kDefaultLaserName[] = "laser";
 constexpr char kOdometrySensor[] = "mrpt_odometry";
-// mrpt::Clock counts 100 ns ticks since 1601-01-01; this many separate it from the Unix epoch.
-constexpr int64_t kMrptTicksAtUnixEpoch = 116444736000000000LL;
 
 // A file read through zlib (gzip or plain), as an MRPT stream; counts decompressed bytes.
 class ZlibCStream : public mrpt::io::CStream {
@@ -118,13 +117,6 @@ std::string MrptReason(const std::string& what) {
     reason += ")";
   }
   return reason;
-}
-
-std::optional<int64_t> MrptTimeToUtime(const mrpt::Clock::time_point& t) {
-  if (t == INVALID_TIMESTAMP) return std::nullopt;
-  const int64_t ticks = t.time_since_epoch().count() - kMrptTicksAtUnixEpoch;
-  // Round 100 ns ticks to the nearest microsecond.
-  return ticks >= 0 ? (ticks + 5) / 10 : -((-ticks + 5) / 10);
 }
 
 nav::Pose2 ToPose2(const mrpt::poses::CPose2D& p) { return {p.x(), p.y(), p.phi()}; }
