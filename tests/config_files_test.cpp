@@ -25,10 +25,11 @@ TEST(ConfigFiles, BusCheck) {
 // Every .ini under config/ is covered by a test above.
 TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // Configs with heavy dependencies are tested in their own test executables
-  // (tests/drivers/): omni_camera.ini, laser_hokuyo.ini; (tests/homing/homing_node_test.cpp): homing.ini.
+  // (tests/drivers/): omni_camera.ini, laser_hokuyo.ini; (tests/homing/homing_node_test.cpp): homing.ini,
+  // landmarks.ini.
   // laser_slam.ini: tests/laser_slam_node_test.cpp.
   const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini", "sim.ini", "omni_camera.ini",
-                                    "laser_hokuyo.ini", "homing.ini", "laser_slam.ini"};
+                                    "laser_hokuyo.ini", "homing.ini", "laser_slam.ini", "landmarks.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();

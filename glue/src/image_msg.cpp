@@ -169,4 +169,19 @@ nav::PanoramaModel ReadPanoramaConfig(const IniFile& ini, const std::string& sec
   return p;
 }
 
+void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& m, const std::string& section) {
+  constexpr double kDeg = M_PI / 180;
+  out << "[" << section << "]\ncenter_x_px = " << m.center_x_px << "\ncenter_y_px = " << m.center_y_px
+      << "\ninner_radius_px = " << m.inner_radius_px << "\nouter_radius_px = " << m.outer_radius_px
+      << "\nelevation_inner_deg = " << m.elevation_inner_rad / kDeg
+      << "\nelevation_outer_deg = " << m.elevation_outer_rad / kDeg << "\n";
+}
+
+void PrintPanoramaConfig(std::ostream& out, const nav::PanoramaModel& p, const std::string& section) {
+  constexpr double kDeg = M_PI / 180;
+  out << "[" << section << "]\nwidth_px = " << p.width_px << "\nheight_px = " << p.height_px
+      << "\nelevation_top_deg = " << p.elevation_top_rad / kDeg
+      << "\nelevation_bottom_deg = " << p.elevation_bottom_rad / kDeg << "\n";
+}
+
 }  // namespace snapnav::glue

@@ -12,6 +12,7 @@
 
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/homing_vector_t.hpp"
+#include "snapnav/glue/landmarks.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/nav/pose2.hpp"
 
@@ -19,20 +20,8 @@ namespace snapnav::processes {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-// Panorama geometry of a frame and of the config may differ by float rounding [rad].
-constexpr double kGeometryTolerance_rad = 1e-4;
 
-template <class E>
-E ReadChoice(const glue::IniFile& ini, const std::string& section, const std::string& key,
-             std::initializer_list<std::pair<const char*, E>> choices) {
-  const std::string value = ini.GetString(section, key);
-  std::string names;
-  for (const auto& [name, e] : choices) {
-    if (value == name) return e;
-    names += names.empty() ? name : std::string(" | ") + name;
-  }
-  throw glue::ConfigError(ini.origin() + ": [" + section + "] " + key + " = '" + value + "': expected " + names);
-}
+using glue::ReadChoice;
 
 nav::OrientationRange ReadRange(const glue::IniFile& ini, const std::string& section) {
   const std::string value = ini.GetString(section, "range");
@@ -64,20 +53,17 @@ void CheckBand(const nav::HogOptions& o, const nav::PanoramaModel& p, const std:
   }
 }
 
-bool SameMirror(const nav::MirrorModel& a, const nav::MirrorModel& b) {
-  return a.center_x_px == b.center_x_px && a.center_y_px == b.center_y_px && a.inner_radius_px == b.inner_radius_px &&
-         a.outer_radius_px == b.outer_radius_px && a.elevation_inner_rad == b.elevation_inner_rad &&
-         a.elevation_outer_rad == b.elevation_outer_rad;
-}
-
-bool IsZeroMirror(const omni_frame_t& f) {
-  return f.mirror_center_x_px == 0 && f.mirror_center_y_px == 0 && f.mirror_inner_radius_px == 0 &&
-         f.mirror_outer_radius_px == 0 && f.mirror_elevation_inner_rad == 0 && f.mirror_elevation_outer_rad == 0;
-}
-
 std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
-const char* InputName(HomingInput i) { return i == HomingInput::kRaw ? "raw" : "panorama"; }
+const char* InputName(HomingInput i) {
+  return i == HomingInput::kRaw ? "raw" : i == HomingInput::kPanorama ? "panorama" : "landmarks";
+}
+
+void PrintMatching(std::ostream& out, const char* section, const nav::MatchOptions& m) {
+  out << "[" << section << "]\nratio = " << m.ratio << "\nmutual = " << (m.mutual ? "true" : "false")
+      << "\nrelaxed_second_best = " << (m.relaxed_second_best ? "true" : "false")
+      << "\nmax_distance = " << m.max_distance << "\nmax_x_displacement_px = " << m.max_x_displacement_px << "\n";
+}
 const char* HomeName(HomeSource h) {
   switch (h) {
     case HomeSource::kMessage:
@@ -98,9 +84,12 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.panorama_channel = channel_prefix + ini.GetString("channels", "panorama");
   c.home_snapshot_channel = channel_prefix + ini.GetString("channels", "home_snapshot");
   c.homing_vector_channel = channel_prefix + ini.GetString("channels", "homing_vector");
+  c.landmarks_channel = channel_prefix + ini.GetString("channels", "landmarks");
+  c.home_landmarks_channel = channel_prefix + ini.GetString("channels", "home_landmarks");
 
-  c.input = ReadChoice<HomingInput>(ini, "homing", "input",
-                                    {{"raw", HomingInput::kRaw}, {"panorama", HomingInput::kPanorama}});
+  c.input = ReadChoice<HomingInput>(
+      ini, "homing", "input",
+      {{"raw", HomingInput::kRaw}, {"panorama", HomingInput::kPanorama}, {"landmarks", HomingInput::kLandmarks}});
   c.home = ReadChoice<HomeSource>(
       ini, "homing", "home",
       {{"message", HomeSource::kMessage}, {"image", HomeSource::kImage}, {"first", HomeSource::kFirst}});
@@ -136,6 +125,9 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   h.warp.height_bottom_m = ini.GetDouble("preprocess", "warp_height_bottom_m");
   h.warp.height_top_m = ini.GetDouble("preprocess", "warp_height_top_m");
 
+  c.keypoint_homing = glue::ReadLandmarkHoming(ini, nav::LandmarkMethod::kSift);
+  c.vline_homing = glue::ReadLandmarkHoming(ini, nav::LandmarkMethod::kVline);
+
   ini.CheckAllUsed();
   c.Validate(ini.origin());
   return c;
@@ -151,6 +143,14 @@ void HomingConfig::Validate(const std::string& origin) const {
   }
   CheckBand(homing.hog, panorama, "hog", origin);
   if (homing.use_compass) CheckBand(homing.compass_hog, panorama, "compass", origin);
+  if (input == HomingInput::kLandmarks && home == HomeSource::kImage) {
+    throw glue::ConfigError(origin + ": [homing] input = landmarks takes its home from " + home_landmarks_channel +
+                            " (home = message) or the first set (home = first), not from an image");
+  }
+  if (input == HomingInput::kLandmarks &&
+      (home_landmarks_channel == landmarks_channel || homing_vector_channel == landmarks_channel)) {
+    throw glue::ConfigError(origin + ": [channels] landmarks, home_landmarks and homing_vector must differ");
+  }
   if (home == HomeSource::kImage && home_image.empty()) {
     throw glue::ConfigError(origin + ": [homing] home = image needs home_image (or --home-image)");
   }
@@ -176,16 +176,13 @@ void HomingConfig::Print(std::ostream& out) const {
   };
   const auto& h = homing;
   out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel
-      << "\nhome_snapshot = " << home_snapshot_channel << "\nhoming_vector = " << homing_vector_channel << "\n"
+      << "\nhome_snapshot = " << home_snapshot_channel << "\nhoming_vector = " << homing_vector_channel
+      << "\nlandmarks = " << landmarks_channel << "\nhome_landmarks = " << home_landmarks_channel << "\n"
       << "[homing]\ninput = " << InputName(input) << "\nhome = " << HomeName(home) << "\nhome_image = " << home_image
-      << "\nhome_image_kind = " << (home_image_raw ? "raw" : "panorama") << "\n"
-      << "[panorama]\nwidth_px = " << panorama.width_px << "\nheight_px = " << panorama.height_px
-      << "\nelevation_top_deg = " << panorama.elevation_top_rad / kDeg
-      << "\nelevation_bottom_deg = " << panorama.elevation_bottom_rad / kDeg << "\n"
-      << "[mirror]\ncenter_x_px = " << mirror.center_x_px << "\ncenter_y_px = " << mirror.center_y_px
-      << "\ninner_radius_px = " << mirror.inner_radius_px << "\nouter_radius_px = " << mirror.outer_radius_px
-      << "\nelevation_inner_deg = " << mirror.elevation_inner_rad / kDeg
-      << "\nelevation_outer_deg = " << mirror.elevation_outer_rad / kDeg << "\n[hog]\n";
+      << "\nhome_image_kind = " << (home_image_raw ? "raw" : "panorama") << "\n";
+  glue::PrintPanoramaConfig(out, panorama);
+  glue::PrintMirrorConfig(out, mirror);
+  out << "[hog]\n";
   print_hog(h.hog);
   out << "narrow_range_deg = " << h.hog.narrow_range_deg
       << "\n[compass]\nenabled = " << (h.use_compass ? "true" : "false") << "\n";
@@ -198,6 +195,17 @@ void HomingConfig::Print(std::ostream& out) const {
       << "\nwarp_compensation = " << (h.warp_compensation ? "true" : "false")
       << "\ncamera_height_m = " << h.warp.camera_height_m << "\nwarp_height_bottom_m = " << h.warp.height_bottom_m
       << "\nwarp_height_top_m = " << h.warp.height_top_m << "\n";
+  PrintMatching(out, "matching", keypoint_homing.match);
+  PrintMatching(out, "vline_matching", vline_homing.match);
+  const auto& a = keypoint_homing.alv;
+  out << "[landmark_alv]\nvariant = " << nav::AlvVariantName(a.variant) << "\nweight = " << nav::MatchWeightName(a.weight)
+      << "\ntop_n = " << a.top_n << "\ndifference = "
+      << (a.difference == nav::AlvDifference::kCurrentMinusHome ? "current_minus_home" : "home_minus_current")
+      << "\nmax_scale_ratio = " << a.max_scale_ratio << "\nmin_landmarks = " << a.min_landmarks
+      << "\nconsensus = " << (a.consensus ? "true" : "false") << "\nconsensus_window_deg = " << a.consensus_window_rad / kDeg
+      << "\nrotation_refine_deg = " << a.rotation_refine_rad / kDeg
+      << "\nrotation = " << (keypoint_homing.rotation == nav::RotationSource::kMatches ? "matches" : "none")
+      << "\nrotation_window_deg = " << keypoint_homing.rotation_window_rad / kDeg << "\n";
 }
 
 cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& config) {
@@ -233,7 +241,12 @@ cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& con
 }
 
 HomingNode::HomingNode(glue::Bus& bus, const HomingConfig& config)
-    : bus_(bus), config_(config), homer_(config.homing, config.panorama) {
+    : bus_(bus), config_(config), homer_(config.homing, config.panorama), frames_to_panoramas_(config.panorama, config.mirror) {
+  if (config_.input == HomingInput::kLandmarks) {
+    bus_.Subscribe(config_.landmarks_channel, &HomingNode::OnLandmarks, this);
+    bus_.Subscribe(config_.home_landmarks_channel, &HomingNode::OnHomeLandmarks, this);
+    return;
+  }
   if (config_.home == HomeSource::kImage) SetHome(LoadHomeImage(config_.home_image, config_.home_image_raw, config_));
   bus_.Subscribe(config_.input_channel(), &HomingNode::OnFrame, this);
   bus_.Subscribe(config_.home_snapshot_channel, &HomingNode::OnHomeSnapshot, this);
@@ -248,7 +261,7 @@ int64_t HomingNode::rejected_total() const {
 void HomingNode::Report(std::ostream& out) const {
   out << "homing: frames " << frames_ << ", before any home " << before_home_ << ", homes set " << homes_set_
       << ", vectors published " << published() << " (valid " << published_valid_ << ", no estimate "
-      << published_invalid_ << "), unwrapper builds " << unwrapper_builds_ << ", rejected " << rejected_total() << "\n";
+      << published_invalid_ << "), unwrapper builds " << frames_to_panoramas_.unwrapper_builds() << ", rejected " << rejected_total() << "\n";
   for (const auto& [reason, count] : rejected_) out << "homing:   rejected (" << reason << "): " << count << "\n";
 }
 
@@ -263,74 +276,8 @@ void HomingNode::SetHome(const cv::Mat& panorama) {
 }
 
 std::optional<cv::Mat> HomingNode::ToPanorama(const omni_frame_t& f) {
-  if (f.kind != omni_frame_t::RAW_OMNI && f.kind != omni_frame_t::PANORAMA) {
-    Reject("unknown kind", "kind " + std::to_string(f.kind) + " (RAW_OMNI 0 or PANORAMA 1)");
-    return std::nullopt;
-  }
-  if (f.encoding < omni_frame_t::GRAY8 || f.encoding > omni_frame_t::PNG) {
-    Reject("unknown encoding", "encoding " + std::to_string(f.encoding) + " (GRAY8 0, RGB8 1, JPEG 2, PNG 3)");
-    return std::nullopt;
-  }
-  if (f.width <= 0 || f.height <= 0 || f.data.empty()) {
-    Reject("empty image", SizeText(f.width, f.height) + " with " + std::to_string(f.data.size()) + " bytes");
-    return std::nullopt;
-  }
-  const bool raw = f.kind == omni_frame_t::RAW_OMNI;
-  const nav::PanoramaModel& p = config_.panorama;
-  if (!raw) {
-    if (f.width != p.width_px || f.height != p.height_px) {
-      Reject("wrong size",
-             "panorama is " + SizeText(f.width, f.height) + ", [panorama] is " + SizeText(p.width_px, p.height_px));
-      return std::nullopt;
-    }
-    if (std::abs(nav::WrapAngle(f.bearing_col0_rad - p.bearing_col0_rad)) > kGeometryTolerance_rad ||
-        std::abs(f.elevation_top_rad - p.elevation_top_rad) > kGeometryTolerance_rad ||
-        std::abs(f.elevation_bottom_rad - p.elevation_bottom_rad) > kGeometryTolerance_rad) {
-      Reject("wrong geometry", "panorama bearing_col0 " + std::to_string(f.bearing_col0_rad / kDeg) +
-                                   " deg, elevations " + std::to_string(f.elevation_top_rad / kDeg) + ".." +
-                                   std::to_string(f.elevation_bottom_rad / kDeg) + " deg differ from [panorama] (" +
-                                   std::to_string(p.bearing_col0_rad / kDeg) + " deg, " +
-                                   std::to_string(p.elevation_top_rad / kDeg) + ".." +
-                                   std::to_string(p.elevation_bottom_rad / kDeg) + " deg)");
-      return std::nullopt;
-    }
-  }
-  cv::Mat image;
-  try {
-    image = glue::FrameToImage(f);
-  } catch (const std::exception& e) {
-    Reject("undecodable image", e.what());
-    return std::nullopt;
-  }
-  if (image.empty()) {
-    Reject("empty image", "decoded to no pixels");
-    return std::nullopt;
-  }
-  if (!raw) return image;
-
-  // Raw: unwrap with the frame's calibration (the config's when the frame has none). The map is
-  // rebuilt only when the calibration or the image size changes.
-  const nav::MirrorModel mirror = IsZeroMirror(f) ? config_.mirror : glue::MirrorOf(f);
-  const cv::Size size = image.size();
-  if (!unwrapper_ || !SameMirror(unwrapper_->mirror(), mirror) || unwrapper_size_ != size) {
-    if (refused_calibration_ && SameMirror(refused_calibration_->first, mirror) &&
-        refused_calibration_->second == size) {
-      Reject("bad mirror calibration", refused_reason_);
-      return std::nullopt;
-    }
-    try {
-      unwrapper_ = nav::Unwrapper(mirror, p, size);
-      unwrapper_size_ = size;
-      ++unwrapper_builds_;
-    } catch (const std::exception& e) {
-      refused_calibration_ = std::make_pair(mirror, size);
-      refused_reason_ = std::string(e.what()) + " (" + SizeText(size.width, size.height) + " image)";
-      Reject("bad mirror calibration", refused_reason_);
-      return std::nullopt;
-    }
-  }
-  cv::Mat panorama;
-  unwrapper_->Unwrap(image, &panorama);
+  auto panorama = frames_to_panoramas_.Convert(f);
+  if (!panorama) Reject(frames_to_panoramas_.reason(), frames_to_panoramas_.detail());
   return panorama;
 }
 
@@ -355,14 +302,19 @@ void HomingNode::OnFrame(const omni_frame_t& frame) {
     ++rejected_["homing error"];
     throw std::runtime_error(std::string("homing: ") + e.what());  // the bus counts it as a handler error
   }
+  PublishVector(frame.utime, landmark_set_t::HOG, "hog", estimate);
+}
+
+void HomingNode::PublishVector(int64_t utime, int8_t method, const std::string& variant,
+                               std::optional<nav::HomingEstimate> estimate) {
   if (estimate && !(std::isfinite(estimate->direction_rad) && std::isfinite(estimate->magnitude) &&
                     std::isfinite(estimate->compass_rotation_rad))) {
     estimate.reset();
   }
   homing_vector_t v{};
-  v.utime = frame.utime;
-  v.method = landmark_set_t::HOG;
-  v.alv_variant = "hog";
+  v.utime = utime;
+  v.method = method;
+  v.alv_variant = variant;
   v.valid = estimate.has_value();
   if (estimate) {
     v.direction_rad = static_cast<float>(estimate->direction_rad);
@@ -388,6 +340,59 @@ void HomingNode::OnHomeSnapshot(const omni_frame_t& frame) {
     throw std::runtime_error(std::string("home snapshot: ") + e.what());
   }
   std::cerr << "homing: home set from " << bus_.current().channel << " (utime " << frame.utime << ")\n";
+}
+
+std::optional<nav::LandmarkSet> HomingNode::ToLandmarks(const landmark_set_t& msg) {
+  try {
+    return glue::LandmarkSetFromMsg(msg, config_.panorama);
+  } catch (const std::invalid_argument& e) {
+    Reject("bad landmark set", e.what());
+    return std::nullopt;
+  }
+}
+
+void HomingNode::OnLandmarks(const landmark_set_t& msg) {
+  ++frames_;
+  auto set = ToLandmarks(msg);
+  if (!set) return;
+  if (!landmark_homer_ || !landmark_homer_->has_home()) {
+    if (config_.home != HomeSource::kFirst) {
+      ++before_home_;
+      return;
+    }
+    landmark_homer_.emplace(config_.landmark_homing(set->method), config_.panorama);
+    landmark_homer_->SetHome(std::move(*set));
+    ++homes_set_;
+    std::cerr << "homing: home set from the first landmark set (" << bus_.current().channel << ", utime " << msg.utime
+              << ", " << landmark_homer_->home().size() << " landmarks)\n";
+    return;
+  }
+  if (set->method != landmark_homer_->home().method) {
+    Reject("method differs from the home's",
+           std::string(nav::LandmarkMethodName(set->method)) + " set, the home is " +
+               nav::LandmarkMethodName(landmark_homer_->home().method));
+    return;
+  }
+  std::optional<nav::LandmarkHoming> result;
+  try {
+    result = landmark_homer_->Home(*set);
+  } catch (const std::exception& e) {
+    ++rejected_["homing error"];
+    throw std::runtime_error(std::string("homing: ") + e.what());
+  }
+  PublishVector(msg.utime, msg.method, nav::AlvVariantName(landmark_homer_->config().alv.variant),
+                result ? std::optional<nav::HomingEstimate>(result->estimate) : std::nullopt);
+}
+
+void HomingNode::OnHomeLandmarks(const landmark_set_t& msg) {
+  auto set = ToLandmarks(msg);
+  if (!set) return;
+  landmark_homer_.emplace(config_.landmark_homing(set->method), config_.panorama);
+  landmark_homer_->SetHome(std::move(*set));
+  ++homes_set_;
+  std::cerr << "homing: home set from " << bus_.current().channel << " (utime " << msg.utime << ", "
+            << landmark_homer_->home().size() << " " << nav::LandmarkMethodName(landmark_homer_->home().method)
+            << " landmarks)\n";
 }
 
 }  // namespace snapnav::processes

@@ -1,7 +1,8 @@
 #pragma once
-// homing: snapshot homing with HOG landmarks (thesis chapter 3). Omni frames (raw
-// catadioptric images, unwrapped here, or panoramas) are compared with a home
-// snapshot; each frame yields one homing_vector_t once a home is set.
+// homing: snapshot homing (thesis chapters 3 and 4). Omni frames (raw catadioptric images,
+// unwrapped here, or panoramas) are compared with a home snapshot by HOG homing; or landmark
+// sets (from the landmarks process: vertical lines, SIFT, SURF) are matched with a home set and
+// homed by the landmark ALV. Each input yields one homing_vector_t once a home is set.
 
 #include <cstdint>
 #include <iosfwd>
@@ -12,15 +13,18 @@
 #include <opencv2/core.hpp>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/landmark_set_t.hpp"
 #include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/landmarks.hpp"
 #include "snapnav/nav/omni_geometry.hpp"
 #include "snapnav/nav/unwrap.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::processes {
 
-enum class HomingInput { kRaw, kPanorama };          // which channel the frames come from
+enum class HomingInput { kRaw, kPanorama, kLandmarks };  // which channel the input comes from
 enum class HomeSource { kMessage, kImage, kFirst };  // how the home snapshot is set at first
 
 struct HomingConfig {
@@ -28,6 +32,8 @@ struct HomingConfig {
   std::string panorama_channel;       // omni_frame_t in (input = panorama)
   std::string home_snapshot_channel;  // omni_frame_t in: replaces the home
   std::string homing_vector_channel;  // homing_vector_t out
+  std::string landmarks_channel;      // landmark_set_t in (input = landmarks)
+  std::string home_landmarks_channel; // landmark_set_t in: replaces the home set
   HomingInput input = HomingInput::kRaw;
   HomeSource home = HomeSource::kMessage;
   std::string home_image;       // home = image: the file (resolved against the config's folder)
@@ -35,11 +41,19 @@ struct HomingConfig {
   nav::PanoramaModel panorama;  // every frame is turned into this panorama
   nav::MirrorModel mirror;      // of home_image, and of raw frames without a calibration
   nav::HogHomingConfig homing;
+  // Landmark homing ([matching] for SIFT and SURF, [vline_matching] for vertical lines, [landmark_alv]).
+  nav::LandmarkHomingConfig keypoint_homing, vline_homing;
+  const nav::LandmarkHomingConfig& landmark_homing(nav::LandmarkMethod m) const {
+    return m == nav::LandmarkMethod::kVline ? vline_homing : keypoint_homing;
+  }
 
   // The channel the node takes frames from.
-  const std::string& input_channel() const { return input == HomingInput::kRaw ? omni_channel : panorama_channel; }
+  const std::string& input_channel() const {
+    return input == HomingInput::kRaw ? omni_channel : input == HomingInput::kPanorama ? panorama_channel : landmarks_channel;
+  }
 
-  // Reads [channels], [homing], [panorama], [mirror], [hog], [compass], [alv] and [preprocess];
+  // Reads [channels], [homing], [panorama], [mirror], [hog], [compass], [alv], [preprocess],
+  // [matching], [vline_matching] and [landmark_alv];
   // every key is required, unknown keys and invalid values are glue::ConfigError.
   static HomingConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
   // Throws glue::ConfigError (naming `origin`) when the options do not fit together.
@@ -59,14 +73,14 @@ class HomingNode {
   // (throws std::runtime_error naming the file when it cannot be used).
   HomingNode(glue::Bus& bus, const HomingConfig& config);
 
-  bool has_home() const { return homer_.has_home(); }
-  int64_t frames() const { return frames_; }            // decoded frames on the input channel
+  bool has_home() const { return homer_.has_home() || (landmark_homer_ && landmark_homer_->has_home()); }
+  int64_t frames() const { return frames_; }            // decoded frames / landmark sets on the input channel
   int64_t before_home() const { return before_home_; }  // frames that arrived before any home
   int64_t homes_set() const { return homes_set_; }
   int64_t published() const { return published_valid_ + published_invalid_; }
   int64_t published_valid() const { return published_valid_; }
   int64_t published_invalid() const { return published_invalid_; }  // no estimate (valid = false)
-  int64_t unwrapper_builds() const { return unwrapper_builds_; }    // once per mirror calibration / size
+  int64_t unwrapper_builds() const { return frames_to_panoramas_.unwrapper_builds(); }    // once per mirror calibration / size
   // Frames (input and home snapshots) skipped, by reason ("wrong size", "undecodable image", ...).
   const std::map<std::string, int64_t>& rejected() const { return rejected_; }
   int64_t rejected_total() const;
@@ -76,6 +90,12 @@ class HomingNode {
  private:
   void OnFrame(const omni_frame_t& frame);
   void OnHomeSnapshot(const omni_frame_t& frame);
+  void OnLandmarks(const landmark_set_t& msg);
+  void OnHomeLandmarks(const landmark_set_t& msg);
+  // The message as a landmark set; nullopt when it is rejected (counted).
+  std::optional<nav::LandmarkSet> ToLandmarks(const landmark_set_t& msg);
+  void PublishVector(int64_t utime, int8_t method, const std::string& variant,
+                     std::optional<nav::HomingEstimate> estimate);
   // The frame as a panorama of config_.panorama; nullopt when it is rejected (counted).
   std::optional<cv::Mat> ToPanorama(const omni_frame_t& frame);
   void Reject(const std::string& reason, const std::string& detail);
@@ -84,13 +104,10 @@ class HomingNode {
   glue::Bus& bus_;
   HomingConfig config_;
   nav::HogHomer homer_;
-  std::optional<nav::Unwrapper> unwrapper_;  // for the last raw calibration and size seen
-  cv::Size unwrapper_size_;
-  // The last calibration the Unwrapper refused, so it is not rebuilt per frame.
-  std::optional<std::pair<nav::MirrorModel, cv::Size>> refused_calibration_;
-  std::string refused_reason_;
+  std::optional<nav::LandmarkHomer> landmark_homer_;  // made for the home set's method
+  glue::FramePanoramas frames_to_panoramas_;
   int64_t frames_ = 0, before_home_ = 0, homes_set_ = 0;
-  int64_t published_valid_ = 0, published_invalid_ = 0, unwrapper_builds_ = 0;
+  int64_t published_valid_ = 0, published_invalid_ = 0;
   std::map<std::string, int64_t> rejected_;
 };
 

@@ -64,12 +64,8 @@ void OmniCameraConfig::Print(std::ostream& out) const {
       << "[camera]\nsensor_name = " << frame.sensor_name << "\nsource = " << capture.source.ToString()
       << "\nwidth_px = " << capture.width_px << "\nheight_px = " << capture.height_px
       << "\nrate_hz = " << capture.rate_hz << "\nloop = " << (capture.loop ? "true" : "false")
-      << "\nencoding = " << glue::FrameEncodingName(frame.encoding) << "\njpeg_quality = " << frame.jpeg_quality << "\n"
-      << "[mirror]\ncenter_x_px = " << frame.mirror.center_x_px << "\ncenter_y_px = " << frame.mirror.center_y_px
-      << "\ninner_radius_px = " << frame.mirror.inner_radius_px
-      << "\nouter_radius_px = " << frame.mirror.outer_radius_px
-      << "\nelevation_inner_deg = " << frame.mirror.elevation_inner_rad * 180 / M_PI
-      << "\nelevation_outer_deg = " << frame.mirror.elevation_outer_rad * 180 / M_PI << "\n";
+      << "\nencoding = " << glue::FrameEncodingName(frame.encoding) << "\njpeg_quality = " << frame.jpeg_quality << "\n";
+  glue::PrintMirrorConfig(out, frame.mirror);
 }
 
 OmniCameraNode::OmniCameraNode(glue::Bus& bus, const OmniCameraConfig& config, std::ostream* log)

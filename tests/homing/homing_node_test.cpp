@@ -12,6 +12,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "homing_node.hpp"
+#include "landmarks_node.hpp"
+#include "snapnav/glue/landmarks.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/homing_vector_t.hpp"
@@ -426,7 +428,7 @@ TEST(HomingConfig, EveryShippedKeyIsRequired) {
       ++keys;
     }
   }
-  EXPECT_EQ(keys, 40);
+  EXPECT_EQ(keys, 63);
 }
 
 TEST(HomingConfig, BadValuesAndUnknownKeysAreErrors) {
@@ -455,6 +457,134 @@ TEST(HomingConfig, BadValuesAndUnknownKeysAreErrors) {
   } catch (const glue::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("treshold_frac"), std::string::npos) << e.what();
   }
+}
+
+// ------------------------------------------------------------------ landmarks + homing on sets
+const std::string kLandmarksConfig = std::string(SNAPNAV_CONFIG_DIR) + "/landmarks.ini";
+
+LandmarksConfig LmConfig(const std::string& prefix, const std::string& method) {
+  std::string text = Edit(ReadText(kLandmarksConfig), "landmarks", "input", "panorama");
+  return LandmarksConfig::FromIni(glue::IniFile::Parse(text, "landmarks-test.ini"), prefix, method);
+}
+
+// The landmarks process turns each frame into a set on its method's channel; the homing process
+// (input = landmarks, home = first) homes from the sets, with the method and landmark count.
+// (The test room's walls are smooth blurred noise: SIFT finds a few keypoints, SURF none.)
+TEST(LandmarkNodes, SiftSetsFlowIntoHomingVectors) {
+  Lab lab;
+  glue::Bus bus("memq://");
+  LandmarksNode landmarks(bus, LmConfig("L1_", "sift"));
+  HomingNode homing(bus, Config("L1_", {{"homing", "input", "landmarks"},
+                                        {"homing", "home", "first"},
+                                        {"channels", "landmarks", "LANDMARKS_SIFT"}}));
+  std::vector<landmark_set_t> sets;
+  std::vector<homing_vector_t> got;
+  bus.Subscribe<landmark_set_t>("L1_LANDMARKS_SIFT", [&](const landmark_set_t& m) { sets.push_back(m); });
+  bus.Subscribe<homing_vector_t>("L1_HOMING_VECTOR", [&](const homing_vector_t& v) { got.push_back(v); });
+  const std::vector<nav::Pose2> poses = {{0, 0, 0}, {0.6, 0, 0.0}, {0, -0.6, 0.5}, {-0.5, 0.4, -1.0}};
+  for (size_t i = 0; i < poses.size(); ++i) bus.Publish("L1_OMNI_PANORAMA", lab.Panorama(poses[i], 100 + static_cast<int64_t>(i)));
+  HandleAll(bus);
+  ASSERT_EQ(sets.size(), poses.size());
+  EXPECT_EQ(landmarks.published(), 4);
+  EXPECT_EQ(landmarks.rejected_total(), 0);
+  for (const auto& m : sets) {
+    EXPECT_EQ(m.method, landmark_set_t::SIFT);
+    EXPECT_GE(m.nlandmarks, 3);
+    EXPECT_EQ(m.descriptor_length, 128);
+  }
+  ASSERT_EQ(got.size(), poses.size() - 1);
+  EXPECT_EQ(homing.homes_set(), 1);
+  int good = 0;
+  for (size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(got[i].utime, 101 + static_cast<int64_t>(i));
+    EXPECT_EQ(got[i].method, landmark_set_t::SIFT);
+    EXPECT_EQ(got[i].alv_variant, "unit");
+    if (got[i].valid) {
+      EXPECT_GE(got[i].nlandmarks_used, 1);
+      good += DirectionError(got[i], poses[i + 1]) < kSixtyDeg;
+    }
+  }
+  EXPECT_GE(good, 2);
+}
+
+TEST(LandmarkNodes, EachMethodPublishesOnItsOwnChannel) {
+  Lab lab;
+  glue::Bus bus("memq://");
+  LandmarksNode vline(bus, LmConfig("L2_", "vline"));
+  LandmarksNode sift(bus, LmConfig("L2_", "sift"));
+  std::map<std::string, landmark_set_t> last;
+  for (const char* ch : {"L2_LANDMARKS_VLINE", "L2_LANDMARKS_SIFT"}) {
+    bus.Subscribe<landmark_set_t>(ch, [&last, ch](const landmark_set_t& m) { last[ch] = m; });
+  }
+  bus.Publish("L2_OMNI_PANORAMA", lab.Panorama({0.2, 0.1, 0}, 7));
+  HandleAll(bus);
+  ASSERT_EQ(last.size(), 2u);
+  EXPECT_EQ(last["L2_LANDMARKS_VLINE"].method, landmark_set_t::VLINE);
+  EXPECT_EQ(last["L2_LANDMARKS_SIFT"].method, landmark_set_t::SIFT);
+  EXPECT_EQ(last["L2_LANDMARKS_SIFT"].descriptor_length, 128);
+  EXPECT_EQ(last["L2_LANDMARKS_SIFT"].utime, 7);
+}
+
+// A featureless frame gives an empty set (not an error), and homing says "no estimate".
+// Malformed sets are counted by reason and skipped.
+TEST(LandmarkNodes, EmptyAndMalformedSets) {
+  Lab lab;
+  glue::Bus bus("memq://");
+  LandmarksNode landmarks(bus, LmConfig("L3_", "sift"));
+  HomingNode homing(bus, Config("L3_", {{"homing", "input", "landmarks"}, {"channels", "landmarks", "LANDMARKS_SIFT"}}));
+  std::vector<homing_vector_t> got;
+  bus.Subscribe<homing_vector_t>("L3_HOMING_VECTOR", [&](const homing_vector_t& v) { got.push_back(v); });
+  omni_frame_t flat = glue::ImageToFrame(cv::Mat(120, 720, CV_8UC1, cv::Scalar(128)), omni_frame_t::GRAY8);
+  flat.kind = omni_frame_t::PANORAMA;
+  glue::SetPanorama(lab.camera().panorama, &flat);
+  bus.Publish("L3_OMNI_PANORAMA", flat);
+  HandleAll(bus);
+  EXPECT_EQ(landmarks.empty_sets(), 1);
+  EXPECT_EQ(homing.before_home(), 1);  // no home yet: counted, no vector
+
+  // Home from a real set on HOME_LANDMARKS, then the empty set: published as valid = false.
+  nav::LandmarkExtractorConfig sift;
+  sift.method = nav::LandmarkMethod::kSift;
+  const auto home_set = glue::LandmarkSetToMsg(
+      nav::ExtractLandmarks(glue::FrameToImage(lab.Panorama({0, 0, 0}, 1)), sift), lab.camera().panorama, 1, "test");
+  bus.Publish("L3_HOME_LANDMARKS", home_set);
+  bus.Publish("L3_OMNI_PANORAMA", flat);
+  HandleAll(bus);
+  ASSERT_EQ(got.size(), 1u);
+  EXPECT_FALSE(got[0].valid);
+
+  ASSERT_GT(home_set.nlandmarks, 0);
+  landmark_set_t bad = home_set;
+  bad.bearings_rad[0] = std::nanf("");
+  bus.Publish("L3_LANDMARKS_SIFT", bad);
+  landmark_set_t wrong_size = home_set;
+  wrong_size.panorama_width_px = 360;
+  bus.Publish("L3_LANDMARKS_SIFT", wrong_size);
+  landmark_set_t vline = home_set;
+  vline.method = landmark_set_t::VLINE;
+  bus.Publish("L3_LANDMARKS_SIFT", vline);
+  HandleAll(bus);
+  EXPECT_EQ(homing.rejected().at("bad landmark set"), 2);
+  EXPECT_EQ(homing.rejected().at("method differs from the home's"), 1);
+  EXPECT_EQ(got.size(), 1u);
+}
+
+TEST(LandmarksConfig, ShippedConfigLoadsAndBadValuesAreErrors) {
+  const auto c = LandmarksConfig::FromIni(glue::IniFile::Load(kLandmarksConfig), "P_");
+  EXPECT_EQ(c.landmarks_channel, "P_LANDMARKS_SURF");
+  std::ostringstream printed;
+  c.Print(printed);
+  const auto back = LandmarksConfig::FromIni(glue::IniFile::Parse(printed.str(), "printed.ini"), "");
+  EXPECT_EQ(back.landmarks_channel, "P_LANDMARKS_SURF");
+  EXPECT_EQ(back.extractor.vline.window_px, c.extractor.vline.window_px);
+  EXPECT_THROW(LandmarksConfig::FromIni(glue::IniFile::Load(kLandmarksConfig), "", "orb"), glue::ConfigError);
+  const std::string text = ReadText(kLandmarksConfig);
+  EXPECT_THROW(LandmarksConfig::FromIni(glue::IniFile::Parse(Edit(text, "surf", "octaves", "0"), "t.ini"), ""),
+               glue::ConfigError);
+  EXPECT_THROW(LandmarksConfig::FromIni(glue::IniFile::Parse(Edit(text, "vline", "window_px", nullptr), "t.ini"), ""),
+               glue::ConfigError);
+  EXPECT_THROW(LandmarksConfig::FromIni(glue::IniFile::Parse(text + "[sift]\nsigmaa = 2\n", "t.ini"), ""),
+               glue::ConfigError);
 }
 
 }  // namespace

@@ -12,6 +12,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "homing_eval.hpp"
+#include "landmark_compare.hpp"
+#include "snapnav/glue/landmarks.hpp"
 #include "homing_node.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
@@ -127,7 +129,10 @@ int Main(int argc, char** argv) {
   std::string scene_name = "indoor13", method = "hog", home_text, out_dir, input = "raw";
   std::string config_path = SNAPNAV_CONFIG_DIR "/homing.ini", sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini";
   std::string entropy_scenes = "indoor13,indoor_objects11,outdoor11";
-  bool random_headings = false, sweep = false, quick = false, no_return = false;
+  std::string landmarks_config_path = SNAPNAV_CONFIG_DIR "/landmarks.ini", alv = "unit";
+  std::string compare_scenes = "indoor13,indoor_objects11,outdoor11,featureless11,people11", counts = "3,5,20,all";
+  int top_n = 0;
+  bool random_headings = false, sweep = false, quick = false, no_return = false, compare = false;
   int seed = 1;
   Overrides o;
   eval::ReturnOptions ret;
@@ -137,7 +142,15 @@ int Main(int argc, char** argv) {
                     "descriptor range, by noise, entropy by cell size) and, with --sweep, a parameter table.\n"
                     "Writes OUT/summary.json, PNGs, and OUT/report.md.");
   flags.AddString("scene", &scene_name, "scene name (config/scenes) or file");
-  flags.AddString("method", &method, "homing method: hog");
+  flags.AddString("method", &method, "homing method: hog | vline | sift | surf (feature landmarks, thesis 4.1-4.3)");
+  flags.AddString("alv", &alv, "landmark methods: unit | weighted | scale ALV");
+  flags.AddInt("landmarks", &top_n, "landmark methods: use the N best matches (thesis 3, 5, 20); 0: all");
+  flags.AddString("landmarks-config", &landmarks_config_path, "extractor config ([vline], [sift], [surf])");
+  flags.AddBool("compare", &compare,
+                "compare HOG, vertical lines, SIFT and SURF x ALV variant x landmark count on --scenes: compare.md, "
+                "compare.csv, summary.json, vector maps");
+  flags.AddString("scenes", &compare_scenes, "--compare: scenes");
+  flags.AddString("counts", &counts, "--compare: landmark counts (N or all)");
   flags.AddString("home", &home_text, "home position X,Y [m] (a grid position; default: the grid centre)");
   flags.AddString("config", &config_path, "homing config (its [hog], [compass], [alv], [preprocess])");
   flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama)");
@@ -162,7 +175,11 @@ int Main(int argc, char** argv) {
   flags.AddString("out", &out_dir, "output folder (required)");
   if (!flags.Parse(argc, argv)) return 0;
   if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
-  if (method != "hog") throw glue::FlagError("--method '" + method + "' is not available (available: hog)");
+  if (!nav::ParseLandmarkMethod(method)) {
+    throw glue::FlagError("--method '" + method + "' is not available (hog, vline, sift, surf)");
+  }
+  if (!nav::ParseAlvVariant(alv)) throw glue::FlagError("--alv must be unit, weighted or scale, not '" + alv + "'");
+  if (top_n < 0) throw glue::FlagError("--landmarks must be >= 0 (0: all)");
   if (input != "raw" && input != "panorama") throw glue::FlagError("--input must be raw or panorama");
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
@@ -177,6 +194,29 @@ int Main(int argc, char** argv) {
                             std::to_string(pm.width_px) + "x" + std::to_string(pm.height_px));
   }
   const nav::HogHomingConfig config = Apply(homing.homing, o);
+  if (compare || method != "hog") {
+    eval::LandmarkEvalSetup setup;
+    setup.camera = sim.camera;
+    setup.hog = config;
+    setup.extractor = glue::ReadLandmarkExtractor(glue::IniFile::Load(landmarks_config_path));
+    setup.keypoint_homing = homing.keypoint_homing;
+    setup.vline_homing = homing.vline_homing;
+    setup.input = input == "raw" ? CameraPipeline::Input::kRaw : CameraPipeline::Input::kPanorama;
+    setup.ret = ret;
+    setup.seed = static_cast<uint64_t>(seed);
+    if (random_headings) throw glue::FlagError("--random-headings is for the HOG evaluation only");
+    if (compare) {
+      eval::CompareOptions c;
+      c.scenes = glue::SplitList(compare_scenes);
+      c.top_n.clear();
+      for (const auto& n : glue::SplitList(counts)) c.top_n.push_back(n == "all" ? 0 : std::stoi(n));
+      if (c.scenes.empty() || c.top_n.empty()) throw glue::FlagError("--scenes and --counts must not be empty");
+      c.returns = !no_return;
+      return eval::RunCompare(setup, c, out_dir);
+    }
+    return eval::RunLandmarkEval(setup, scene_name, *nav::ParseLandmarkMethod(method), *nav::ParseAlvVariant(alv), top_n,
+                                 no_return, out_dir);
+  }
   const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
 
   eval::GridOptions grid;

@@ -2,6 +2,7 @@
 // Conversions between omni_frame_t messages and OpenCV images
 // (library snapnav_glue_image, so only image processes link OpenCV's codecs).
 
+#include <ostream>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -39,5 +40,8 @@ nav::PanoramaModel PanoramaOf(const omni_frame_t& frame);
 // are glue::ConfigError naming file and line; the models are not validated here.
 nav::MirrorModel ReadMirrorConfig(const IniFile& ini, const std::string& section = "mirror");
 nav::PanoramaModel ReadPanoramaConfig(const IniFile& ini, const std::string& section = "panorama");
+// The sections the two readers above read back (header line included).
+void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& mirror, const std::string& section = "mirror");
+void PrintPanoramaConfig(std::ostream& out, const nav::PanoramaModel& panorama, const std::string& section = "panorama");
 
 }  // namespace snapnav::glue

@@ -3,6 +3,7 @@
 // A missing key, a malformed value and a key nobody asked for are errors that
 // name the file and line.
 
+#include <initializer_list>
 #include <iosfwd>
 #include <map>
 #include <set>
@@ -50,5 +51,19 @@ class IniFile {
   std::map<std::string, std::map<std::string, Entry>> sections_;
   mutable std::set<std::pair<std::string, std::string>> used_;
 };
+
+// The value of [section] key as one of `choices` (name, value); anything else is a ConfigError
+// listing the choices.
+template <class E>
+E ReadChoice(const IniFile& ini, const std::string& section, const std::string& key,
+             std::initializer_list<std::pair<const char*, E>> choices) {
+  const std::string value = ini.GetString(section, key);
+  std::string names;
+  for (const auto& [name, e] : choices) {
+    if (value == name) return e;
+    names += names.empty() ? name : std::string(" | ") + name;
+  }
+  throw ConfigError(ini.origin() + ": [" + section + "] " + key + " = '" + value + "': expected " + names);
+}
 
 }  // namespace snapnav::glue

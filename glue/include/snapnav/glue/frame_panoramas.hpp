@@ -1,0 +1,48 @@
+#pragma once
+// Omni frames as panoramas of one model (library snapnav_glue_frames): raw catadioptric frames
+// are unwrapped with their own mirror calibration (a default one when theirs is all zero),
+// panorama frames must have the model's size and geometry. Processes that take frames (homing,
+// landmarks) use it, so a frame is accepted or refused for the same reasons everywhere.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+
+#include <opencv2/core.hpp>
+
+#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/omni_frame_t.hpp"
+
+namespace snapnav::glue {
+
+class FramePanoramas {
+ public:
+  FramePanoramas(const nav::PanoramaModel& panorama, const nav::MirrorModel& default_mirror)
+      : panorama_(panorama), default_mirror_(default_mirror) {}
+  // The frame as a panorama of the model; nullopt when it cannot be used, with reason() (a
+  // short category: "wrong size", "undecodable image", ...) and detail() saying why. The unwrap
+  // map is rebuilt only when the calibration or the image size changes.
+  std::optional<cv::Mat> Convert(const omni_frame_t& frame);
+  const std::string& reason() const { return reason_; }
+  const std::string& detail() const { return detail_; }
+  int64_t unwrapper_builds() const { return unwrapper_builds_; }
+
+ private:
+  void Fail(const std::string& reason, const std::string& detail) {
+    reason_ = reason;
+    detail_ = detail;
+  }
+  nav::PanoramaModel panorama_;
+  nav::MirrorModel default_mirror_;
+  std::optional<nav::Unwrapper> unwrapper_;  // for the last raw calibration and size seen
+  cv::Size unwrapper_size_;
+  // The last calibration the Unwrapper refused, so it is not rebuilt per frame.
+  std::optional<std::pair<nav::MirrorModel, cv::Size>> refused_calibration_;
+  std::string refused_reason_;
+  std::string reason_, detail_;
+  int64_t unwrapper_builds_ = 0;
+};
+
+}  // namespace snapnav::glue

@@ -1,0 +1,33 @@
+#pragma once
+// One entry point for the landmark extractors of chapter 4: vertical lines (4.1), SIFT (4.2),
+// SURF (4.3), with the matching rules that suit each, so the landmarks process, the homing
+// process and the evaluation configure them the same way.
+
+#include <opencv2/core.hpp>
+
+#include "snapnav/nav/landmark_set.hpp"
+#include "snapnav/nav/landmarks.hpp"
+#include "snapnav/nav/surf.hpp"
+#include "snapnav/nav/vline.hpp"
+
+namespace snapnav::nav {
+
+struct LandmarkExtractorConfig {
+  LandmarkMethod method = LandmarkMethod::kSift;
+  VlineOptions vline;
+  SiftOptions sift;
+  SurfOptions surf;
+  int surf_pad_px = 64;             // wrapped columns around the seam for SURF's largest filters
+  bool equalize_histogram = false;  // before extraction (3.1.5)
+  void Validate() const;            // throws std::invalid_argument; kHog has no extractor
+};
+
+// Landmarks of a panorama (8-bit grey or BGR). Throws std::invalid_argument on an empty image.
+LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorConfig& config);
+
+// The matching each method is used with: vertical lines the thesis' rules (mutual with the
+// second-best relaxation, no ratio test, a 60 px displacement limit); SIFT and SURF Lowe's
+// ratio test with the mutual check.
+MatchOptions DefaultMatchOptions(LandmarkMethod method);
+
+}  // namespace snapnav::nav

@@ -1,0 +1,118 @@
+#include "landmarks_node.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <iostream>
+
+#include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/landmarks.hpp"
+#include "snapnav/landmark_set_t.hpp"
+
+namespace snapnav::processes {
+LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix,
+                                         const std::string& method) {
+  LandmarksConfig c;
+  c.omni_channel = channel_prefix + ini.GetString("channels", "omni");
+  c.panorama_channel = channel_prefix + ini.GetString("channels", "panorama");
+  std::string out = ini.GetString("channels", "landmarks");
+  c.raw_input = glue::ReadChoice<bool>(ini, "landmarks", "input", {{"raw", true}, {"panorama", false}});
+  c.panorama = glue::ReadPanoramaConfig(ini);
+  c.mirror = glue::ReadMirrorConfig(ini);
+  c.extractor = glue::ReadLandmarkExtractor(ini);
+  if (!method.empty()) {
+    const auto m = nav::ParseLandmarkMethod(method);
+    if (!m || *m == nav::LandmarkMethod::kHog) {
+      throw glue::ConfigError("--method '" + method + "': expected vline | sift | surf");
+    }
+    c.extractor.method = *m;
+  }
+  ini.CheckAllUsed();
+  std::string upper = nav::LandmarkMethodName(c.extractor.method);
+  std::transform(upper.begin(), upper.end(), upper.begin(), [](unsigned char ch) { return std::toupper(ch); });
+  if (const auto pos = out.find("%s"); pos != std::string::npos) out.replace(pos, 2, upper);
+  c.landmarks_channel = channel_prefix + out;
+  try {
+    c.panorama.Validate();
+    c.mirror.Validate();
+    c.extractor.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": " + e.what());
+  }
+  if (c.landmarks_channel == c.input_channel()) {
+    throw glue::ConfigError(ini.origin() + ": [channels] landmarks and the input channel are both '" +
+                            c.landmarks_channel + "'");
+  }
+  return c;
+}
+
+void LandmarksConfig::Print(std::ostream& out) const {
+  const auto& v = extractor.vline;
+  const auto& s = extractor.sift;
+  const auto& u = extractor.surf;
+  out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel << "\nlandmarks = "
+      << landmarks_channel << "\n[landmarks]\ninput = " << (raw_input ? "raw" : "panorama")
+      << "\nmethod = " << nav::LandmarkMethodName(extractor.method)
+      << "\nequalize_histogram = " << (extractor.equalize_histogram ? "true" : "false") << "\n";
+  glue::PrintPanoramaConfig(out, panorama);
+  glue::PrintMirrorConfig(out, mirror);
+  out << "[vline]\nblur_sigma_px = " << v.blur_sigma_px << "\ncanny_low = " << v.canny_low << "\ncanny_high = "
+      << v.canny_high << "\nhough_threshold = " << v.hough_threshold << "\nmin_segment_px = " << v.min_segment_px
+      << "\nmax_gap_px = " << v.max_gap_px << "\nmax_tilt_deg = " << v.max_tilt_deg << "\ncluster_px = " << v.cluster_px
+      << "\nmin_line_px = " << v.min_line_px << "\nwindow_px = " << v.window_px << "\nbins = " << v.bins
+      << "\ndivided = " << (v.divided ? "true" : "false") << "\n"
+      << "[sift]\nmax_features = " << s.max_features << "\noctave_layers = " << s.octave_layers
+      << "\ncontrast_threshold = " << s.contrast_threshold << "\nedge_threshold = " << s.edge_threshold
+      << "\nsigma = " << s.sigma << "\n"
+      << "[surf]\nhessian_threshold = " << u.hessian_threshold << "\noctaves = " << u.octaves << "\nintervals = "
+      << u.intervals << "\ninit_sample = " << u.init_sample << "\nupright = " << (u.upright ? "true" : "false")
+      << "\nmax_keypoints = " << u.max_keypoints << "\npad_px = " << extractor.surf_pad_px << "\n";
+}
+
+LandmarksNode::LandmarksNode(glue::Bus& bus, const LandmarksConfig& config)
+    : bus_(bus), config_(config), frames_to_panoramas_(config.panorama, config.mirror) {
+  bus_.Subscribe(config_.input_channel(), &LandmarksNode::OnFrame, this);
+}
+
+int64_t LandmarksNode::rejected_total() const {
+  int64_t n = 0;
+  for (const auto& [_, count] : rejected_) n += count;
+  return n;
+}
+
+void LandmarksNode::Report(std::ostream& out) const {
+  out << "landmarks: " << nav::LandmarkMethodName(config_.extractor.method) << ", frames " << frames_
+      << ", sets published " << published_ << " (" << empty_sets_ << " without landmarks), landmarks " << landmarks_
+      << (published_ > 0 ? " (" + std::to_string(landmarks_ / published_) + " per set, " +
+                               std::to_string(static_cast<int>(std::lround(seconds_ * 1000 / published_))) +
+                               " ms extraction per frame)"
+                         : std::string())
+      << ", rejected " << rejected_total() << "\n";
+  for (const auto& [reason, count] : rejected_) out << "landmarks:   rejected (" << reason << "): " << count << "\n";
+}
+
+void LandmarksNode::OnFrame(const omni_frame_t& frame) {
+  ++frames_;
+  const auto panorama = frames_to_panoramas_.Convert(frame);
+  if (!panorama) {
+    ++rejected_[frames_to_panoramas_.reason()];
+    bus_.CountDecodeError(frames_to_panoramas_.reason() + ": " + frames_to_panoramas_.detail());
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  nav::LandmarkSet set;
+  try {
+    set = nav::ExtractLandmarks(*panorama, config_.extractor);
+  } catch (const std::exception& e) {
+    ++rejected_["extraction error"];
+    throw std::runtime_error(std::string("landmarks: ") + e.what());  // the bus counts it as a handler error
+  }
+  seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  bus_.Publish(config_.landmarks_channel, glue::LandmarkSetToMsg(set, config_.panorama, frame.utime, frame.sensor_name));
+  ++published_;
+  landmarks_ += set.size();
+  if (set.empty()) ++empty_sets_;
+}
+
+}  // namespace snapnav::processes

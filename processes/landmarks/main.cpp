@@ -1,0 +1,39 @@
+// landmarks: feature landmarks (vertical lines, SIFT, SURF) of omni frames, one set per frame.
+#include <iostream>
+
+#include "landmarks_node.hpp"
+#include "snapnav/glue/app.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/shutdown.hpp"
+
+namespace {
+
+int Main(int argc, char** argv) {
+  using namespace snapnav;
+  glue::CommonFlags common;
+  common.config = SNAPNAV_CONFIG_DIR "/landmarks.ini";
+  std::string method;
+  glue::Flags flags("landmarks",
+                    "Feature landmarks of omni frames (thesis 4.1-4.3): each frame (raw, unwrapped here, or panorama;\n"
+                    "[landmarks] input) yields one landmark_set_t of vertical lines, SIFT or SURF keypoints on\n"
+                    "[channels] landmarks. Run one instance per method for several methods.");
+  flags.AddCommon(&common);
+  flags.AddString("method", &method, "vline | sift | surf (overrides [landmarks] method)");
+  if (!flags.Parse(argc, argv)) return 0;
+  const auto config = processes::LandmarksConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix, method);
+  std::cerr << "landmarks: config " << common.config << "\n";
+  config.Print(std::cerr);
+  glue::InstallShutdownHandlers();
+  glue::Bus bus(common.lcm_url);
+  processes::LandmarksNode node(bus, config);
+  std::cerr << "landmarks: frames from " << config.input_channel() << ", " << nav::LandmarkMethodName(config.extractor.method)
+            << " landmarks on " << config.landmarks_channel << " (" << bus.url() << ")\n";
+  bus.Run();
+  node.Report(std::cerr);
+  bus.ReportStats(std::cerr);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return snapnav::glue::RunMain(argc, argv, Main); }

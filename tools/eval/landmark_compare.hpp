@@ -1,0 +1,43 @@
+#pragma once
+// eval-homing with feature landmarks: one method's evaluation (AAE, return ratio, vector map)
+// and the comparison of HOG, vertical lines, SIFT and SURF x ALV variant x landmark count on
+// the thesis scenes (4.1-4.3), as markdown, CSV, summary.json and vector maps.
+
+#include <string>
+#include <vector>
+
+#include "homing_eval.hpp"
+#include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks.hpp"
+#include "snapnav/nav/sim/omni_renderer.hpp"
+
+namespace snapnav::eval {
+
+struct LandmarkEvalSetup {
+  nav::sim::OmniCameraOptions camera;
+  nav::HogHomingConfig hog;                       // the HOG row of the comparison
+  nav::LandmarkExtractorConfig extractor;         // method-independent parts; method set per row
+  nav::LandmarkHomingConfig keypoint_homing, vline_homing;
+  CameraPipeline::Input input = CameraPipeline::Input::kRaw;
+  ReturnOptions ret;
+  uint64_t seed = 1;
+  const nav::LandmarkHomingConfig& homing(nav::LandmarkMethod m) const {
+    return m == nav::LandmarkMethod::kVline ? vline_homing : keypoint_homing;
+  }
+};
+
+// One landmark method on one scene: AAE, return ratio, vector map, summary.json, report.md.
+// Returns the process exit code.
+int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_name, nav::LandmarkMethod method,
+                    nav::AlvVariant variant, int top_n, bool no_return, const std::string& out_dir);
+
+struct CompareOptions {
+  std::vector<std::string> scenes;     // default: the thesis scenes
+  std::vector<int> top_n = {3, 5, 20, 0};
+  bool returns = true;                 // return ratio of each method x variant at its best count
+};
+// The comparison table over scenes x methods x ALV variants x landmark counts.
+int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, const std::string& out_dir);
+
+}  // namespace snapnav::eval

@@ -1,0 +1,55 @@
+#pragma once
+// Homing with feature landmarks (thesis 4.1-4.3) in the chapter 3 evaluation: a HomingMethod
+// that extracts landmarks from each panorama (or takes them from a cache of the grid
+// database's sets, so that ALV variants are compared on the same landmarks) and homes with
+// the landmark ALV.
+
+#include <memory>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "homing_eval.hpp"
+#include "snapnav/nav/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks.hpp"
+
+namespace snapnav::eval {
+
+// Landmark sets of a list of panoramas, extracted once, with the time it took.
+struct LandmarkCache {
+  std::vector<nav::LandmarkSet> sets;
+  std::unordered_map<const unsigned char*, int> index;  // panorama pixel buffer -> set
+  double seconds = 0;                                    // extraction, all panoramas
+  double mean_landmarks = 0;
+  double ms_per_panorama() const { return sets.empty() ? 0 : seconds * 1000 / sets.size(); }
+};
+LandmarkCache ExtractAll(const std::vector<cv::Mat>& panoramas, const nav::LandmarkExtractorConfig& config);
+
+class LandmarkMethod : public HomingMethod {
+ public:
+  LandmarkMethod(const nav::LandmarkExtractorConfig& extractor, const nav::LandmarkHomingConfig& homing,
+                 const nav::PanoramaModel& panorama, const LandmarkCache* cache = nullptr);
+  std::string name() const override;
+  void SetHome(const cv::Mat& panorama) override;
+  std::optional<nav::HomingEstimate> Home(const cv::Mat& panorama) override;
+  // Extraction time of panoramas not found in the cache.
+  double extract_seconds() const { return extract_seconds_; }
+  int extracted() const { return extracted_; }
+  int64_t matches() const { return matches_; }
+  int64_t estimates() const { return estimates_; }
+
+ private:
+  const nav::LandmarkSet& Landmarks(const cv::Mat& panorama);
+  nav::LandmarkExtractorConfig extractor_;
+  nav::LandmarkHomer homer_;
+  const LandmarkCache* cache_;
+  nav::LandmarkSet scratch_;
+  double extract_seconds_ = 0;
+  int extracted_ = 0;
+  int64_t matches_ = 0, estimates_ = 0;
+};
+
+// Short label of a configuration: "sift weighted top20", "surf scale all".
+std::string LandmarkLabel(nav::LandmarkMethod method, nav::AlvVariant variant, int top_n);
+
+}  // namespace snapnav::eval
