@@ -23,6 +23,7 @@ inline constexpr char kHomingVector[] = "HOMING_VECTOR";        // homing_vector
 inline constexpr char kPlaceCellMatch[] = "PLACE_CELL_MATCH";   // place_cell_match_t
 inline constexpr char kPointMap[] = "POINT_MAP";                // point_map_t
 inline constexpr char kRoute[] = "ROUTE";                       // waypoint_route_t
+inline constexpr char kNavigatorStatus[] = "NAVIGATOR_STATUS";
 inline constexpr char kBusCheck[] = "BUS_CHECK";                // omni_frame_t probes of bus-check
 inline constexpr char kBusPing[] = "BUS_PING";
 inline constexpr char kBusPong[] = "BUS_PONG";

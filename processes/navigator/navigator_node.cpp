@@ -1,0 +1,353 @@
+#include "navigator_node.hpp"
+
+#include <cmath>
+#include <iostream>
+#include <ostream>
+#include <stdexcept>
+
+#include "snapnav/glue/conversions.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+const char* Bool(bool b) { return b ? "true" : "false"; }
+
+bool Finite(const nav::Pose2& p) { return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad); }
+
+int8_t StateCode(nav::FollowState s) {
+  switch (s) {
+    case nav::FollowState::kIdle:
+      return navigator_status_t::IDLE;
+    case nav::FollowState::kTurning:
+      return navigator_status_t::TURNING;
+    case nav::FollowState::kDriving:
+      return navigator_status_t::DRIVING;
+    case nav::FollowState::kHoming:
+      return navigator_status_t::HOMING;
+    case nav::FollowState::kFinished:
+      return navigator_status_t::FINISHED;
+  }
+  return navigator_status_t::IDLE;
+}
+
+}  // namespace
+
+std::optional<nav::Route> NavigatorConfig::ConfiguredRoute() const {
+  const auto which = nav::ParseThesisRoute(route_source);
+  if (!which) return std::nullopt;
+  nav::Route r;
+  r.name = route_source;
+  r.waypoints = nav::ThesisRoute(*which, route_origin, route_size_m);
+  r.loop = route_loop;
+  r.laps = route_laps;
+  r.tolerance_m = route_tolerance_m;
+  return r;
+}
+
+NavigatorConfig NavigatorConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  NavigatorConfig c;
+  c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
+  c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
+  c.homing_vector_channel = channel_prefix + ini.GetString("channels", "homing_vector");
+  c.route_channel = channel_prefix + ini.GetString("channels", "route");
+  c.drive_command_channel = channel_prefix + ini.GetString("channels", "drive_command");
+  c.status_channel = channel_prefix + ini.GetString("channels", "status");
+
+  c.route_source = glue::ReadChoice<std::string>(ini, "route", "route",
+                                                 {{"none", "none"}, {"thesis1", "thesis1"}, {"thesis2", "thesis2"}});
+  c.route_origin = {ini.GetDouble("route", "origin_x_m"), ini.GetDouble("route", "origin_y_m")};
+  c.route_size_m = ini.GetDouble("route", "size_m");
+  c.route_loop = ini.GetBool("route", "loop");
+  c.route_laps = ini.GetInt("route", "laps");
+  c.route_tolerance_m = ini.GetDouble("route", "tolerance_m");
+  c.route_first_waypoint = ini.GetInt("route", "first_waypoint");
+
+  auto& t = c.tracker;
+  t.odometry.translation_noise_m_per_m = ini.GetDouble("tracker", "translation_noise_m_per_m");
+  t.odometry.rotation_noise_rad_per_rad = ini.GetDouble("tracker", "rotation_noise_rad_per_rad");
+  t.odometry.rotation_noise_rad_per_m = ini.GetDouble("tracker", "rotation_noise_deg_per_m") * kDeg;
+  t.initial_position_sigma_m = ini.GetDouble("tracker", "initial_position_sigma_m");
+  t.initial_heading_sigma_rad = ini.GetDouble("tracker", "initial_heading_sigma_deg") * kDeg;
+  t.gate_chi2 = ini.GetDouble("tracker", "gate_chi2");
+  t.reset_after_rejections = ini.GetInt("tracker", "reset_after_rejections");
+  t.use_fix_heading = ini.GetBool("tracker", "use_fix_heading");
+  t.min_fix_position_sigma_m = ini.GetDouble("tracker", "min_fix_position_sigma_m");
+  t.min_fix_heading_sigma_rad = ini.GetDouble("tracker", "min_fix_heading_sigma_deg") * kDeg;
+  t.max_fix_age_s = ini.GetDouble("tracker", "max_fix_age_s");
+  c.unknown_fix_position_sigma_m = ini.GetDouble("tracker", "unknown_fix_position_sigma_m");
+  c.unknown_fix_heading_sigma_rad = ini.GetDouble("tracker", "unknown_fix_heading_sigma_deg") * kDeg;
+
+  auto& f = c.follower;
+  f.max_linear_mps = ini.GetDouble("follower", "max_linear_mps");
+  f.min_linear_mps = ini.GetDouble("follower", "min_linear_mps");
+  f.max_angular_radps = ini.GetDouble("follower", "max_angular_deg_per_s") * kDeg;
+  f.heading_gain_per_s = ini.GetDouble("follower", "heading_gain_per_s");
+  f.turn_in_place_rad = ini.GetDouble("follower", "turn_in_place_deg") * kDeg;
+  f.align_rad = ini.GetDouble("follower", "align_deg") * kDeg;
+  f.slow_down_m = ini.GetDouble("follower", "slow_down_m");
+  f.homing_radius_m = ini.GetDouble("follower", "homing_radius_m");
+  f.homing_speed_mps = ini.GetDouble("follower", "homing_speed_mps");
+  f.homing_max_age_s = ini.GetDouble("follower", "homing_max_age_s");
+  f.homing_max_deviation_rad = ini.GetDouble("follower", "homing_max_deviation_deg") * kDeg;
+  f.arrival = glue::ReadChoice<nav::ArrivalRule>(ini, "follower", "arrival",
+                                                 {{"estimate", nav::ArrivalRule::kEstimate},
+                                                  {"homing", nav::ArrivalRule::kHoming},
+                                                  {"either", nav::ArrivalRule::kEither}});
+  f.approach_timeout_s = ini.GetDouble("follower", "approach_timeout_s");
+
+  c.homing_arrived_magnitude = ini.GetDouble("homing", "arrived_magnitude");
+  c.status_period_s = ini.GetDouble("navigator", "status_period_s");
+  ini.CheckAllUsed();
+
+  try {
+    c.tracker.Validate();
+    c.follower.Validate();
+    if (!(c.unknown_fix_position_sigma_m > 0) || !(c.unknown_fix_heading_sigma_rad > 0)) {
+      throw std::invalid_argument(
+          "[tracker] unknown_fix_position_sigma_m and unknown_fix_heading_sigma_deg must be positive");
+    }
+    if (!(c.homing_arrived_magnitude >= 0)) throw std::invalid_argument("[homing] arrived_magnitude must be >= 0");
+    if (!(c.status_period_s >= 0)) throw std::invalid_argument("[navigator] status_period_s must be >= 0");
+    if (c.route_laps < 0) throw std::invalid_argument("[route] laps must be >= 0");
+    if (const auto r = c.ConfiguredRoute()) {
+      r->Validate();
+      if (c.route_first_waypoint < 0 || c.route_first_waypoint >= static_cast<int>(r->waypoints.size())) {
+        throw std::invalid_argument("[route] first_waypoint must be a waypoint of the route (0.." +
+                                    std::to_string(r->waypoints.size() - 1) + ")");
+      }
+    } else if (!(c.route_tolerance_m > 0)) {
+      throw std::invalid_argument("[route] tolerance_m must be positive");
+    }
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": " + e.what());
+  }
+  const std::string* ins[] = {&c.odometry_channel, &c.pose_channel, &c.homing_vector_channel, &c.route_channel};
+  for (const auto* in : ins) {
+    if (*in == c.drive_command_channel || *in == c.status_channel) {
+      throw glue::ConfigError(ini.origin() + ": [channels] the output channels must differ from the inputs ('" + *in +
+                              "')");
+    }
+  }
+  return c;
+}
+
+void NavigatorConfig::Print(std::ostream& out) const {
+  const auto& t = tracker;
+  const auto& f = follower;
+  out << "[channels]\nodometry = " << odometry_channel << "\npose = " << pose_channel
+      << "\nhoming_vector = " << homing_vector_channel << "\nroute = " << route_channel
+      << "\ndrive_command = " << drive_command_channel << "\nstatus = " << status_channel << "\n"
+      << "[route]\nroute = " << route_source << "\norigin_x_m = " << route_origin.x()
+      << "\norigin_y_m = " << route_origin.y() << "\nsize_m = " << route_size_m << "\nloop = " << Bool(route_loop)
+      << "\nlaps = " << route_laps << "\ntolerance_m = " << route_tolerance_m
+      << "\nfirst_waypoint = " << route_first_waypoint << "\n"
+      << "[tracker]\ntranslation_noise_m_per_m = " << t.odometry.translation_noise_m_per_m
+      << "\nrotation_noise_rad_per_rad = " << t.odometry.rotation_noise_rad_per_rad
+      << "\nrotation_noise_deg_per_m = " << t.odometry.rotation_noise_rad_per_m / kDeg
+      << "\ninitial_position_sigma_m = " << t.initial_position_sigma_m
+      << "\ninitial_heading_sigma_deg = " << t.initial_heading_sigma_rad / kDeg << "\ngate_chi2 = " << t.gate_chi2
+      << "\nreset_after_rejections = " << t.reset_after_rejections << "\nuse_fix_heading = " << Bool(t.use_fix_heading)
+      << "\nmin_fix_position_sigma_m = " << t.min_fix_position_sigma_m
+      << "\nmin_fix_heading_sigma_deg = " << t.min_fix_heading_sigma_rad / kDeg
+      << "\nmax_fix_age_s = " << t.max_fix_age_s << "\nunknown_fix_position_sigma_m = " << unknown_fix_position_sigma_m
+      << "\nunknown_fix_heading_sigma_deg = " << unknown_fix_heading_sigma_rad / kDeg << "\n"
+      << "[follower]\nmax_linear_mps = " << f.max_linear_mps << "\nmin_linear_mps = " << f.min_linear_mps
+      << "\nmax_angular_deg_per_s = " << f.max_angular_radps / kDeg << "\nheading_gain_per_s = " << f.heading_gain_per_s
+      << "\nturn_in_place_deg = " << f.turn_in_place_rad / kDeg << "\nalign_deg = " << f.align_rad / kDeg
+      << "\nslow_down_m = " << f.slow_down_m << "\nhoming_radius_m = " << f.homing_radius_m
+      << "\nhoming_speed_mps = " << f.homing_speed_mps << "\nhoming_max_age_s = " << f.homing_max_age_s
+      << "\nhoming_max_deviation_deg = " << f.homing_max_deviation_rad / kDeg
+      << "\narrival = " << nav::ArrivalRuleName(f.arrival) << "\napproach_timeout_s = " << f.approach_timeout_s << "\n"
+      << "[homing]\narrived_magnitude = " << homing_arrived_magnitude << "\n"
+      << "[navigator]\nstatus_period_s = " << status_period_s << "\n";
+}
+
+NavigatorNode::NavigatorNode(glue::Bus& bus, const NavigatorConfig& config)
+    : bus_(bus), config_(config), tracker_(config.tracker), follower_(config.follower) {
+  if (const auto route = config_.ConfiguredRoute()) {
+    follower_.SetRoute(*route, config_.route_first_waypoint);
+    ++routes_;
+  }
+  bus_.Subscribe(config_.odometry_channel, &NavigatorNode::OnOdometry, this);
+  bus_.Subscribe(config_.pose_channel, &NavigatorNode::OnPose, this);
+  bus_.Subscribe(config_.homing_vector_channel, &NavigatorNode::OnHomingVector, this);
+  bus_.Subscribe(config_.route_channel, &NavigatorNode::OnRoute, this);
+}
+
+int64_t NavigatorNode::rejected_total() const {
+  int64_t n = 0;
+  for (const auto& [reason, count] : rejected_) n += count;
+  return n;
+}
+
+void NavigatorNode::Reject(const std::string& reason, const std::string& detail) {
+  ++rejected_[reason];
+  bus_.CountDecodeError(reason + ": " + detail);  // per channel; printed to stderr, rate-limited
+}
+
+void NavigatorNode::OnOdometry(const odometry_t& msg) {
+  const nav::Pose2 delta = glue::OdometryDelta(msg);
+  if (!Finite(delta)) {
+    Reject("non-finite odometry", "increment (" + std::to_string(delta.x_m) + ", " + std::to_string(delta.y_m) + ", " +
+                                      std::to_string(delta.theta_rad) + ")");
+    return;
+  }
+  if (last_odometry_utime_ && msg.utime < *last_odometry_utime_) {
+    Reject("odometry back in time",
+           "utime " + std::to_string(msg.utime) + " after " + std::to_string(*last_odometry_utime_));
+    return;
+  }
+  if (msg.utime < tracker_.utime()) {
+    // A fix stamped later than this odometry came first: its time is kept, the increment is used.
+    tracker_.AddOdometry(tracker_.utime(), delta);
+  } else {
+    tracker_.AddOdometry(msg.utime, delta);
+  }
+  last_odometry_utime_ = msg.utime;
+  if (!follower_.has_route()) return;  // nothing to drive: no commands (a teleop may be driving)
+
+  int8_t state;
+  nav::DriveCommand command;
+  if (!tracker_.initialized()) {
+    state = navigator_status_t::WAITING_FOR_POSE;  // stand still until the first fix
+    last_step_ = nav::FollowStep{};
+    last_step_.waypoint = follower_.waypoint();
+  } else {
+    last_step_ = follower_.Update(msg.utime, tracker_.pose());
+    if (last_step_.homing_used) ++homing_used_;
+    if (last_step_.arrival != nav::ArrivalReason::kNone) {
+      const auto& w = follower_.route().waypoints[last_step_.arrived_waypoint];
+      std::cerr << "navigator: reached waypoint " << last_step_.arrived_waypoint << " (" << w.x() << ", " << w.y()
+                << ") by " << nav::ArrivalReasonName(last_step_.arrival) << " at utime " << msg.utime
+                << (last_step_.lap_completed ? ", lap " + std::to_string(follower_.laps()) + " completed" : "")
+                << (follower_.state() == nav::FollowState::kFinished ? ", route finished" : "") << "\n";
+    }
+    command = last_step_.command;
+    state = StateCode(last_step_.state);
+  }
+  drive_command_t cmd{};
+  cmd.utime = msg.utime;
+  cmd.source = "navigator";
+  cmd.linear_velocity_mps = command.linear_mps;
+  cmd.angular_velocity_radps = command.angular_radps;
+  bus_.Publish(config_.drive_command_channel, cmd);
+  last_command_ = command;
+  ++commands_;
+  if (!last_status_utime_ || msg.utime - *last_status_utime_ >= static_cast<int64_t>(config_.status_period_s * 1e6) ||
+      last_step_.arrival != nav::ArrivalReason::kNone) {
+    PublishStatus(msg.utime, state);
+  }
+}
+
+void NavigatorNode::PublishStatus(int64_t utime, int8_t state) {
+  navigator_status_t s{};
+  s.utime = utime;
+  s.state = state;
+  const nav::Route& r = follower_.route();
+  s.route_name = r.name;
+  s.nwaypoints = static_cast<int32_t>(r.waypoints.size());
+  s.waypoint_index = follower_.has_route() ? follower_.waypoint() : -1;
+  s.laps = follower_.laps();
+  s.arrivals = follower_.arrivals();
+  if (s.waypoint_index >= 0) {
+    const auto& w = r.waypoints[s.waypoint_index];
+    s.waypoint_x_m = w.x();
+    s.waypoint_y_m = w.y();
+    if (tracker_.initialized())
+      s.distance_to_waypoint_m = (w - Eigen::Vector2d(tracker_.pose().x_m, tracker_.pose().y_m)).norm();
+  }
+  s.heading_error_rad = last_step_.heading_error_rad;
+  s.x_m = tracker_.pose().x_m;
+  s.y_m = tracker_.pose().y_m;
+  s.theta_rad = tracker_.pose().theta_rad;
+  s.position_sigma_m = tracker_.initialized() ? tracker_.position_sigma_m() : 0;
+  s.fixes_accepted = static_cast<int32_t>(tracker_.fixes_accepted());
+  s.fixes_rejected = static_cast<int32_t>(tracker_.fixes_rejected());
+  s.tracker_resets = static_cast<int32_t>(tracker_.resets());
+  s.linear_velocity_mps = last_command_.linear_mps;
+  s.angular_velocity_radps = last_command_.angular_radps;
+  bus_.Publish(config_.status_channel, s);
+  last_status_utime_ = utime;
+  ++statuses_;
+}
+
+void NavigatorNode::OnPose(const pose_t& msg) {
+  const nav::Pose2 pose = glue::FromPoseMsg(msg);
+  if (!Finite(pose)) {
+    Reject("non-finite pose", "from " + msg.estimator + " at utime " + std::to_string(msg.utime));
+    return;
+  }
+  Eigen::Matrix3d cov = glue::CovarianceOf(msg);
+  if (!cov.allFinite()) {
+    Reject("non-finite covariance", "from " + msg.estimator + " at utime " + std::to_string(msg.utime));
+    return;
+  }
+  if (cov(0, 0) < 0 || cov(1, 1) < 0 || cov(2, 2) < 0) {
+    Reject("negative variance", "from " + msg.estimator + " at utime " + std::to_string(msg.utime));
+    return;
+  }
+  if (cov.isZero(0)) {  // unknown: the configured uncertainty of a place-cell fix
+    const double sp = config_.unknown_fix_position_sigma_m, sh = config_.unknown_fix_heading_sigma_rad;
+    cov = Eigen::Vector3d(sp * sp, sp * sp, sh * sh).asDiagonal();
+  }
+  const nav::FixOutcome outcome = tracker_.AddFix(msg.utime, pose, cov);
+  ++fixes_[nav::FixOutcomeName(outcome)];
+  if (outcome == nav::FixOutcome::kInitialized || outcome == nav::FixOutcome::kReset) {
+    std::cerr << "navigator: tracker " << (outcome == nav::FixOutcome::kReset ? "reset" : "initialised") << " at ("
+              << pose.x_m << ", " << pose.y_m << ", " << pose.theta_rad / kDeg << " deg) from " << msg.estimator
+              << " (utime " << msg.utime << ")\n";
+  }
+}
+
+void NavigatorNode::OnHomingVector(const homing_vector_t& msg) {
+  if (!msg.valid) {
+    ++homing_invalid_;
+    return;
+  }
+  if (!std::isfinite(msg.direction_rad) || !std::isfinite(msg.magnitude)) {
+    Reject("non-finite homing vector", "utime " + std::to_string(msg.utime));
+    return;
+  }
+  nav::HomingInput h;
+  h.utime = msg.utime;
+  h.direction_rad = msg.direction_rad;
+  h.arrived = config_.homing_arrived_magnitude > 0 && msg.magnitude < config_.homing_arrived_magnitude;
+  follower_.SetHoming(h);
+}
+
+void NavigatorNode::OnRoute(const waypoint_route_t& msg) {
+  if (msg.nwaypoints <= 0) {
+    Reject("empty route", "'" + msg.name + "' has " + std::to_string(msg.nwaypoints) + " waypoints");
+    return;
+  }
+  nav::Route r;
+  r.name = msg.name;
+  r.loop = msg.loop;
+  r.laps = config_.route_laps;
+  r.tolerance_m = msg.tolerance_m;
+  for (int i = 0; i < msg.nwaypoints; ++i) r.waypoints.emplace_back(msg.x_m[i], msg.y_m[i]);
+  try {
+    r.Validate();
+  } catch (const std::invalid_argument& e) {
+    Reject("invalid route", e.what());
+    return;
+  }
+  follower_.SetRoute(r, 0);
+  ++routes_;
+  std::cerr << "navigator: route '" << r.name << "' with " << r.waypoints.size() << " waypoints"
+            << (r.loop ? ", looping" : "") << ", tolerance " << r.tolerance_m << " m (utime " << msg.utime << ")\n";
+}
+
+void NavigatorNode::Report(std::ostream& out) const {
+  out << "navigator: " << commands_ << " drive commands, " << statuses_ << " statuses, " << routes_ << " routes, "
+      << follower_.arrivals() << " waypoints reached, " << follower_.laps() << " laps, state "
+      << nav::FollowStateName(follower_.state()) << "\n";
+  out << "navigator: fixes accepted " << tracker_.fixes_accepted() << ", rejected " << tracker_.fixes_rejected()
+      << ", resets " << tracker_.resets() << "; homing vectors used in " << homing_used_ << " commands, "
+      << homing_invalid_ << " invalid\n";
+  for (const auto& [reason, count] : rejected_) out << "navigator: rejected " << count << " (" << reason << ")\n";
+}
+
+}  // namespace snapnav::processes

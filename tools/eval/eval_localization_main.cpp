@@ -1,0 +1,223 @@
+// eval-localization: place-cell localization evaluated the way the thesis does (5.1.4, 5.2.2,
+// fig. 5.9): memories explored in a simulated scene (the grid database, a manual route, random
+// exploration at several novelty thresholds), 30 random off-grid test positions, and the
+// position and heading error of each distance measure with and without the distance filter,
+// nearest cell against the interpolated estimate. Writes report.md, results.csv, queries.csv,
+// summary.json and PNG figures into --out (one sub-folder per scene with --scenes).
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include <opencv2/core/utility.hpp>
+
+#include "localization_eval.hpp"
+#include "report_text.hpp"
+#include "scene_file.hpp"
+#include "sim_node.hpp"
+#include "snapnav/glue/app.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/place_cells.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace snapnav;
+
+std::vector<double> ParseDoubles(const std::string& text, const std::string& flag) {
+  std::vector<double> v;
+  for (const auto& part : glue::SplitList(text)) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(part, &used));
+      if (used != part.size()) throw std::invalid_argument(part);
+    } catch (const std::exception&) {
+      throw glue::FlagError("--" + flag + ": '" + part + "' is not a number");
+    }
+  }
+  return v;
+}
+
+// Overrides of the config's localizer options (negative: keep the config's value).
+struct Overrides {
+  double ratio = -1, keep_fraction = -1, ransac_threshold_rad = -1, window_min_ncc = -2, filter_radius_m = -1,
+         filter_weight = -1, filter_gate_m = -1, interpolate_power = -1, interpolate_radius_m = -1,
+         residual_cap_rad = -1;
+  int keep_min = -1, min_matches = -1, interpolate_k = -1, candidates = -1, near_candidates = -1, exhaustive_below = -1;
+  void Apply(nav::LocalizerOptions* l) const {
+    if (ratio >= 0) l->measure.match.ratio = ratio;
+    if (keep_fraction >= 0) l->measure.keep_fraction = keep_fraction;
+    if (residual_cap_rad >= 0) l->measure.residual_cap_rad = residual_cap_rad;
+    if (ransac_threshold_rad >= 0) l->measure.ransac_threshold_rad = ransac_threshold_rad;
+    if (window_min_ncc >= -1) l->measure.window_min_ncc = window_min_ncc;
+    if (filter_radius_m >= 0) l->filter.radius_m = filter_radius_m;
+    if (filter_weight >= 0) l->filter.weight = filter_weight;
+    if (filter_gate_m >= 0) l->filter.gate_m = filter_gate_m;
+    if (interpolate_power >= 0) l->interpolate_power = interpolate_power;
+    if (interpolate_radius_m >= 0) l->interpolate_radius_m = interpolate_radius_m;
+    if (keep_min >= 0) l->measure.keep_min = keep_min;
+    if (min_matches >= 0) l->measure.min_matches = min_matches;
+    if (interpolate_k >= 0) l->interpolate_k = interpolate_k;
+    if (candidates >= 0) l->candidates = candidates;
+    if (near_candidates >= 0) l->near_candidates = near_candidates;
+    if (exhaustive_below >= 0) l->exhaustive_below = exhaustive_below;
+  }
+};
+
+int Main(int argc, char** argv) {
+  std::string scene_name = "indoor13", scenes, out_dir;
+  std::string sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini", config_path = SNAPNAV_CONFIG_DIR "/placecells.ini";
+  std::string features, memories = "grid,route,random", measures = "bearing-smallest,bearing-ransac,count,vline";
+  std::string filters = "on,off", pose_source = "truth", thresholds = "0.08,0.05,0.03", explore_measure = "bearing-smallest";
+  int threads = 1, seed = 1;
+  eval::LocalizationEvalOptions o;
+  Overrides ov;
+  glue::Flags flags("eval-localization",
+                    "Place-cell localization (thesis 5.1.4, 5.2.2, fig. 5.9): explores a simulated scene (its grid\n"
+                    "database, a manual serpentine route, random exploration at several novelty thresholds), then\n"
+                    "localizes at --tests random off-grid positions with random headings. For every distance\n"
+                    "measure, memory, distance filter on/off and nearest-cell/interpolated estimate: mean and max\n"
+                    "position error, heading error, ms per query. Views come from raw omni images rendered and\n"
+                    "unwrapped (the real pipeline), made once and shared by every configuration. View, localizer\n"
+                    "and vocabulary options come from --config (the placecells process' INI); measure, filter and\n"
+                    "estimate are varied, the flags below override the rest.\n"
+                    "Writes report.md, results.csv, queries.csv, summary.json (mean_localization_error_m: bearing-\n"
+                    "smallest, filter on, interpolated, grid memory) and figures into --out.");
+  flags.AddString("scene", &scene_name, "scene name (config/scenes) or file");
+  flags.AddString("scenes", &scenes, "several scenes (comma-separated): one sub-folder of --out each");
+  flags.AddString("out", &out_dir, "output folder (required)");
+  flags.AddString("config", &config_path, "place-cell config: [landmarks] [place_view] [vline] [sift] [surf] [matching] "
+                                          "[measure] [distance_filter] [localizer] [vocabulary]");
+  flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama, effects, robot noise)");
+  flags.AddString("features", &features, "override [landmarks] method: sift | surf");
+  flags.AddString("memories", &memories, "memories: grid, route, random (comma-separated)");
+  flags.AddString("measures", &measures, "distance measures: bearing-smallest, bearing-ransac, count, vline");
+  flags.AddString("filters", &filters, "distance filter settings: on, off");
+  flags.AddInt("tests", &o.tests, "test positions");
+  flags.AddDouble("prediction-sigma-m", &o.prediction_sigma_m, "odometry prediction noise per axis [m] (distance filter)");
+  flags.AddString("pose-source", &pose_source, "cell positions of route and random exploration: truth | odometry");
+  flags.AddString("thresholds", &thresholds, "random exploration: novelty thresholds (units of --explore-measure)");
+  flags.AddString("explore-measure", &explore_measure, "random exploration: measure of the novelty test");
+  flags.AddInt("walk-runs", &o.walk.runs, "random exploration: runs (start headings spread over the circle)");
+  flags.AddInt("walk-steps", &o.walk.steps, "random exploration: steps (views) per run");
+  flags.AddDouble("walk-step-m", &o.walk.step_m, "random exploration: step length [m]");
+  flags.AddDouble("walk-turn-sigma-rad", &o.walk.turn_sigma_rad, "random exploration: heading change std. dev. per step");
+  flags.AddDouble("route-row-spacing-m", &o.route_row_spacing_m, "manual route: distance between serpentine rows [m]");
+  flags.AddDouble("route-spacing-m", &o.route_spacing_m, "manual route: a cell every this much travel [m]");
+  flags.AddInt("seed", &seed, "seed of exploration, test positions, prediction noise and people");
+  flags.AddInt("threads", &threads, "OpenCV threads (SIFT is parallel); 1: one core");
+  flags.AddString("save-test-panoramas", &o.save_test_panoramas_dir, "folder for the test positions' panoramas (PNG)");
+  const std::string keep = " (negative: the config's)";
+  flags.AddDouble("ratio", &ov.ratio, "override [matching] ratio" + keep);
+  flags.AddDouble("keep-fraction", &ov.keep_fraction, "override [measure] keep_fraction" + keep);
+  flags.AddDouble("residual-cap-rad", &ov.residual_cap_rad, "override residual_cap_rad (bearing residual cap)" + keep);
+  flags.AddInt("keep-min", &ov.keep_min, "override [measure] keep_min" + keep);
+  flags.AddDouble("ransac-threshold-rad", &ov.ransac_threshold_rad, "override the RANSAC inlier residual [rad]" + keep);
+  flags.AddDouble("window-min-ncc", &ov.window_min_ncc, "override [measure] window_min_ncc (< -1: the config's)");
+  flags.AddInt("min-matches", &ov.min_matches, "override [measure] min_matches" + keep);
+  flags.AddDouble("filter-radius-m", &ov.filter_radius_m, "override [distance_filter] radius_m" + keep);
+  flags.AddDouble("filter-weight", &ov.filter_weight, "override [distance_filter] weight" + keep);
+  flags.AddDouble("filter-gate-m", &ov.filter_gate_m, "override [distance_filter] gate_m" + keep);
+  flags.AddInt("interpolate-k", &ov.interpolate_k, "override [localizer] interpolate_k" + keep);
+  flags.AddDouble("interpolate-power", &ov.interpolate_power, "override [localizer] interpolate_power" + keep);
+  flags.AddDouble("interpolate-radius-m", &ov.interpolate_radius_m,
+                  "override interpolate_radius_m: cells this near the chosen one are interpolated" + keep);
+  flags.AddInt("candidates", &ov.candidates, "override [localizer] candidates" + keep);
+  flags.AddInt("near-candidates", &ov.near_candidates, "override [localizer] near_candidates" + keep);
+  flags.AddInt("exhaustive-below", &ov.exhaustive_below, "override [localizer] exhaustive_below" + keep);
+  if (!flags.Parse(argc, argv)) return 0;
+  if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
+  if (!features.empty() && features != "sift" && features != "surf") throw glue::FlagError("--features must be sift or surf");
+  if (pose_source != "truth" && pose_source != "odometry") throw glue::FlagError("--pose-source must be truth or odometry");
+  if (threads < 1) throw glue::FlagError("--threads must be >= 1");
+  o.memories = glue::SplitList(memories);
+  o.measures = glue::SplitList(measures);
+  o.filters.clear();
+  for (const auto& f : glue::SplitList(filters)) {
+    if (f != "on" && f != "off") throw glue::FlagError("--filters takes on and off, not '" + f + "'");
+    o.filters.push_back(f == "on");
+  }
+  o.thresholds = ParseDoubles(thresholds, "thresholds");
+  o.explore_measure = explore_measure;
+  o.odometry_poses = pose_source == "odometry";
+  o.seed = static_cast<uint64_t>(seed);
+  cv::setNumThreads(threads);
+
+  const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  o.camera = sim.camera;
+  o.effects = sim.effects;
+  o.drive = sim.drive_options;
+  const auto ini = glue::IniFile::Load(config_path);
+  o.view = glue::ReadPlaceViewOptions(ini);
+  o.localizer = glue::ReadLocalizerOptions(ini);
+  o.vocabulary = glue::ReadVocabularyOptions(ini);
+  if (!features.empty()) o.view.features.method = features == "sift" ? nav::LandmarkMethod::kSift : nav::LandmarkMethod::kSurf;
+  ov.Apply(&o.localizer);
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::FlagError(e.what());
+  }
+  std::ostringstream effective;
+  effective << "config " << config_path << " (with the overrides), sim config " << sim_config_path << ", threads "
+            << threads << "\n";
+  glue::PrintPlaceViewOptions(effective, o.view);
+  glue::PrintLocalizerOptions(effective, o.localizer);
+  glue::PrintVocabularyOptions(effective, o.vocabulary);
+  effective << "[evaluation]\n" << eval::DescribeOptions(o);
+  const std::string options_text = effective.str();
+  std::cerr << "eval-localization: effective options (measure, refinement, filter and estimate are varied per "
+               "configuration):\n";
+  std::istringstream lines(options_text);
+  for (std::string line; std::getline(lines, line);) std::cerr << "  " << line << "\n";
+
+  const std::vector<std::string> scene_names = scenes.empty() ? std::vector<std::string>{scene_name} : glue::SplitList(scenes);
+  if (scene_names.empty()) throw glue::FlagError("--scenes must name at least one scene");
+  const fs::path out(out_dir);
+  fs::create_directories(out);
+  std::ostringstream top;  // several scenes: one summary over them
+  int missed = 0;
+  for (const auto& name : scene_names) {
+    const auto scene = processes::LoadSceneFile(processes::SceneFilePath(name));
+    std::cerr << "eval-localization: scene " << scene.name << ", grid " << scene.grid.nx << "x" << scene.grid.ny << " at "
+              << scene.grid.spacing_m << " m, " << scene.people.count << " people\n";
+    const auto result = eval::RunLocalizationEval(scene, o, [&](const std::string& text, bool transient) {
+      std::cerr << "eval-localization: " << scene.name << ": " << text << (transient ? "\r" : "\n") << std::flush;
+    });
+    const fs::path dir = scene_names.size() > 1 ? out / scene.name : out;
+    const auto figures = eval::WriteLocalizationOutputs(result, o, dir.string(), options_text);
+    const auto* def = result.Find("grid", "bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+    const auto* thesis = result.Find("grid", "bearing-smallest", true, nav::PlaceEstimate::kNearestCell);
+    const auto target = eval::TargetMeanErrorM(scene.name);
+    std::cerr << "eval-localization: " << scene.name << ": wrote " << (dir / "summary.json").string() << ", report.md, "
+              << "results.csv, queries.csv and " << figures.size() << " figures in " << eval::Fixed(result.total_seconds, 0)
+              << " s\n";
+    if (def) {
+      std::cout << scene.name << " mean_localization_error_m " << eval::Fixed(def->errors.mean_m, 4)
+                << " max_localization_error_m " << eval::Fixed(def->errors.max_m, 4);
+      if (thesis) std::cout << " thesis_configuration_mean_localization_error_m " << eval::Fixed(thesis->errors.mean_m, 4);
+      if (target) std::cout << " target " << eval::Fixed(*target, 2) << (def->errors.mean_m <= *target ? " met" : " MISSED");
+      std::cout << "\n";
+      if (target && def->errors.mean_m > *target) ++missed;
+      top << ",\n  \"" << scene.name << "_mean_localization_error_m\": " << eval::Fixed(def->errors.mean_m, 4) << ",\n  \""
+          << scene.name << "_max_localization_error_m\": " << eval::Fixed(def->errors.max_m, 4);
+      if (thesis) {
+        top << ",\n  \"" << scene.name << "_thesis_configuration_mean_localization_error_m\": "
+            << eval::Fixed(thesis->errors.mean_m, 4);
+      }
+    }
+  }
+  if (scene_names.size() > 1) {
+    std::ofstream j(out / "summary.json");
+    j << "{\n  \"scenes\": [";
+    for (size_t i = 0; i < scene_names.size(); ++i) j << (i ? ", " : "") << eval::JsonString(scene_names[i]);
+    j << "]" << top.str() << ",\n  \"scenes_missing_target\": " << missed << "\n}\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return glue::RunMain(argc, argv, Main); }

@@ -1,0 +1,895 @@
+#include "localization_eval.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <map>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "report_text.hpp"
+#include "snapnav/plot/plot.hpp"
+
+namespace snapnav::eval {
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kPhysicsDt = 0.05;  // [s] simulation step of the exploration drives
+
+double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
+
+Eigen::Vector2d Xy(const nav::Pose2& p) { return {p.x_m, p.y_m}; }
+
+// The people of a scene walk (random waypoints) around a robot that stands at `robot`: they do
+// not walk into it, and one who stands where the robot is (radius + robot radius) has stepped
+// aside and is left out of the image.
+class Crowd {
+ public:
+  Crowd(const nav::sim::Scene& scene, uint64_t seed) : world_(scene, {}, {}, seed), active_(scene.people.count > 0) {}
+  bool active() const { return active_; }
+  void Step(double dt_s, const nav::Pose2& robot) {
+    if (!active_) return;
+    world_.SetTruePose(robot);
+    world_.Step(0, 0, dt_s);
+  }
+  std::vector<nav::sim::Cylinder> Around(const nav::Pose2& robot, double robot_radius_m) const {
+    std::vector<nav::sim::Cylinder> out;
+    if (!active_) return out;
+    for (const auto& c : world_.people()) {
+      if ((c.center - Xy(robot)).norm() > c.radius_m + robot_radius_m) out.push_back(c);
+    }
+    return out;
+  }
+  // People after dt_s of walking (in 0.1 s steps) around the robot standing at `robot`.
+  std::vector<nav::sim::Cylinder> Advance(double dt_s, const nav::Pose2& robot, double robot_radius_m) {
+    const int steps = std::max(1, static_cast<int>(std::lround(dt_s / 0.1)));
+    for (int i = 0; i < steps; ++i) Step(0.1, robot);
+    return Around(robot, robot_radius_m);
+  }
+
+ private:
+  nav::sim::World world_;
+  bool active_;
+};
+
+// The exploring robot: it drives in the scene without its people (so nobody blocks it: the people
+// step aside), while the people walk around it in a World of their own, kept in step.
+class ExploreWorld {
+ public:
+  ExploreWorld(const nav::sim::Scene& scene, const nav::sim::DriveOptions& drive, uint64_t seed)
+      : empty_(WithoutPeople(scene)), robot_(empty_, drive, {}, seed), crowd_(scene, seed + 1), drive_(drive) {}
+  void Step(double linear_mps, double angular_radps, double dt_s) {
+    robot_.Step(linear_mps, angular_radps, dt_s);
+    crowd_.Step(dt_s, robot_.true_pose());
+  }
+  nav::sim::World& robot() { return robot_; }
+  const nav::sim::World& robot() const { return robot_; }
+  std::vector<nav::sim::Cylinder> people() const { return crowd_.Around(robot_.true_pose(), drive_.robot_radius_m); }
+
+ private:
+  static nav::sim::Scene WithoutPeople(nav::sim::Scene scene) {
+    scene.people.count = 0;
+    return scene;
+  }
+  nav::sim::Scene empty_;  // before robot_, which keeps a reference to it
+  nav::sim::World robot_;
+  Crowd crowd_;
+  nav::sim::DriveOptions drive_;
+};
+
+// Renders a pose (raw omni image, unwrapped) and makes its view, timing both.
+class ViewMaker {
+ public:
+  ViewMaker(const nav::sim::Scene& scene, const LocalizationEvalOptions& options)
+      : renderer_(scene, options.camera, options.seed), view_(options.view) {
+    pipeline_.input = CameraPipeline::Input::kRaw;
+    pipeline_.effects = options.effects;
+  }
+  nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people,
+                      const std::string& save_png = "") {
+    auto t0 = Clock::now();
+    const cv::Mat panorama = renderer_.ToPanorama(renderer_.Sensor(pose, CameraPipeline::Input::kRaw, people), pipeline_);
+    render_s_ += Seconds(t0);
+    if (!save_png.empty()) plot::SavePng(panorama, save_png);
+    t0 = Clock::now();
+    nav::PlaceView v = nav::MakePlaceView(panorama, view_);
+    extract_s_ += Seconds(t0);
+    landmarks_ += v.landmarks.size();
+    ++views_;
+    return v;
+  }
+  int views() const { return views_; }
+  double render_ms() const { return views_ ? 1000 * render_s_ / views_ : 0; }
+  double extract_ms() const { return views_ ? 1000 * extract_s_ / views_ : 0; }
+  double mean_landmarks() const { return views_ ? static_cast<double>(landmarks_) / views_ : 0; }
+
+ private:
+  ViewRenderer renderer_;
+  CameraPipeline pipeline_;
+  nav::PlaceViewOptions view_;
+  int views_ = 0;
+  int64_t landmarks_ = 0;
+  double render_s_ = 0, extract_s_ = 0;
+};
+
+std::string EstimateName(nav::PlaceEstimate e) { return nav::PlaceEstimateName(e); }
+
+// Key-safe form of a label: "bearing-smallest" -> "bearing_smallest".
+std::string Key(std::string s) {
+  for (char& c : s) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  }
+  return s;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+bool Area::Contains(const Eigen::Vector2d& p, double margin_m) const {
+  return p.x() >= min.x() - margin_m && p.x() <= max.x() + margin_m && p.y() >= min.y() - margin_m &&
+         p.y() <= max.y() + margin_m;
+}
+
+Area GridArea(const nav::sim::GridSpec& grid) {
+  if (grid.nx < 2 || grid.ny < 2) throw std::invalid_argument("grid area: the grid needs at least 2 x 2 positions");
+  Area a;
+  a.min = grid.Position(0, 0);
+  a.max = grid.Position(grid.nx - 1, grid.ny - 1);
+  return a;
+}
+
+std::vector<nav::Pose2> RandomTestPoses(const Area& area, const nav::sim::GridSpec& grid, int count,
+                                        double min_grid_distance_m, uint64_t seed) {
+  if (count < 0) throw std::invalid_argument("test poses: count must be >= 0");
+  if (!(min_grid_distance_m >= 0) || min_grid_distance_m >= grid.spacing_m / 2) {
+    throw std::invalid_argument("test poses: min_grid_distance_m must be in [0, spacing / 2)");
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> ux(area.min.x(), area.max.x()), uy(area.min.y(), area.max.y()),
+      heading(-M_PI, M_PI);
+  std::vector<nav::Pose2> poses;
+  while (static_cast<int>(poses.size()) < count) {
+    const Eigen::Vector2d p(ux(rng), uy(rng));
+    const double th = heading(rng);
+    const int ix = std::clamp(static_cast<int>(std::lround((p.x() - grid.origin_x_m) / grid.spacing_m)), 0, grid.nx - 1);
+    const int iy = std::clamp(static_cast<int>(std::lround((p.y() - grid.origin_y_m) / grid.spacing_m)), 0, grid.ny - 1);
+    if ((grid.Position(ix, iy) - p).norm() < min_grid_distance_m) continue;
+    poses.push_back({p.x(), p.y(), th});
+  }
+  return poses;
+}
+
+void RandomWalkOptions::Validate() const {
+  if (runs < 1 || steps < 0) throw std::invalid_argument("random walk: runs must be >= 1 and steps >= 0");
+  if (!(step_m > 0) || !(speed_mps > 0)) throw std::invalid_argument("random walk: step_m and speed_mps must be positive");
+  if (!(turn_sigma_rad >= 0) || !(turn_back_spread_rad >= 0) || !(turn_back_spread_rad < M_PI / 2)) {
+    throw std::invalid_argument("random walk: turn_sigma_rad >= 0, turn_back_spread_rad in [0, pi / 2)");
+  }
+  if (!(border_margin_m >= 0)) throw std::invalid_argument("random walk: border_margin_m must be >= 0");
+  if (!std::isfinite(start_heading_rad)) throw std::invalid_argument("random walk: start_heading_rad must be finite");
+}
+
+namespace {
+
+// Turns in place by `angle_rad`, then drives `distance_m` forward, in physics steps.
+void TurnAndDrive(ExploreWorld& world, double angle_rad, double distance_m, double speed_mps,
+                  double turn_rate_radps) {
+  for (double left = std::abs(angle_rad) / turn_rate_radps; left > 1e-9; left -= kPhysicsDt) {
+    world.Step(0, std::copysign(turn_rate_radps, angle_rad), std::min(kPhysicsDt, left));
+  }
+  for (double left = distance_m / speed_mps; left > 1e-9; left -= kPhysicsDt) {
+    world.Step(speed_mps, 0, std::min(kPhysicsDt, left));
+  }
+}
+
+ExploreSample Sample(const ExploreWorld& world, const nav::Pose2& start, const nav::Pose2& odom_start,
+                     const nav::Pose2& odom_now, double time_offset_s, int run) {
+  ExploreSample s;
+  s.truth = world.robot().true_pose();
+  s.odometry = start.Compose(odom_start.Between(odom_now));
+  s.utime = static_cast<int64_t>(std::llround((time_offset_s + world.robot().time_s()) * 1e6));
+  s.run = run;
+  s.people = world.people();
+  return s;
+}
+
+}  // namespace
+
+std::vector<ExploreSample> RandomWalk(const nav::sim::Scene& scene, const Area& area, const nav::sim::DriveOptions& drive,
+                                      const RandomWalkOptions& options, uint64_t seed) {
+  options.Validate();
+  std::vector<ExploreSample> samples;
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> turn(0.0, options.turn_sigma_rad);
+  std::uniform_real_distribution<double> spread(-options.turn_back_spread_rad, options.turn_back_spread_rad);
+  const double turn_rate = 0.8 * drive.max_angular_radps;
+  const double speed = std::min(options.speed_mps, drive.max_linear_mps);
+  double time_offset_s = 0;
+  for (int run = 0; run < options.runs; ++run) {
+    ExploreWorld world(scene, drive, seed * 7919 + static_cast<uint64_t>(run) + 1);
+    const nav::Pose2 start{area.centre().x(), area.centre().y(),
+                           nav::WrapAngle(options.start_heading_rad + run * 2 * M_PI / options.runs)};
+    world.robot().SetTruePose(start);
+    const nav::Pose2 odom_start = world.robot().TakeOdometry().cumulative;
+    nav::Pose2 odom = odom_start;
+    samples.push_back(Sample(world, start, odom_start, odom, time_offset_s, run));
+    for (int step = 0; step < options.steps; ++step) {
+      const nav::Pose2 p = world.robot().true_pose();
+      double dtheta = turn(rng);
+      const double h = p.theta_rad + dtheta;
+      const Eigen::Vector2d next = Xy(p) + options.step_m * Eigen::Vector2d(std::cos(h), std::sin(h));
+      if (!area.Contains(next, options.border_margin_m)) {
+        // Over the border: turn back drastically, towards the centre give or take a little.
+        const Eigen::Vector2d to = area.centre() - Xy(p);
+        dtheta = nav::WrapAngle(std::atan2(to.y(), to.x()) + spread(rng) - p.theta_rad);
+      }
+      TurnAndDrive(world, dtheta, options.step_m, speed, turn_rate);
+      odom = world.robot().TakeOdometry().cumulative;
+      samples.push_back(Sample(world, start, odom_start, odom, time_offset_s, run));
+    }
+    time_offset_s += world.robot().time_s() + 1.0;
+  }
+  return samples;
+}
+
+std::vector<Eigen::Vector2d> ManualRouteWaypoints(const Area& area, double row_spacing_m) {
+  if (!(row_spacing_m > 0)) throw std::invalid_argument("manual route: row_spacing_m must be positive");
+  const double h = area.max.y() - area.min.y();
+  const int rows = std::max(2, static_cast<int>(std::lround(h / row_spacing_m)) + 1);
+  std::vector<Eigen::Vector2d> w;
+  for (int r = 0; r < rows; ++r) {
+    const double y = area.min.y() + h * r / (rows - 1);
+    const bool east = r % 2 == 0;
+    w.push_back({east ? area.min.x() : area.max.x(), y});
+    w.push_back({east ? area.max.x() : area.min.x(), y});
+  }
+  return w;
+}
+
+std::vector<ExploreSample> DriveRoute(const nav::sim::Scene& scene, const std::vector<Eigen::Vector2d>& waypoints,
+                                      const nav::sim::DriveOptions& drive, double spacing_m, uint64_t seed) {
+  if (waypoints.size() < 2) throw std::invalid_argument("drive route: needs at least 2 waypoints");
+  if (!(spacing_m > 0)) throw std::invalid_argument("drive route: spacing_m must be positive");
+  ExploreWorld world(scene, drive, seed);
+  const Eigen::Vector2d d = waypoints[1] - waypoints[0];
+  const nav::Pose2 start{waypoints[0].x(), waypoints[0].y(), std::atan2(d.y(), d.x())};
+  world.robot().SetTruePose(start);
+  const nav::Pose2 odom_start = world.robot().TakeOdometry().cumulative;
+  nav::sim::RouteDriver driver(std::vector<Eigen::Vector2d>(waypoints.begin() + 1, waypoints.end()),
+                               std::min(0.25, drive.max_linear_mps), 0.05, false);
+  std::vector<ExploreSample> samples = {Sample(world, start, odom_start, odom_start, 0, 0)};
+  double last = 0;
+  for (int i = 0; i < 200000 && !driver.finished(); ++i) {
+    const Eigen::Vector2d cmd = driver.Command(world.robot().true_pose());
+    if (driver.finished()) break;
+    world.Step(cmd.x(), cmd.y(), kPhysicsDt);
+    if (world.robot().distance_m() - last >= spacing_m) {
+      last = world.robot().distance_m();
+      samples.push_back(Sample(world, start, odom_start, world.robot().TakeOdometry().cumulative, 0, 0));
+    }
+  }
+  if (world.robot().distance_m() - last >= spacing_m / 2) {
+    samples.push_back(Sample(world, start, odom_start, world.robot().TakeOdometry().cumulative, 0, 0));
+  }
+  return samples;
+}
+
+const std::vector<std::string>& MeasureVariantNames() {
+  static const std::vector<std::string> names = {"bearing-smallest", "bearing-ransac", "count", "vline"};
+  return names;
+}
+
+std::optional<MeasureVariant> ParseMeasureVariant(const std::string& name) {
+  if (name == "bearing-smallest" || name == "bearing") {
+    return MeasureVariant{"bearing-smallest", nav::PlaceMeasure::kBearingDifference, nav::MatchRefinement::kSmallestDistance};
+  }
+  if (name == "bearing-ransac") {
+    return MeasureVariant{name, nav::PlaceMeasure::kBearingDifference, nav::MatchRefinement::kRansac};
+  }
+  if (name == "count") return MeasureVariant{name, nav::PlaceMeasure::kMatchCount, nav::MatchRefinement::kSmallestDistance};
+  if (name == "vline") return MeasureVariant{name, nav::PlaceMeasure::kVlineTemplate, nav::MatchRefinement::kSmallestDistance};
+  return std::nullopt;
+}
+
+ErrorStats Summarize(const std::vector<double>& position_errors_m, const std::vector<double>& heading_errors_rad) {
+  ErrorStats s;
+  if (!position_errors_m.empty()) {
+    std::vector<double> e = position_errors_m;
+    double sum = 0;
+    for (double v : e) sum += v;
+    s.mean_m = sum / e.size();
+    std::sort(e.begin(), e.end());
+    s.median_m = e.size() % 2 ? e[e.size() / 2] : (e[e.size() / 2 - 1] + e[e.size() / 2]) / 2;
+    s.max_m = e.back();
+  }
+  double sum = 0;
+  int n = 0;
+  for (double h : heading_errors_rad) {
+    if (std::isnan(h)) continue;
+    sum += std::abs(h);
+    s.max_heading_deg = std::max(s.max_heading_deg, std::abs(h) * 180 / M_PI);
+    ++n;
+  }
+  s.mean_heading_deg = n ? sum / n * 180 / M_PI : kNaN;
+  if (!n) s.max_heading_deg = kNaN;
+  return s;
+}
+
+void LocalizationEvalOptions::Validate() const {
+  camera.Validate();
+  effects.Validate();
+  drive.Validate();
+  view.Validate();
+  vocabulary.Validate();
+  localizer.Validate();
+  walk.Validate();
+  if (!ParseMeasureVariant(explore_measure)) throw std::invalid_argument("explore_measure '" + explore_measure + "' is unknown");
+  for (const auto& m : measures) {
+    if (!ParseMeasureVariant(m)) throw std::invalid_argument("measure '" + m + "' is unknown (bearing-smallest, bearing-ransac, count, vline)");
+  }
+  for (const auto& m : memories) {
+    if (m != "grid" && m != "route" && m != "random") throw std::invalid_argument("memory '" + m + "' is unknown (grid, route, random)");
+  }
+  if (memories.empty() || measures.empty() || filters.empty()) throw std::invalid_argument("memories, measures and filters must not be empty");
+  if (tests < 1) throw std::invalid_argument("tests must be >= 1");
+  if (!(prediction_sigma_m >= 0)) throw std::invalid_argument("prediction_sigma_m must be >= 0");
+  if (!(route_row_spacing_m > 0) || !(route_spacing_m > 0)) throw std::invalid_argument("route spacings must be positive");
+  if (std::find(memories.begin(), memories.end(), "random") != memories.end() && thresholds.empty()) {
+    throw std::invalid_argument("random exploration needs at least one threshold");
+  }
+  for (double t : thresholds) {
+    if (!(t > 0)) throw std::invalid_argument("thresholds must be positive");
+  }
+  if (!(people_dt_s > 0)) throw std::invalid_argument("people_dt_s must be positive");
+}
+
+std::string ConfigResult::Label() const {
+  return memory + " " + measure + (filter ? " filter " : " no-filter ") + EstimateName(estimate);
+}
+
+const ConfigResult* LocalizationEvalResult::Find(const std::string& memory, const std::string& measure, bool filter,
+                                                 nav::PlaceEstimate estimate) const {
+  for (const auto& r : results) {
+    if (r.memory == memory && r.measure == measure && r.filter == filter && r.estimate == estimate) return &r;
+  }
+  return nullptr;
+}
+
+std::optional<double> TargetMeanErrorM(const std::string& scene) {
+  if (scene == "indoor13") return 0.10;
+  if (scene == "people11") return 0.15;
+  return std::nullopt;
+}
+
+std::string DescribeOptions(const LocalizationEvalOptions& o) {
+  std::ostringstream s;
+  s << "features " << nav::LandmarkMethodName(o.view.features.method) << ", interpolate_radius_m "
+    << o.localizer.interpolate_radius_m << ", residual_cap_rad " << o.localizer.measure.residual_cap_rad << "\n"
+    << "memories";
+  for (const auto& m : o.memories) s << " " << m;
+  s << "; measures";
+  for (const auto& m : o.measures) s << " " << m;
+  s << "; filters";
+  for (bool b : o.filters) s << " " << (b ? "on" : "off");
+  s << "\ntests " << o.tests << " (at least " << o.min_grid_distance_m << " m off the grid), prediction_sigma_m "
+    << o.prediction_sigma_m << ", pose source " << (o.odometry_poses ? "odometry" : "truth") << ", seed " << o.seed
+    << "\nroute: rows " << o.route_row_spacing_m << " m apart, a cell every " << o.route_spacing_m << " m\n"
+    << "random walk: " << o.walk.runs << " runs x " << o.walk.steps << " steps of " << o.walk.step_m
+    << " m, turn sigma " << o.walk.turn_sigma_rad << " rad, border margin " << o.walk.border_margin_m
+    << " m; novelty measure " << o.explore_measure << ", thresholds";
+  for (double t : o.thresholds) s << " " << t;
+  s << "\nrobot: heading drift " << o.drive.heading_drift_deg_per_m << " deg/m, odometry noise "
+    << o.drive.odometry_linear_noise_frac << " (distance), " << o.drive.odometry_angular_noise_frac << " (turn)\n";
+  return s.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const LocalizationEvalOptions& options,
+                                           const std::function<void(const std::string&, bool)>& progress) {
+  options.Validate();
+  const auto t_start = Clock::now();
+  auto say = [&](const std::string& text, bool transient = false) {
+    if (progress) progress(text, transient);
+  };
+  auto counter = [&](const std::string& what, int done, int total) {
+    if (done == total || done % 10 == 0) say(what + " " + std::to_string(done) + "/" + std::to_string(total), done != total);
+  };
+  auto wants = [&](const std::string& m) {
+    return std::find(options.memories.begin(), options.memories.end(), m) != options.memories.end();
+  };
+  LocalizationEvalResult result;
+  result.scene = scene.name;
+  result.area = GridArea(scene.grid);
+  const Area& area = result.area;
+  ViewMaker maker(scene, options);
+  const nav::PanoramaModel& pm = options.camera.panorama;
+  auto new_memory = [&]() { return std::make_unique<nav::PlaceCellMemory>(options.view, pm, options.vocabulary); };
+
+  // Grid memory: the scene's image database (heading 0 everywhere, people walking between images).
+  if (wants("grid")) {
+    EvalMemory m;
+    m.name = "grid";
+    m.memory = new_memory();
+    const auto t0 = Clock::now();
+    Crowd crowd(scene, options.seed);
+    const int total = scene.grid.nx * scene.grid.ny;
+    for (int iy = 0; iy < scene.grid.ny; ++iy) {
+      for (int ix = 0; ix < scene.grid.nx; ++ix) {
+        const Eigen::Vector2d p = scene.grid.Position(ix, iy);
+        const nav::Pose2 pose{p.x(), p.y(), 0.0};
+        const auto people = crowd.Advance(options.people_dt_s, pose, options.drive.robot_radius_m);
+        m.memory->Add(pose, static_cast<int64_t>(m.memory->size()) * 2'000'000, maker.Make(pose, people));
+        m.true_cell_poses.push_back(pose);
+        counter("grid views", m.memory->size(), total);
+      }
+    }
+    m.explored_views = total;
+    m.explore_seconds = Seconds(t0);
+    m.description = "the scene's grid database, " + std::to_string(scene.grid.nx) + "x" + std::to_string(scene.grid.ny) +
+                    " at " + Fixed(scene.grid.spacing_m * 100, 0) + " cm";
+    result.memories.push_back(std::move(m));
+  }
+  // Manual route: a serpentine over the area, a cell every route_spacing_m.
+  if (wants("route")) {
+    EvalMemory m;
+    m.name = "route";
+    m.memory = new_memory();
+    const auto t0 = Clock::now();
+    const auto samples = DriveRoute(scene, ManualRouteWaypoints(area, options.route_row_spacing_m), options.drive,
+                                    options.route_spacing_m, options.seed + 11);
+    std::vector<Eigen::Vector2d> path;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const auto& s = samples[i];
+      m.memory->Add(options.odometry_poses ? s.odometry : s.truth, s.utime, maker.Make(s.truth, s.people));
+      m.true_cell_poses.push_back(s.truth);
+      path.push_back(Xy(s.truth));
+      counter("route views", static_cast<int>(i) + 1, static_cast<int>(samples.size()));
+    }
+    m.trajectories.push_back(path);
+    m.explored_views = static_cast<int>(samples.size());
+    m.explore_seconds = Seconds(t0);
+    m.description = "manual route: serpentine, rows " + Fixed(options.route_row_spacing_m, 2) + " m apart, a cell every " +
+                    Fixed(options.route_spacing_m, 2) + " m";
+    result.memories.push_back(std::move(m));
+  }
+  // Random exploration (5.1.4): one walk, its views offered to ExploreStep at each threshold.
+  if (wants("random")) {
+    const auto t0 = Clock::now();
+    const auto samples = RandomWalk(scene, area, options.drive, options.walk, options.seed + 23);
+    std::vector<nav::PlaceView> views;
+    views.reserve(samples.size());
+    std::vector<std::vector<Eigen::Vector2d>> paths(options.walk.runs);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      views.push_back(maker.Make(samples[i].truth, samples[i].people));
+      paths[samples[i].run].push_back(Xy(samples[i].truth));
+      counter("random walk views", static_cast<int>(i) + 1, static_cast<int>(samples.size()));
+    }
+    const double walk_seconds = Seconds(t0);
+    std::vector<double> thresholds = options.thresholds;
+    std::sort(thresholds.begin(), thresholds.end(), std::greater<double>());
+    nav::LocalizerOptions explore = options.localizer;
+    const auto variant = *ParseMeasureVariant(options.explore_measure);
+    explore.measure.measure = variant.measure;
+    explore.measure.refinement = variant.refinement;
+    for (size_t k = 0; k < thresholds.size(); ++k) {
+      EvalMemory m;
+      m.name = "random" + std::to_string(k + 1);
+      m.threshold = thresholds[k];
+      m.memory = new_memory();
+      m.trajectories = paths;
+      const auto t1 = Clock::now();
+      for (size_t i = 0; i < samples.size(); ++i) {
+        const auto& s = samples[i];
+        if (nav::ExploreStep(*m.memory, options.odometry_poses ? s.odometry : s.truth, s.utime, views[i], thresholds[k],
+                             explore) >= 0) {
+          m.true_cell_poses.push_back(s.truth);
+        }
+        counter(m.name + " exploration (threshold " + Fixed(thresholds[k], 3) + ", " + std::to_string(m.memory->size()) +
+                    " cells)",
+                static_cast<int>(i) + 1, static_cast<int>(samples.size()));
+      }
+      m.explored_views = static_cast<int>(samples.size());
+      m.explore_seconds = Seconds(t1) + walk_seconds;
+      m.description = "random exploration, " + std::to_string(options.walk.runs) + " runs x " +
+                      std::to_string(options.walk.steps) + " steps of " + Fixed(options.walk.step_m * 100, 0) +
+                      " cm, novelty threshold " + Fixed(thresholds[k], 3) + " (" + options.explore_measure + ")";
+      result.memories.push_back(std::move(m));
+    }
+  }
+  for (auto& m : result.memories) {
+    m.cells_per_m2 = m.memory->size() / area.area_m2();
+    const auto t0 = Clock::now();
+    m.memory->BuildIndex();
+    say("memory " + m.name + ": " + std::to_string(m.memory->size()) + " cells (" + Fixed(m.cells_per_m2, 1) +
+        " per m^2), index built in " + Fixed(Seconds(t0) * 1000, 0) + " ms");
+  }
+
+  // Test positions: off the grid, random headings, people walking; the odometry prediction.
+  {
+    Crowd crowd(scene, options.seed + 31);
+    std::mt19937_64 rng(options.seed + 37);
+    std::normal_distribution<double> noise(0.0, options.prediction_sigma_m);
+    const auto poses = RandomTestPoses(area, scene.grid, options.tests, options.min_grid_distance_m, options.seed + 41);
+    for (size_t i = 0; i < poses.size(); ++i) {
+      EvalTest t;
+      t.truth = poses[i];
+      const double dx = options.prediction_sigma_m > 0 ? noise(rng) : 0.0;
+      const double dy = options.prediction_sigma_m > 0 ? noise(rng) : 0.0;
+      t.predicted = Xy(t.truth) + Eigen::Vector2d(dx, dy);
+      std::string png;
+      if (!options.save_test_panoramas_dir.empty()) {
+        fs::create_directories(options.save_test_panoramas_dir);
+        png = (fs::path(options.save_test_panoramas_dir) / ("test_" + std::to_string(i) + ".png")).string();
+      }
+      t.view = maker.Make(t.truth, crowd.Advance(options.people_dt_s, t.truth, options.drive.robot_radius_m), png);
+      result.tests.push_back(std::move(t));
+      counter("test views", static_cast<int>(i) + 1, static_cast<int>(poses.size()));
+    }
+  }
+  result.views_made = maker.views();
+  result.extract_ms_per_view = maker.extract_ms();
+  result.render_ms_per_view = maker.render_ms();
+  result.mean_landmarks = maker.mean_landmarks();
+  say("views: " + std::to_string(maker.views()) + " made, " + Fixed(maker.mean_landmarks(), 0) + " landmarks each, " +
+      Fixed(maker.render_ms(), 1) + " ms render+unwrap, " + Fixed(maker.extract_ms(), 1) + " ms MakePlaceView");
+
+  // Localization: every memory x measure x filter; nearest and interpolated from the same query
+  // (the nearest-cell estimate is the best cell's position, which Localize also reports).
+  const int total = static_cast<int>(result.memories.size() * options.measures.size() * options.filters.size());
+  int done = 0;
+  for (const auto& m : result.memories) {
+    for (const auto& measure_name : options.measures) {
+      const auto variant = *ParseMeasureVariant(measure_name);
+      for (bool filter : options.filters) {
+        nav::LocalizerOptions lo = options.localizer;
+        lo.measure.measure = variant.measure;
+        lo.measure.refinement = variant.refinement;
+        lo.filter.enabled = filter;
+        lo.estimate = nav::PlaceEstimate::kInterpolated;
+        ConfigResult nearest, interp;
+        for (auto* r : {&nearest, &interp}) {
+          r->memory = m.name;
+          r->measure = variant.name;
+          r->filter = filter;
+          r->cells = m.memory->size();
+          r->cells_per_m2 = m.cells_per_m2;
+        }
+        nearest.estimate = nav::PlaceEstimate::kNearestCell;
+        interp.estimate = nav::PlaceEstimate::kInterpolated;
+        std::vector<double> heading_errors;
+        double seconds = 0, candidates = 0;
+        for (const auto& t : result.tests) {
+          const std::optional<nav::Pose2> predicted =
+              filter ? std::optional<nav::Pose2>(nav::Pose2{t.predicted.x(), t.predicted.y(), t.truth.theta_rad})
+                     : std::nullopt;
+          const auto t0 = Clock::now();
+          const auto loc = m.memory->Localize(t.view, predicted, lo);
+          seconds += Seconds(t0);
+          Eigen::Vector2d near_xy = t.predicted, interp_xy = t.predicted;
+          double heading_error = kNaN;
+          if (loc) {
+            near_xy = Xy(m.memory->cell(loc->cell).pose);
+            interp_xy = Xy(loc->pose);
+            heading_error = nav::WrapAngle(loc->pose.theta_rad - t.truth.theta_rad);
+            candidates += loc->candidates;
+          } else {
+            ++nearest.failures;
+            ++interp.failures;
+          }
+          heading_errors.push_back(heading_error);
+          nearest.estimates.push_back(near_xy);
+          interp.estimates.push_back(interp_xy);
+          nearest.position_errors_m.push_back((near_xy - Xy(t.truth)).norm());
+          interp.position_errors_m.push_back((interp_xy - Xy(t.truth)).norm());
+        }
+        const int answered = static_cast<int>(result.tests.size()) - interp.failures;
+        for (auto* r : {&nearest, &interp}) {
+          r->errors = Summarize(r->position_errors_m, heading_errors);
+          r->ms_per_query = 1000 * seconds / result.tests.size();
+          r->mean_candidates = answered ? candidates / answered : 0;
+        }
+        ++done;
+        say("[" + std::to_string(done) + "/" + std::to_string(total) + "] " + m.name + " " + variant.name +
+            (filter ? " filter" : " no filter") + ": mean error " + Fixed(interp.errors.mean_m, 3) + " m interpolated, " +
+            Fixed(nearest.errors.mean_m, 3) + " m nearest, heading " + Fixed(interp.errors.mean_heading_deg, 1) +
+            " deg, " + Fixed(interp.ms_per_query, 1) + " ms/query" +
+            (interp.failures ? ", " + std::to_string(interp.failures) + " without an answer" : ""));
+        result.results.push_back(std::move(nearest));
+        result.results.push_back(std::move(interp));
+      }
+    }
+  }
+  result.total_seconds = Seconds(t_start);
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------------
+cv::Mat DrawLocalizationMap(const LocalizationEvalResult& result, const EvalMemory& memory, const ConfigResult* config,
+                            const std::string& title) {
+  const Area& a = result.area;
+  double xmin = a.min.x() - 0.3, xmax = a.max.x() + 0.3, ymin = a.min.y() - 0.3, ymax = a.max.y() + 0.3;
+  for (const auto& c : memory.memory->cells()) {
+    xmin = std::min(xmin, c.pose.x_m - 0.1); xmax = std::max(xmax, c.pose.x_m + 0.1);
+    ymin = std::min(ymin, c.pose.y_m - 0.1); ymax = std::max(ymax, c.pose.y_m + 0.1);
+  }
+  const int size = 760, top = 80, bottom = 40;
+  const double scale = (size - 40) / std::max(xmax - xmin, ymax - ymin);
+  cv::Mat img(top + size + bottom, size, CV_8UC3, cv::Scalar(255, 255, 255));
+  auto px = [&](const Eigen::Vector2d& p) {
+    return cv::Point(static_cast<int>(std::lround(20 + (p.x() - xmin) * scale)),
+                     static_cast<int>(std::lround(top + size - 20 - (p.y() - ymin) * scale)));
+  };
+  const auto font = cv::FONT_HERSHEY_SIMPLEX;
+  cv::putText(img, title, {12, 24}, font, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(img, memory.description, {12, 46}, font, 0.45, cv::Scalar(60, 60, 60), 1, cv::LINE_AA);
+  if (config) {
+    cv::putText(img,
+                config->Label() + ": mean " + Fixed(config->errors.mean_m, 3) + " m, max " + Fixed(config->errors.max_m, 3) +
+                    " m",
+                {12, 68}, font, 0.45, cv::Scalar(40, 40, 200), 1, cv::LINE_AA);
+  }
+  cv::rectangle(img, px({a.min.x(), a.max.y()}), px({a.max.x(), a.min.y()}), cv::Scalar(210, 210, 210), 1);
+  for (const auto& path : memory.trajectories) {
+    for (size_t i = 1; i < path.size(); ++i) cv::line(img, px(path[i - 1]), px(path[i]), cv::Scalar(215, 215, 215), 1, cv::LINE_AA);
+  }
+  // Cells at their stored positions (blue), and where they were really taken when that differs.
+  for (size_t i = 0; i < memory.memory->cells().size(); ++i) {
+    const auto& c = memory.memory->cell(static_cast<int>(i));
+    if (i < memory.true_cell_poses.size() && (Xy(memory.true_cell_poses[i]) - Xy(c.pose)).norm() > 0.01) {
+      cv::line(img, px(Xy(memory.true_cell_poses[i])), px(Xy(c.pose)), cv::Scalar(230, 190, 150), 1, cv::LINE_AA);
+    }
+    cv::circle(img, px(Xy(c.pose)), 3, cv::Scalar(200, 110, 30), cv::FILLED, cv::LINE_AA);
+  }
+  for (size_t i = 0; i < result.tests.size(); ++i) {
+    const cv::Point t = px(Xy(result.tests[i].truth));
+    if (config && i < config->estimates.size()) {
+      const cv::Point e = px(config->estimates[i]);
+      cv::line(img, t, e, cv::Scalar(40, 40, 220), 2, cv::LINE_AA);
+      cv::drawMarker(img, e, cv::Scalar(40, 40, 220), cv::MARKER_TILTED_CROSS, 9, 2, cv::LINE_AA);
+    }
+    cv::circle(img, t, 5, cv::Scalar(40, 150, 40), 2, cv::LINE_AA);
+  }
+  const int ly = top + size + 24;
+  cv::circle(img, {24, ly - 5}, 3, cv::Scalar(200, 110, 30), cv::FILLED, cv::LINE_AA);
+  cv::putText(img, "cells (" + std::to_string(memory.memory->size()) + ")", {32, ly}, font, 0.45, cv::Scalar(200, 110, 30), 1, cv::LINE_AA);
+  cv::circle(img, {170, ly - 5}, 5, cv::Scalar(40, 150, 40), 2, cv::LINE_AA);
+  cv::putText(img, "test positions", {180, ly}, font, 0.45, cv::Scalar(40, 150, 40), 1, cv::LINE_AA);
+  cv::drawMarker(img, {310, ly - 5}, cv::Scalar(40, 40, 220), cv::MARKER_TILTED_CROSS, 9, 2, cv::LINE_AA);
+  cv::putText(img, "estimates", {320, ly}, font, 0.45, cv::Scalar(40, 40, 220), 1, cv::LINE_AA);
+  if (!memory.trajectories.empty()) {
+    cv::line(img, {420, ly - 5}, {445, ly - 5}, cv::Scalar(200, 200, 200), 2);
+    cv::putText(img, "exploration", {450, ly}, font, 0.45, cv::Scalar(150, 150, 150), 1, cv::LINE_AA);
+  }
+  const int bar = static_cast<int>(0.5 * scale);
+  cv::line(img, {size - 30 - bar, ly - 4}, {size - 30, ly - 4}, cv::Scalar(0, 0, 0), 2);
+  cv::putText(img, "0.5 m", {size - 30 - bar, ly - 10}, font, 0.4, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  return img;
+}
+
+namespace {
+
+// Error against cell density (fig. 5.9) for one filter setting: a line per measure.
+cv::Mat DensityChart(const LocalizationEvalResult& r, const LocalizationEvalOptions& o, bool filter) {
+  std::vector<plot::Series> series;
+  auto add = [&](const std::string& measure, nav::PlaceEstimate estimate) {
+    plot::Series s{measure + (estimate == nav::PlaceEstimate::kNearestCell ? " (nearest cell)" : ""), {}, {}};
+    std::vector<std::pair<double, double>> points;
+    for (const auto& c : r.results) {
+      if (c.measure == measure && c.filter == filter && c.estimate == estimate) points.push_back({c.cells_per_m2, c.errors.mean_m});
+    }
+    std::sort(points.begin(), points.end());
+    for (const auto& [x, y] : points) {
+      s.x.push_back(x);
+      s.y.push_back(y);
+    }
+    if (!points.empty()) series.push_back(s);
+  };
+  for (const auto& m : o.measures) add(ParseMeasureVariant(m)->name, nav::PlaceEstimate::kInterpolated);
+  add("bearing-smallest", nav::PlaceEstimate::kNearestCell);
+  plot::Axes axes;
+  axes.title = std::string(filter ? "(a) with" : "(b) without") + " distance filter (" + r.scene + ")";
+  axes.x_label = "cells per m^2";
+  axes.y_label = "mean localization error [m]";
+  axes.y_from_zero = true;
+  return plot::LineChart(axes, series, {700, 480});
+}
+
+std::string OnOff(bool b) { return b ? "on" : "off"; }
+
+// A JSON number (null when not finite).
+std::string Num(double v) { return std::isfinite(v) ? Fixed(v, 4) : std::string("null"); }
+
+}  // namespace
+
+std::vector<std::string> WriteLocalizationOutputs(const LocalizationEvalResult& r, const LocalizationEvalOptions& o,
+                                                  const std::string& out_dir, const std::string& options_text) {
+  fs::create_directories(out_dir);
+  const fs::path out(out_dir);
+  std::vector<std::string> figures;
+  auto save = [&](const cv::Mat& img, const std::string& name) {
+    plot::SavePng(img, (out / name).string());
+    figures.push_back(name);
+  };
+  // The default configuration: bearing-smallest (else the first measure), filter on (if evaluated),
+  // interpolated, on the grid memory (else the first).
+  std::string dm = ParseMeasureVariant(o.measures.front())->name;
+  for (const auto& m : o.measures) {
+    if (ParseMeasureVariant(m)->name == "bearing-smallest") dm = "bearing-smallest";
+  }
+  const bool df = std::find(o.filters.begin(), o.filters.end(), true) != o.filters.end();
+  const std::string dmem = r.memories.empty() ? "" : (r.Find("grid", dm, df, nav::PlaceEstimate::kInterpolated) ? "grid" : r.memories.front().name);
+  const ConfigResult* def = r.Find(dmem, dm, df, nav::PlaceEstimate::kInterpolated);
+  const ConfigResult* thesis = r.Find(dmem, dm, df, nav::PlaceEstimate::kNearestCell);
+  const auto target = TargetMeanErrorM(r.scene);
+
+  // Figures: error against density (fig. 5.9), maps of each memory with the default configuration.
+  {
+    std::vector<cv::Mat> panels;
+    for (bool f : o.filters) panels.push_back(DensityChart(r, o, f));
+    cv::Mat all;
+    cv::hconcat(panels, all);
+    save(all, "error_vs_density.png");
+  }
+  for (const auto& m : r.memories) {
+    const ConfigResult* c = r.Find(m.name, dm, df, nav::PlaceEstimate::kInterpolated);
+    save(DrawLocalizationMap(r, m, c, r.scene + " " + m.name + ": " + std::to_string(m.memory->size()) + " cells"),
+         "map_" + m.name + ".png");
+  }
+
+  // results.csv and queries.csv.
+  {
+    std::ofstream csv(out / "results.csv");
+    csv << "scene,memory,cells,cells_per_m2,threshold,measure,filter,estimate,mean_error_m,median_error_m,max_error_m,"
+           "mean_heading_error_deg,max_heading_error_deg,ms_per_query,failures,mean_candidates\n";
+    for (const auto& c : r.results) {
+      double threshold = 0;
+      for (const auto& m : r.memories) {
+        if (m.name == c.memory) threshold = m.threshold;
+      }
+      csv << r.scene << "," << c.memory << "," << c.cells << "," << Fixed(c.cells_per_m2, 3) << "," << threshold << ","
+          << c.measure << "," << OnOff(c.filter) << "," << EstimateName(c.estimate) << "," << Fixed(c.errors.mean_m, 4)
+          << "," << Fixed(c.errors.median_m, 4) << "," << Fixed(c.errors.max_m, 4) << ","
+          << Fixed(c.errors.mean_heading_deg, 2) << "," << Fixed(c.errors.max_heading_deg, 2) << ","
+          << Fixed(c.ms_per_query, 2) << "," << c.failures << "," << Fixed(c.mean_candidates, 1) << "\n";
+    }
+    std::ofstream q(out / "queries.csv");
+    q << "memory,measure,filter,estimate,test,true_x_m,true_y_m,true_theta_rad,predicted_x_m,predicted_y_m,estimate_x_m,"
+         "estimate_y_m,error_m\n";
+    for (const auto& c : r.results) {
+      for (size_t i = 0; i < r.tests.size() && i < c.estimates.size(); ++i) {
+        const auto& t = r.tests[i];
+        q << c.memory << "," << c.measure << "," << OnOff(c.filter) << "," << EstimateName(c.estimate) << "," << i << ","
+          << Fixed(t.truth.x_m, 4) << "," << Fixed(t.truth.y_m, 4) << "," << Fixed(t.truth.theta_rad, 4) << ","
+          << Fixed(t.predicted.x(), 4) << "," << Fixed(t.predicted.y(), 4) << "," << Fixed(c.estimates[i].x(), 4) << ","
+          << Fixed(c.estimates[i].y(), 4) << "," << Fixed(c.position_errors_m[i], 4) << "\n";
+      }
+    }
+  }
+
+  // report.md.
+  std::ostringstream md;
+  md << "# Place-cell localization: " << r.scene << "\n\n"
+     << "Thesis 5.1.4, 5.2.2, fig. 5.9. " << r.tests.size() << " test positions at random off-grid positions of the "
+     << Fixed(r.area.max.x() - r.area.min.x(), 2) << " x " << Fixed(r.area.max.y() - r.area.min.y(), 2)
+     << " m grid area, random headings" << (r.scene == "people11" ? ", people walking" : "")
+     << "; odometry prediction = truth + N(0, " << o.prediction_sigma_m << " m) per axis (used by the distance filter "
+     << "only; without the filter no prediction is given, so the candidates come from the vocabulary alone).\n"
+     << "Views: raw omni images rendered and unwrapped, " << r.views_made << " views, " << Fixed(r.mean_landmarks, 0)
+     << " landmarks each; render + unwrap " << Fixed(r.render_ms_per_view, 1) << " ms, MakePlaceView "
+     << Fixed(r.extract_ms_per_view, 1) << " ms per view (not in ms/query). Run time " << Fixed(r.total_seconds, 0)
+     << " s.\n\n";
+  if (def) {
+    md << "## Result\n\n| configuration | mean error [m] | median | max | heading error [deg] | ms/query | target |\n"
+       << "|---|---|---|---|---|---|---|\n"
+       << "| **default**: " << def->Label() << " | **" << Fixed(def->errors.mean_m, 3) << "** | "
+       << Fixed(def->errors.median_m, 3) << " | " << Fixed(def->errors.max_m, 3) << " | "
+       << Fixed(def->errors.mean_heading_deg, 1) << " | " << Fixed(def->ms_per_query, 1) << " | "
+       << (target ? "<= " + Fixed(*target, 2) + " m: " + (def->errors.mean_m <= *target ? "met" : "**missed**") : "-")
+       << " |\n";
+    if (thesis) {
+      md << "| thesis (nearest cell): " << thesis->Label() << " | " << Fixed(thesis->errors.mean_m, 3) << " | "
+         << Fixed(thesis->errors.median_m, 3) << " | " << Fixed(thesis->errors.max_m, 3) << " | "
+         << Fixed(thesis->errors.mean_heading_deg, 1) << " | " << Fixed(thesis->ms_per_query, 1) << " | |\n";
+    }
+    md << "| thesis' own figure (5.2.2, SIFT count measure, nearest cell) | 0.196 | | | | | |\n\n";
+  }
+  md << "## Memories\n\n| memory | how | cells | cells/m^2 | views explored | bytes/cell | exploration [s] |\n"
+     << "|---|---|---|---|---|---|---|\n";
+  for (const auto& m : r.memories) {
+    md << "| " << m.name << " | " << m.description << " | " << m.memory->size() << " | " << Fixed(m.cells_per_m2, 1)
+       << " | " << m.explored_views << " | "
+       << (m.memory->size() ? std::to_string(m.memory->bytes() / m.memory->size()) : std::string("-")) << " | "
+       << Fixed(m.explore_seconds, 1) << " |\n";
+  }
+  md << "\nCell positions from the " << (o.odometry_poses ? "exploration's odometry" : "ground truth")
+     << " (the grid database always has its true positions).\n\n";
+  // Fig. 5.9 table: mean error by memory x measure, per filter and estimate.
+  for (bool f : o.filters) {
+    for (auto e : {nav::PlaceEstimate::kInterpolated, nav::PlaceEstimate::kNearestCell}) {
+      md << "## Mean error [m], filter " << OnOff(f) << ", " << EstimateName(e) << "\n\n| memory | cells/m^2 |";
+      for (const auto& m : o.measures) md << " " << ParseMeasureVariant(m)->name << " |";
+      md << "\n|---|---|";
+      for (size_t i = 0; i < o.measures.size(); ++i) md << "---|";
+      md << "\n";
+      for (const auto& mem : r.memories) {
+        md << "| " << mem.name << " | " << Fixed(mem.cells_per_m2, 1) << " |";
+        for (const auto& m : o.measures) {
+          const ConfigResult* c = r.Find(mem.name, ParseMeasureVariant(m)->name, f, e);
+          md << " " << (c ? Fixed(c->errors.mean_m, 3) + (c->failures ? " (" + std::to_string(c->failures) + " n/a)" : "") : "-")
+             << " |";
+        }
+        md << "\n";
+      }
+      md << "\n";
+    }
+  }
+  md << "## Every configuration\n\nNo answer: the prediction's error is counted and the heading left out (n/a).\n\n"
+     << "| memory | measure | filter | estimate | mean [m] | median | max | heading mean [deg] | heading max | ms/query | "
+        "candidates | n/a |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : r.results) {
+    md << "| " << c.memory << " | " << c.measure << " | " << OnOff(c.filter) << " | " << EstimateName(c.estimate) << " | "
+       << Fixed(c.errors.mean_m, 3) << " | " << Fixed(c.errors.median_m, 3) << " | " << Fixed(c.errors.max_m, 3) << " | "
+       << Fixed(c.errors.mean_heading_deg, 1) << " | " << Fixed(c.errors.max_heading_deg, 1) << " | "
+       << Fixed(c.ms_per_query, 1) << " | " << Fixed(c.mean_candidates, 1) << " | " << c.failures << " |\n";
+  }
+  md << "\n## Options\n\n```\n" << options_text << "```\n\n## Figures\n\n";
+  for (const auto& f : figures) md << "![" << f << "](" << f << ")\n";
+  std::ofstream(out / "report.md") << md.str();
+
+  // summary.json: flat keys.
+  std::ofstream j(out / "summary.json");
+  j << std::fixed << std::setprecision(4) << "{\n  \"scene\": " << JsonString(r.scene) << ",\n  \"test_positions\": "
+    << r.tests.size() << ",\n  \"prediction_sigma_m\": " << o.prediction_sigma_m << ",\n  \"pose_source\": \""
+    << (o.odometry_poses ? "odometry" : "truth") << "\",\n  \"seed\": " << o.seed;
+  if (def) {
+    j << ",\n  \"default_configuration\": " << JsonString(def->Label())
+      << ",\n  \"mean_localization_error_m\": " << def->errors.mean_m
+      << ",\n  \"median_localization_error_m\": " << def->errors.median_m
+      << ",\n  \"max_localization_error_m\": " << def->errors.max_m
+      << ",\n  \"mean_heading_error_deg\": " << Num(def->errors.mean_heading_deg)
+      << ",\n  \"ms_per_query\": " << def->ms_per_query << ",\n  \"queries_without_answer\": " << def->failures;
+  }
+  if (thesis) {
+    j << ",\n  \"thesis_configuration\": " << JsonString(thesis->Label())
+      << ",\n  \"thesis_configuration_mean_localization_error_m\": " << thesis->errors.mean_m
+      << ",\n  \"thesis_configuration_max_localization_error_m\": " << thesis->errors.max_m;
+  }
+  j << ",\n  \"thesis_reported_mean_localization_error_m\": 0.1957";
+  if (target) {
+    j << ",\n  \"target_mean_localization_error_m\": " << *target << ",\n  \"target_met\": "
+      << (def && def->errors.mean_m <= *target ? "true" : "false");
+  }
+  j << ",\n  \"views\": " << r.views_made << ",\n  \"mean_landmarks_per_view\": " << r.mean_landmarks
+    << ",\n  \"render_ms_per_view\": " << r.render_ms_per_view << ",\n  \"make_view_ms_per_view\": " << r.extract_ms_per_view
+    << ",\n  \"total_seconds\": " << r.total_seconds;
+  for (const auto& m : r.memories) {
+    j << ",\n  \"" << m.name << "_cells\": " << m.memory->size() << ",\n  \"" << m.name
+      << "_cells_per_m2\": " << m.cells_per_m2 << ",\n  \"" << m.name << "_bytes_per_cell\": "
+      << (m.memory->size() ? m.memory->bytes() / m.memory->size() : 0);
+    if (m.threshold > 0) j << ",\n  \"" << m.name << "_threshold\": " << m.threshold;
+  }
+  for (const auto& c : r.results) {
+    const std::string k = c.memory + "_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
+    j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
+      << ",\n  \"" << k << "_mean_heading_error_deg\": "
+      << Num(c.errors.mean_heading_deg) << ",\n  \""
+      << k << "_ms_per_query\": " << c.ms_per_query << ",\n  \"" << k << "_failures\": " << c.failures;
+  }
+  j << ",\n  \"figures\": [";
+  for (size_t i = 0; i < figures.size(); ++i) j << (i ? ", " : "") << JsonString(figures[i]);
+  j << "]\n}\n";
+  return figures;
+}
+
+}  // namespace snapnav::eval
