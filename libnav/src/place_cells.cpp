@@ -503,17 +503,22 @@ std::vector<CellComparison> PlaceCellMemory::Compare(const PlaceView& view, cons
       double s = 0, co = 0;
       for (double d : diffs) {
         if (std::abs(WrapAngle(d - best_delta)) <= options.ransac_threshold_rad) {
-          used.push_back(d);
           s += std::sin(d);
           co += std::cos(d);
         }
       }
       delta = std::atan2(s, co);
+      // Every match counts, an outlier at the cap (MSAC): the mean over the inliers alone would let
+      // a far cell with a few consistent matches look near.
+      used = diffs;
     }
+    const double cap = options.residual_cap_rad > 0 ? options.residual_cap_rad
+                       : options.refinement == MatchRefinement::kRansac ? options.ransac_threshold_rad
+                                                                         : 0.0;
     double sum = 0;
     for (double d : used) {
       const double r = std::abs(WrapAngle(d - delta));
-      sum += options.residual_cap_rad > 0 ? std::min(r, options.residual_cap_rad) : r;
+      sum += cap > 0 ? std::min(r, cap) : r;
     }
     c.matches = static_cast<int>(used.size());
     c.seen = c.matches >= std::min<int>(options.min_matches, static_cast<int>(matches.size()));

@@ -47,7 +47,8 @@ std::optional<PlaceMeasure> ParsePlaceMeasure(const std::string& name);
 // How the bearing measure refines its matches (5.1.1).
 enum class MatchRefinement {
   kSmallestDistance,  // keep the fraction keep_fraction (at least keep_min) of smallest descriptor distance
-  kRansac,            // the rotation with the largest consensus; its inliers are kept
+  kRansac,            // the rotation with the largest consensus (from its inliers); every match counts,
+                      // an outlier at the residual cap (or the RANSAC threshold without one): MSAC
 };
 std::optional<MatchRefinement> ParseMatchRefinement(const std::string& name);
 const char* MatchRefinementName(MatchRefinement refinement);  // "smallest", "ransac"
