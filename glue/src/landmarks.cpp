@@ -174,4 +174,22 @@ nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMe
   return c;
 }
 
+void PrintLandmarkExtractorSections(std::ostream& out, const nav::LandmarkExtractorConfig& c) {
+  const auto& v = c.vline;
+  const auto& s = c.sift;
+  const auto& u = c.surf;
+  const auto b = [](bool x) { return x ? "true" : "false"; };
+  out << "[vline]\nblur_sigma_px = " << v.blur_sigma_px << "\ncanny_low = " << v.canny_low
+      << "\ncanny_high = " << v.canny_high << "\nhough_threshold = " << v.hough_threshold
+      << "\nmin_segment_px = " << v.min_segment_px << "\nmax_gap_px = " << v.max_gap_px
+      << "\nmax_tilt_deg = " << v.max_tilt_deg << "\ncluster_px = " << v.cluster_px << "\nmin_line_px = " << v.min_line_px
+      << "\nwindow_px = " << v.window_px << "\nbins = " << v.bins << "\ndivided = " << b(v.divided) << "\n"
+      << "[sift]\nmax_features = " << s.max_features << "\noctave_layers = " << s.octave_layers
+      << "\ncontrast_threshold = " << s.contrast_threshold << "\nedge_threshold = " << s.edge_threshold
+      << "\nsigma = " << s.sigma << "\n"
+      << "[surf]\nhessian_threshold = " << u.hessian_threshold << "\noctaves = " << u.octaves
+      << "\nintervals = " << u.intervals << "\ninit_sample = " << u.init_sample << "\nupright = " << b(u.upright)
+      << "\nmax_keypoints = " << u.max_keypoints << "\npad_px = " << c.surf_pad_px << "\n";
+}
+
 }  // namespace snapnav::glue

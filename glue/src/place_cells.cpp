@@ -40,25 +40,6 @@ int ReadNonNegativeInt(const IniFile& ini, const std::string& section, const std
   return v;
 }
 
-void PrintLandmarkExtractor(std::ostream& out, const nav::LandmarkExtractorConfig& c) {
-  const auto& v = c.vline;
-  const auto& s = c.sift;
-  const auto& u = c.surf;
-  out << "[landmarks]\nmethod = " << nav::LandmarkMethodName(c.method)
-      << "\nequalize_histogram = " << Bool(c.equalize_histogram) << "\n"
-      << "[vline]\nblur_sigma_px = " << v.blur_sigma_px << "\ncanny_low = " << v.canny_low
-      << "\ncanny_high = " << v.canny_high << "\nhough_threshold = " << v.hough_threshold
-      << "\nmin_segment_px = " << v.min_segment_px << "\nmax_gap_px = " << v.max_gap_px
-      << "\nmax_tilt_deg = " << v.max_tilt_deg << "\ncluster_px = " << v.cluster_px << "\nmin_line_px = " << v.min_line_px
-      << "\nwindow_px = " << v.window_px << "\nbins = " << v.bins << "\ndivided = " << Bool(v.divided) << "\n"
-      << "[sift]\nmax_features = " << s.max_features << "\noctave_layers = " << s.octave_layers
-      << "\ncontrast_threshold = " << s.contrast_threshold << "\nedge_threshold = " << s.edge_threshold
-      << "\nsigma = " << s.sigma << "\n"
-      << "[surf]\nhessian_threshold = " << u.hessian_threshold << "\noctaves = " << u.octaves
-      << "\nintervals = " << u.intervals << "\ninit_sample = " << u.init_sample << "\nupright = " << Bool(u.upright)
-      << "\nmax_keypoints = " << u.max_keypoints << "\npad_px = " << c.surf_pad_px << "\n";
-}
-
 std::string ErrnoText() { return std::strerror(errno); }
 
 }  // namespace
@@ -146,7 +127,9 @@ nav::VocabularyOptions ReadVocabularyOptions(const IniFile& ini) {
 }
 
 void PrintPlaceViewOptions(std::ostream& out, const nav::PlaceViewOptions& o) {
-  PrintLandmarkExtractor(out, o.features);
+  out << "[landmarks]\nmethod = " << nav::LandmarkMethodName(o.features.method)
+      << "\nequalize_histogram = " << Bool(o.features.equalize_histogram) << "\n";
+  PrintLandmarkExtractorSections(out, o.features);
   out << "[place_view]\nkeep_vlines = " << Bool(o.keep_vlines) << "\nvline_window_px = " << o.vline.window_px
       << "\nwindow_px = " << o.window_px << "\nwindow_scale = " << o.window_scale
       << "\nsignature_width_px = " << o.signature_width_px << "\nsignature_height_px = " << o.signature_height_px

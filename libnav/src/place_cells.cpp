@@ -307,6 +307,7 @@ void PlaceCellMemory::BuildIndex() {
   indexed_cells_ = 0;
   templates_stale_ = true;
   EnsureIndex();
+  EnsureTemplates();
 }
 
 void PlaceCellMemory::EnsureIndex() const {
@@ -336,9 +337,12 @@ void PlaceCellMemory::EnsureIndex() const {
       vocabulary_.Add(indexed_cells_, cells_[indexed_cells_].view.landmarks.descriptors);
     }
   }
+}
+
+void PlaceCellMemory::EnsureTemplates() const {
   if (templates_stale_) {
-    // Templates (4.4): cluster every cell's line descriptors; each template is the line nearest
-    // a cluster centre, so the templates are lines of the memory that differ from each other.
+    // Templates (4.4): cluster every cell's line descriptors; one line of each cluster is a
+    // template, so the templates are lines of the memory that differ from each other.
     int rows = 0, cols = 0;
     for (const auto& c : cells_) {
       rows += c.view.vlines.descriptors.rows;
@@ -360,28 +364,19 @@ void PlaceCellMemory::EnsureIndex() const {
       o.max_training = std::max(o.branching, 20000);
       VocabularyIndex clusters(o);
       clusters.Train(all);
-      // The tree's first level centres are the clusters: pick the nearest real line to each.
-      cv::Mat centres_row;
+      // One template per cluster: its first line (a real line of the memory, not a centre).
+      std::vector<int> first(clusters.words(), -1);
+      for (int i = 0; i < all.rows; ++i) {
+        int& f = first[clusters.Word(all.ptr<float>(i))];
+        if (f < 0) f = i;
+      }
       templates_.create(0, cols, CV_32F);
-      std::vector<int> chosen;
-      for (int t = 0; t < template_count_ && clusters.words() > 0; ++t) {
-        // Lines of word t, the one nearest the others in its word (a medoid-like pick).
-        int best = -1;
-        for (int i = 0; i < all.rows; ++i) {
-          if (clusters.Word(all.ptr<float>(i)) == t &&
-              std::find(chosen.begin(), chosen.end(), i) == chosen.end()) {
-            best = i;
-            break;
-          }
-        }
-        if (best >= 0) {
-          chosen.push_back(best);
-          templates_.push_back(all.row(best));
-        }
+      for (int i : first) {
+        if (i >= 0) templates_.push_back(all.row(i));
       }
     }
-    auto& cells = const_cast<std::vector<PlaceCell>&>(cells_);
-    for (auto& c : cells) c.template_bearings = TemplateBearings(c.view);
+    template_bearings_.clear();
+    for (const auto& c : cells_) template_bearings_.push_back(TemplateBearings(c.view));
     templates_stale_ = false;
   }
 }
@@ -402,12 +397,14 @@ std::vector<float> PlaceCellMemory::TemplateBearings(const PlaceView& view) cons
 std::vector<CellComparison> PlaceCellMemory::Compare(const PlaceView& view, const std::vector<int>& indices,
                                                      const PlaceMeasureOptions& options) const {
   options.Validate();
-  EnsureIndex();
   std::vector<CellComparison> out;
   out.reserve(indices.size());
   const LandmarkSet query = FloatSet(view.landmarks);
   std::vector<float> query_templates;
-  if (options.measure == PlaceMeasure::kVlineTemplate) query_templates = TemplateBearings(view);
+  if (options.measure == PlaceMeasure::kVlineTemplate) {
+    EnsureTemplates();
+    query_templates = TemplateBearings(view);
+  }
   std::mt19937_64 rng(options.ransac_seed);
   for (int index : indices) {
     const PlaceCell& cell = cells_.at(index);
@@ -424,9 +421,10 @@ std::vector<CellComparison> PlaceCellMemory::Compare(const PlaceView& view, cons
       c.rotation_rad = -delta;
       double sum = 0;
       int n = 0;
-      for (size_t t = 0; t < query_templates.size() && t < cell.template_bearings.size(); ++t) {
-        if (std::isnan(query_templates[t]) || std::isnan(cell.template_bearings[t])) continue;
-        sum += std::abs(WrapAngle(query_templates[t] - cell.template_bearings[t] - delta));
+      const std::vector<float>& cell_templates = template_bearings_.at(index);
+      for (size_t t = 0; t < query_templates.size() && t < cell_templates.size(); ++t) {
+        if (std::isnan(query_templates[t]) || std::isnan(cell_templates[t])) continue;
+        sum += std::abs(WrapAngle(query_templates[t] - cell_templates[t] - delta));
         ++n;
       }
       c.matches = n;
@@ -653,7 +651,8 @@ std::optional<Localization> PlaceCellMemory::Localize(const PlaceView& view, con
 
 int64_t PlaceCellMemory::bytes() const {
   int64_t b = static_cast<int64_t>(cells_.capacity() * sizeof(PlaceCell));
-  for (const auto& c : cells_) b += c.view.bytes() + static_cast<int64_t>(c.template_bearings.size() * sizeof(float));
+  for (const auto& c : cells_) b += c.view.bytes();
+  for (const auto& t : template_bearings_) b += static_cast<int64_t>(t.size() * sizeof(float));
   return b + vocabulary_.bytes() + static_cast<int64_t>(templates_.total() * templates_.elemSize());
 }
 

@@ -234,7 +234,6 @@ PlaceCellMemory PlaceCellMemory::Parse(const std::vector<uint8_t>& bytes, const 
   const size_t options_end = r.pos();
   const int32_t templates = r.Get<int32_t>("template count");
   const int32_t next_id = r.Get<int32_t>("next id");
-  const size_t count_at = r.pos();
   const uint32_t n = r.Count("cell count", kMaxCells);
   // The checksum: a flipped bit anywhere is told apart from a valid file.
   uint64_t stored;
@@ -246,7 +245,6 @@ PlaceCellMemory PlaceCellMemory::Parse(const std::vector<uint8_t>& bytes, const 
   } catch (const std::invalid_argument& e) {
     r.Fail(std::string("invalid options (") + e.what() + ")", options_end);
   }
-  (void)count_at;
   for (uint32_t i = 0; i < n; ++i) {
     const size_t cell_at = r.pos();
     PlaceCell c;

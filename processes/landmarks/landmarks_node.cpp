@@ -48,26 +48,13 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
 }
 
 void LandmarksConfig::Print(std::ostream& out) const {
-  const auto& v = extractor.vline;
-  const auto& s = extractor.sift;
-  const auto& u = extractor.surf;
   out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel << "\nlandmarks = "
       << landmarks_channel << "\n[landmarks]\ninput = " << (raw_input ? "raw" : "panorama")
       << "\nmethod = " << nav::LandmarkMethodName(extractor.method)
       << "\nequalize_histogram = " << (extractor.equalize_histogram ? "true" : "false") << "\n";
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror);
-  out << "[vline]\nblur_sigma_px = " << v.blur_sigma_px << "\ncanny_low = " << v.canny_low << "\ncanny_high = "
-      << v.canny_high << "\nhough_threshold = " << v.hough_threshold << "\nmin_segment_px = " << v.min_segment_px
-      << "\nmax_gap_px = " << v.max_gap_px << "\nmax_tilt_deg = " << v.max_tilt_deg << "\ncluster_px = " << v.cluster_px
-      << "\nmin_line_px = " << v.min_line_px << "\nwindow_px = " << v.window_px << "\nbins = " << v.bins
-      << "\ndivided = " << (v.divided ? "true" : "false") << "\n"
-      << "[sift]\nmax_features = " << s.max_features << "\noctave_layers = " << s.octave_layers
-      << "\ncontrast_threshold = " << s.contrast_threshold << "\nedge_threshold = " << s.edge_threshold
-      << "\nsigma = " << s.sigma << "\n"
-      << "[surf]\nhessian_threshold = " << u.hessian_threshold << "\noctaves = " << u.octaves << "\nintervals = "
-      << u.intervals << "\ninit_sample = " << u.init_sample << "\nupright = " << (u.upright ? "true" : "false")
-      << "\nmax_keypoints = " << u.max_keypoints << "\npad_px = " << extractor.surf_pad_px << "\n";
+  glue::PrintLandmarkExtractorSections(out, extractor);
 }
 
 LandmarksNode::LandmarksNode(glue::Bus& bus, const LandmarksConfig& config)

@@ -3,6 +3,7 @@
 // between nav::LandmarkSet and landmark_set_t, and the INI sections of the extractors, the
 // matching and the landmark ALV, shared by the landmarks and homing processes and the evaluation.
 
+#include <ostream>
 #include <string>
 
 #include "snapnav/glue/ini.hpp"
@@ -24,6 +25,9 @@ nav::LandmarkSet LandmarkSetFromMsg(const landmark_set_t& msg, const nav::Panora
 
 // [landmarks] method, equalize_histogram; [vline], [sift], [surf]: every key required.
 nav::LandmarkExtractorConfig ReadLandmarkExtractor(const IniFile& ini);
+// The extractors' sections as ReadLandmarkExtractor reads them: [vline], [sift], [surf] (the
+// [landmarks] keys belong to each process's own section printing).
+void PrintLandmarkExtractorSections(std::ostream& out, const nav::LandmarkExtractorConfig& config);
 // [matching] (SIFT and SURF) or [vline_matching] (vertical lines), and [landmark_alv]; the
 // matching section of `method` is read, the other one is only checked for its keys.
 nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMethod method);

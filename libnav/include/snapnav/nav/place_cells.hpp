@@ -96,9 +96,6 @@ struct PlaceCell {
   Pose2 pose;              // where the snapshot was taken (the exploration's pose source)
   int64_t utime = 0;       // when
   PlaceView view;
-  // Responses to the memory's vertical-line templates (4.4): per template, the bearing of the
-  // most similar line in the robot frame (NaN: no line), filled by PlaceCellMemory.
-  std::vector<float> template_bearings;
 };
 
 struct PlaceMeasureOptions {
@@ -221,8 +218,8 @@ class PlaceCellMemory {
   const PlaceViewOptions& view_options() const { return view_; }
   const PanoramaModel& panorama() const { return panorama_; }
 
-  // The index (vocabulary and templates) is built lazily on the first query after cells were
-  // added, or now. Rebuild trains the vocabulary again; Add after it only extends the inverted
+  // The index (vocabulary; the line templates when the vline measure is used) is built lazily
+  // on the first query after cells were added, or now. Rebuild trains the vocabulary again; Add after it only extends the inverted
   // file (the vocabulary is retrained when the memory has doubled since).
   void BuildIndex();
   const VocabularyIndex& vocabulary() const { return vocabulary_; }
@@ -258,7 +255,8 @@ class PlaceCellMemory {
   std::vector<int> Candidates(const PlaceView& view, const std::optional<Pose2>& predicted,
                               const LocalizerOptions& options) const;
   std::vector<float> TemplateBearings(const PlaceView& view) const;
-  void EnsureIndex() const;
+  void EnsureIndex() const;      // the vocabulary and its inverted file
+  void EnsureTemplates() const;  // the line templates and every cell's responses (vline measure only)
 
   PlaceViewOptions view_;
   PanoramaModel panorama_;
@@ -267,6 +265,9 @@ class PlaceCellMemory {
   int template_count_ = 6;
   mutable VocabularyIndex vocabulary_;
   mutable cv::Mat templates_;
+  // Per cell, its responses to the templates (4.4): per template, the bearing of the most similar
+  // line in the robot frame (NaN: no line).
+  mutable std::vector<std::vector<float>> template_bearings_;
   mutable int indexed_cells_ = 0;   // cells in the inverted file
   mutable int trained_at_ = 0;      // memory size when the vocabulary was trained
   mutable bool templates_stale_ = true;
