@@ -18,7 +18,7 @@ TEST(ConfigFiles, DeadReckoning) {
 
 TEST(ConfigFiles, BusCheck) {
   const auto ini = glue::IniFile::Load(kConfigDir / "bus_check.ini");
-  for (const char* key : {"probe", "ping", "pong"}) EXPECT_FALSE(ini.GetString("channels", key).empty());
+  for (const char* key : {"probe", "ping", "pong", "soak_frame", "soak_scan"}) EXPECT_FALSE(ini.GetString("channels", key).empty());
   EXPECT_NO_THROW(ini.CheckAllUsed());
 }
 
