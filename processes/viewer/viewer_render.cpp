@@ -26,6 +26,7 @@ const cv::Scalar kBlack(0, 0, 0);
 const cv::Scalar kGreyText(100, 100, 100);
 const cv::Scalar kBackground(255, 255, 255);
 const cv::Scalar kPanoramaHoming(255, 0, 255);
+const cv::Scalar kMemoryCellColour(149, 207, 149);  // the place-cell green, lighter
 
 bool EndsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -107,7 +108,7 @@ void DrawMapPart(cv::Mat& img, const Layout& layout, const ViewerScene& scene, c
   view.DrawPoints(img, scan_world, kScanColour, 3);  // under the map, so both show where they agree
   view.DrawPoints(img, scene.map_points, kMapColour, 2);
   for (const auto& c : scene.memory_cells) {
-    view.DrawCircle(img, c.x, c.y, 4, kPlaceCellColour * 0.5 + cv::Scalar(127, 127, 127), 1);
+    view.DrawCircle(img, c.x, c.y, 4, kMemoryCellColour, 1);
   }
 
   // Ground truth first, so the estimates are drawn over it.
@@ -185,7 +186,7 @@ void DrawPanel(cv::Mat& img, const Layout& layout, const ViewerScene& scene, con
   }
   if (!scene.memory_cells.empty()) {
     entries.push_back({"memory: " + std::to_string(scene.memory_cells.size()) + " place cells",
-                       kPlaceCellColour * 0.5 + cv::Scalar(127, 127, 127), plot::LegendMark::kCircle});
+                       kMemoryCellColour, plot::LegendMark::kCircle});
   }
   if (!scene.matches.empty()) {
     const auto& m = scene.matches.back();
