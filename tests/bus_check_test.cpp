@@ -61,3 +61,59 @@ TEST(BusCheck, EchoNodeReturnsPayloadUnchanged) {
 
 }  // namespace
 }  // namespace snapnav::tools
+
+namespace snapnav::tools {
+namespace {
+
+TEST(BusCheckSoak, StreamsAreDeterministicAndDistinct) {
+  EXPECT_EQ(glue::Encode(MakeSoakFrame(3, 4096)), glue::Encode(MakeSoakFrame(3, 4096)));
+  EXPECT_NE(glue::Encode(MakeSoakFrame(3, 4096)), glue::Encode(MakeSoakFrame(4, 4096)));
+  EXPECT_EQ(MakeSoakFrame(2, 1048576).data.size(), 1048576u);
+  EXPECT_EQ(glue::Encode(MakeSoakScan(5, 681)), glue::Encode(MakeSoakScan(5, 681)));
+  EXPECT_NE(glue::Encode(MakeSoakScan(5, 681)), glue::Encode(MakeSoakScan(6, 681)));
+  EXPECT_EQ(ProbeSeq(MakeSoakScan(9, 10).utime), 9);
+  EXPECT_THROW(MakeSoakFrame(0, 4), std::invalid_argument);
+}
+
+TEST(BusCheckSoak, VerifierCountsEveryStream) {
+  glue::Bus bus("memq://");
+  SoakVerifier verifier(bus, "T_SOAK_FRAME", "T_SOAK_SCAN", 4096, 100, 6, 2);
+  for (int k = 0; k < 6; ++k) {
+    bus.Publish("T_SOAK_FRAME", MakeSoakFrame(k, 4096));
+    if (k % 3 == 0) bus.Publish("T_SOAK_SCAN", MakeSoakScan(k / 3, 100));
+  }
+  while (bus.HandleOnce(0)) {
+  }
+  EXPECT_TRUE(verifier.ok()) << verifier.Report();
+  EXPECT_EQ(verifier.frames().received, 6);
+  EXPECT_EQ(verifier.scans().received, 2);
+  EXPECT_NE(verifier.JsonMembers("v_").find("\"v_frames_missing\": 0"), std::string::npos);
+}
+
+TEST(BusCheckSoak, VerifierDetectsLossDuplicatesAndCorruption) {
+  glue::Bus bus("memq://");
+  SoakVerifier verifier(bus, "T_SOAK_FRAME2", "T_SOAK_SCAN2", 4096, 100, 4, 2);
+  bus.Publish("T_SOAK_FRAME2", MakeSoakFrame(1, 4096));
+  bus.Publish("T_SOAK_FRAME2", MakeSoakFrame(1, 4096));  // duplicate
+  bus.Publish("T_SOAK_FRAME2", MakeSoakFrame(0, 4096));  // out of order
+  auto bad = MakeSoakScan(0, 100);
+  bad.ranges_m[50] += 1;
+  bus.Publish("T_SOAK_SCAN2", bad);
+  bus.Publish("T_SOAK_SCAN2", MakeSoakScan(7, 100));  // never sent
+  while (bus.HandleOnce(0)) {
+  }
+  EXPECT_FALSE(verifier.ok());
+  EXPECT_EQ(verifier.frames().missing(), 2);
+  EXPECT_EQ(verifier.frames().duplicates, 1);
+  EXPECT_EQ(verifier.frames().out_of_order, 1);
+  EXPECT_EQ(verifier.scans().corrupt, 2);
+  EXPECT_EQ(verifier.scans().missing(), 2);
+}
+
+TEST(BusCheckSoak, RssOfThisProcessIsKnown) {
+  EXPECT_GT(ProcessRssKb(), 0);
+  EXPECT_EQ(ProcessRssKb(999999999), -1);
+}
+
+}  // namespace
+}  // namespace snapnav::tools

@@ -18,7 +18,7 @@ TEST(ConfigFiles, DeadReckoning) {
 
 TEST(ConfigFiles, BusCheck) {
   const auto ini = glue::IniFile::Load(kConfigDir / "bus_check.ini");
-  for (const char* key : {"probe", "ping", "pong"}) EXPECT_FALSE(ini.GetString("channels", key).empty());
+  for (const char* key : {"probe", "ping", "pong", "soak_frame", "soak_scan"}) EXPECT_FALSE(ini.GetString("channels", key).empty());
   EXPECT_NO_THROW(ini.CheckAllUsed());
 }
 
@@ -28,10 +28,11 @@ TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // (tests/drivers/): omni_camera.ini, laser_hokuyo.ini; (tests/homing/homing_node_test.cpp): homing.ini,
   // landmarks.ini.
   // laser_slam.ini: tests/laser_slam_node_test.cpp; placecells.ini: tests/placecells/place_cells_glue_test.cpp;
-  // navigator.ini: tests/navigator/.
+  // navigator.ini: tests/navigator/; viewer.ini: tests/viewer/viewer_test.cpp.
   const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini", "sim.ini", "omni_camera.ini",
                                     "laser_hokuyo.ini", "homing.ini", "laser_slam.ini", "landmarks.ini",
-                                    "placecells.ini", "navigator.ini"};
+                                    "placecells.ini", "navigator.ini",
+                                    "viewer.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();

@@ -1,7 +1,9 @@
 #include "bus_check.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -185,6 +187,195 @@ std::vector<PingResult> RunPing(glue::Bus& bus, const std::string& ping_channel,
     }
   }
   return results;
+}
+
+
+omni_frame_t MakeSoakFrame(int64_t seq, int size_bytes) {
+  if (size_bytes < 8) throw std::invalid_argument("soak frames need at least 8 bytes");
+  static std::vector<uint8_t> base;  // the pseudo-random image, made once per size
+  if (static_cast<int>(base.size()) != size_bytes) base = MakeProbeFrame(0, size_bytes).data;
+  omni_frame_t f = MakeProbeFrame(0, 1);
+  f.utime = kProbeBaseUtime + seq * kProbePeriodUtime;
+  f.sensor_name = "bus-check-soak";
+  f.width = f.row_stride = f.data_size = size_bytes;
+  f.data = base;
+  for (int b = 0; b < 8; ++b) f.data[b] = static_cast<uint8_t>((static_cast<uint64_t>(seq) >> (56 - 8 * b)) & 0xff);
+  return f;
+}
+
+laser_scan_t MakeSoakScan(int64_t seq, int beams) {
+  if (beams < 1) throw std::invalid_argument("soak scans need at least one beam");
+  laser_scan_t s;
+  s.utime = kProbeBaseUtime + seq * kProbePeriodUtime;
+  s.sensor_name = "bus-check-soak";
+  s.sensor_x_m = 0.1f;
+  s.sensor_y_m = 0;
+  s.sensor_theta_rad = 0;
+  s.angle_min_rad = -2.0944f;
+  s.angle_increment_rad = 4.1888f / std::max(1, beams - 1);
+  s.time_increment_s = 0;
+  s.range_min_m = 0.02f;
+  s.range_max_m = 5.6f;
+  s.nranges = beams;
+  s.ranges_m.resize(beams);
+  for (int i = 0; i < beams; ++i) s.ranges_m[i] = 0.1f + static_cast<float>((seq * 7 + i) % 500) * 0.01f;
+  s.nintensities = 0;
+  return s;
+}
+
+SoakVerifier::SoakVerifier(const std::string& frame_channel, const std::string& scan_channel, int frame_bytes,
+                           int beams, int64_t expected_frames, int64_t expected_scans)
+    : frame_channel_(frame_channel), scan_channel_(scan_channel), frame_bytes_(frame_bytes), beams_(beams) {
+  if (expected_frames < 0 || expected_scans < 0) throw std::invalid_argument("soak: negative expected counts");
+  frames_.expected = expected_frames;
+  scans_.expected = expected_scans;
+  frames_seen_.seen.assign(expected_frames, false);
+  scans_seen_.seen.assign(expected_scans, false);
+}
+
+SoakVerifier::SoakVerifier(glue::Bus& bus, const std::string& frame_channel, const std::string& scan_channel,
+                           int frame_bytes, int beams, int64_t expected_frames, int64_t expected_scans)
+    : SoakVerifier(frame_channel, scan_channel, frame_bytes, beams, expected_frames, expected_scans) {
+  bus_ = &bus;
+  bus.SubscribeRaw(frame_channel, [this](const void* data, size_t size) { OnFrame(data, size); });
+  bus.SubscribeRaw(scan_channel, [this](const void* data, size_t size) { OnScan(data, size); });
+}
+
+void SoakVerifier::Feed(const std::string& channel, const void* data, size_t size) {
+  try {
+    if (channel == frame_channel_) {
+      OnFrame(data, size);
+    } else if (channel == scan_channel_) {
+      OnScan(data, size);
+    } else {
+      ++ignored_;
+    }
+  } catch (const std::exception& e) {
+    if (++feed_errors_ <= 5) std::cerr << "soak: " << channel << ": " << e.what() << "\n";
+  }
+}
+
+void SoakVerifier::OnFrame(const void* data, size_t size) {
+  const int64_t seq = ProbeSeq(PayloadUtime(data, size));
+  const std::string expected =
+      seq >= 0 && seq < frames_.expected ? glue::Encode(MakeSoakFrame(seq, frame_bytes_)) : std::string();
+  Check(data, size, expected, seq, &frames_, &frames_seen_);
+}
+
+void SoakVerifier::OnScan(const void* data, size_t size) {
+  const int64_t seq = ProbeSeq(PayloadUtime(data, size));
+  const std::string expected = seq >= 0 && seq < scans_.expected ? glue::Encode(MakeSoakScan(seq, beams_)) : std::string();
+  Check(data, size, expected, seq, &scans_, &scans_seen_);
+}
+
+int64_t SoakVerifier::errors() const {
+  return bus_ ? static_cast<int64_t>(bus_->total_errors()) : feed_errors_;
+}
+
+void SoakVerifier::Check(const void* data, size_t size, const std::string& expected, int64_t seq, SoakStream* stream,
+                         Seen* seen) {
+  if (expected.empty() || expected.size() != size || std::memcmp(expected.data(), data, size) != 0) {
+    ++stream->corrupt;
+    throw std::runtime_error("soak message " + std::to_string(seq) + " (" + std::to_string(size) +
+                             " bytes) is not one that was sent");
+  }
+  if (seen->seen[seq]) {
+    ++stream->duplicates;
+    return;
+  }
+  if (seq <= seen->last_seq) ++stream->out_of_order;
+  seen->last_seq = std::max(seen->last_seq, seq);
+  seen->seen[seq] = true;
+  ++stream->received;
+  stream->bytes += static_cast<int64_t>(size);
+}
+
+bool SoakVerifier::ok() const {
+  for (const SoakStream* s : {&frames_, &scans_}) {
+    if (s->corrupt || s->out_of_order || s->duplicates) return false;
+  }
+  return complete() && errors() == 0;
+}
+
+std::string SoakVerifier::Report() const {
+  std::ostringstream out;
+  auto stream = [&](const char* name, const SoakStream& s) {
+    out << name << " " << s.received << "/" << s.expected << " (" << s.missing() << " missing, " << s.corrupt
+        << " corrupt, " << s.out_of_order << " out of order, " << s.duplicates << " duplicates)";
+  };
+  stream("frames", frames_);
+  out << ", ";
+  stream("scans", scans_);
+  return out.str();
+}
+
+std::string SoakVerifier::JsonMembers(const std::string& prefix) const {
+  std::ostringstream out;
+  bool first = true;
+  auto member = [&](const std::string& key, int64_t v) {
+    out << (first ? "" : ",\n") << "  \"" << prefix << key << "\": " << v;
+    first = false;
+  };
+  for (const auto& [name, s] : {std::pair<const char*, const SoakStream&>{"frames", frames_}, {"scans", scans_}}) {
+    const std::string n = name;
+    member(n + "_expected", s.expected);
+    member(n + "_received", s.received);
+    member(n + "_missing", s.missing());
+    member(n + "_corrupt", s.corrupt);
+    member(n + "_out_of_order", s.out_of_order);
+    member(n + "_duplicates", s.duplicates);
+    member(n + "_bytes", s.bytes);
+  }
+  member("decode_or_handler_errors", errors());
+  return out.str();
+}
+
+LogStreamReader::LogStreamReader(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "rb")) {
+  if (!file_) throw std::runtime_error("cannot open LCM log '" + path + "': " + std::strerror(errno));
+}
+
+LogStreamReader::~LogStreamReader() {
+  if (file_) std::fclose(file_);
+}
+
+bool LogStreamReader::Read(void* dst, size_t n) {
+  const size_t got = std::fread(dst, 1, n, file_);
+  offset_ += static_cast<int64_t>(got);
+  return got == n;
+}
+
+bool LogStreamReader::Next(std::string* channel, std::string* data, int64_t* timestamp_us) {
+  uint8_t header[28];
+  const int64_t start = offset_;
+  const size_t got = std::fread(header, 1, sizeof(header), file_);
+  offset_ += static_cast<int64_t>(got);
+  if (got == 0) return false;
+  auto fail = [&](const std::string& why) {
+    throw std::runtime_error(path_ + ": event at byte " + std::to_string(start) + ": " + why);
+  };
+  if (got < sizeof(header)) fail("truncated header");
+  auto be = [&](int at, int bytes) {
+    uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v = (v << 8) | header[at + i];
+    return v;
+  };
+  if (be(0, 4) != 0xEDA1DA01u) fail("no LCM event magic");
+  *timestamp_us = static_cast<int64_t>(be(12, 8));
+  const uint64_t channel_len = be(20, 4), data_len = be(24, 4);
+  if (channel_len == 0 || channel_len > 256 || data_len > (1u << 30)) fail("absurd channel or data length");
+  channel->resize(channel_len);
+  data->resize(data_len);
+  if (!Read(channel->data(), channel_len) || !Read(data->data(), data_len)) fail("truncated event");
+  return true;
+}
+
+int64_t ProcessRssKb(int pid) {
+  std::ifstream in(pid == 0 ? std::string("/proc/self/status") : "/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::strtoll(line.c_str() + 6, nullptr, 10);
+  }
+  return -1;
 }
 
 }  // namespace snapnav::tools

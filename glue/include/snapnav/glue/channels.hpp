@@ -27,6 +27,8 @@ inline constexpr char kNavigatorStatus[] = "NAVIGATOR_STATUS";
 inline constexpr char kBusCheck[] = "BUS_CHECK";                // omni_frame_t probes of bus-check
 inline constexpr char kBusPing[] = "BUS_PING";
 inline constexpr char kBusPong[] = "BUS_PONG";
+inline constexpr char kSoakFrame[] = "SOAK_FRAME";              // omni_frame_t of the bus-check soak
+inline constexpr char kSoakScan[] = "SOAK_SCAN";                // laser_scan_t of the bus-check soak
 
 inline std::string Prefixed(const std::string& prefix, const std::string& name) { return prefix + name; }
 

@@ -1,0 +1,327 @@
+#include "viewer_node.hpp"
+
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+
+#include "snapnav/glue/codec.hpp"
+#include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
+#include "snapnav/pose_t.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+std::string MethodName(int8_t method) {
+  switch (method) {
+    case landmark_set_t::HOG: return "hog";
+    case landmark_set_t::VLINE: return "vline";
+    case landmark_set_t::SIFT: return "sift";
+    case landmark_set_t::SURF: return "surf";
+    default: return "method " + std::to_string(method);
+  }
+}
+
+void Positive(const glue::IniFile& ini, const std::string& key, double v, bool allow_zero = false) {
+  if (!(allow_zero ? v >= 0 : v > 0) || !std::isfinite(v)) {
+    throw glue::ConfigError(ini.origin() + ": [viewer] " + key + " must be " + (allow_zero ? "at least 0" : "positive"));
+  }
+}
+
+}  // namespace
+
+std::string RegexEscape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (std::string(".[]{}()*+?^$|\\").find(c) != std::string::npos) out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  ViewerConfig c;
+  const std::string regex_prefix = RegexEscape(channel_prefix);
+  c.point_map_channel = channel_prefix + ini.GetString("channels", "point_map");
+  c.pose_channels = regex_prefix + ini.GetString("channels", "poses");
+  c.truth_channel = channel_prefix + ini.GetString("channels", "ground_truth");
+  c.panorama_channel = channel_prefix + ini.GetString("channels", "panorama");
+  c.omni_channel = channel_prefix + ini.GetString("channels", "omni");
+  c.landmark_channels = regex_prefix + ini.GetString("channels", "landmarks");
+  c.homing_vector_channel = channel_prefix + ini.GetString("channels", "homing_vector");
+  c.place_cell_match_channel = channel_prefix + ini.GetString("channels", "place_cell_match");
+  c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
+
+  c.refresh_hz = ini.GetDouble("viewer", "refresh_hz");
+  Positive(ini, "refresh_hz", c.refresh_hz);
+  c.png_interval_s = ini.GetDouble("viewer", "png_interval_s");
+  Positive(ini, "png_interval_s", c.png_interval_s, true);
+  c.render.size.width = ini.GetInt("viewer", "width_px");
+  c.render.size.height = ini.GetInt("viewer", "height_px");
+  c.render.ellipse_sigma = ini.GetDouble("viewer", "ellipse_sigma");
+  c.render.ellipse_interval_s = ini.GetDouble("viewer", "ellipse_interval_s");
+  c.render.min_span_m = ini.GetDouble("viewer", "min_span_m");
+  c.render.scan_max_age_s = ini.GetDouble("viewer", "scan_max_age_s");
+  c.render.homing_arrow_px = ini.GetInt("viewer", "homing_arrow_px");
+  c.render.robot_pose_channels.clear();
+  for (const auto& ch : glue::SplitList(ini.GetString("viewer", "robot_pose_channels"))) {
+    c.render.robot_pose_channels.push_back(channel_prefix + ch);
+  }
+  c.trajectory_min_step_m = ini.GetDouble("viewer", "trajectory_min_step_m");
+  Positive(ini, "trajectory_min_step_m", c.trajectory_min_step_m, true);
+  c.trajectory_min_turn_rad = ini.GetDouble("viewer", "trajectory_min_turn_deg") * kDeg;
+  Positive(ini, "trajectory_min_turn_deg", c.trajectory_min_turn_rad, true);
+  c.trajectory_max_gap_s = ini.GetDouble("viewer", "trajectory_max_gap_s");
+  Positive(ini, "trajectory_max_gap_s", c.trajectory_max_gap_s);
+  c.max_poses_per_channel = ini.GetInt("viewer", "max_poses_per_channel");
+  c.max_place_cell_matches = ini.GetInt("viewer", "max_place_cell_matches");
+  c.panorama = glue::ReadPanoramaConfig(ini);
+  c.mirror = glue::ReadMirrorConfig(ini);
+  ini.CheckAllUsed();
+  c.Validate(ini.origin());
+  return c;
+}
+
+void ViewerConfig::Validate(const std::string& origin) const {
+  try {
+    render.Validate();
+    panorama.Validate();
+    mirror.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(origin + ": " + e.what());
+  }
+  if (max_poses_per_channel < 100) throw glue::ConfigError(origin + ": [viewer] max_poses_per_channel must be >= 100");
+  if (max_place_cell_matches < 1) throw glue::ConfigError(origin + ": [viewer] max_place_cell_matches must be >= 1");
+  if (render.robot_pose_channels.empty()) throw glue::ConfigError(origin + ": [viewer] robot_pose_channels is empty");
+}
+
+void ViewerConfig::Print(std::ostream& out) const {
+  out << "[channels]\npoint_map = " << point_map_channel << "\nposes = " << pose_channels
+      << "\nground_truth = " << truth_channel << "\npanorama = " << panorama_channel << "\nomni = " << omni_channel
+      << "\nlandmarks = " << landmark_channels << "\nhoming_vector = " << homing_vector_channel
+      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\n[viewer]\n"
+      << "refresh_hz = " << refresh_hz << "\npng_interval_s = " << png_interval_s
+      << "\nwidth_px = " << render.size.width << "\nheight_px = " << render.size.height
+      << "\nellipse_sigma = " << render.ellipse_sigma << "\nellipse_interval_s = " << render.ellipse_interval_s
+      << "\nmin_span_m = " << render.min_span_m << "\nscan_max_age_s = " << render.scan_max_age_s
+      << "\nhoming_arrow_px = " << render.homing_arrow_px << "\nrobot_pose_channels = ";
+  for (size_t i = 0; i < render.robot_pose_channels.size(); ++i) out << (i ? "," : "") << render.robot_pose_channels[i];
+  out << "\ntrajectory_min_step_m = " << trajectory_min_step_m
+      << "\ntrajectory_min_turn_deg = " << trajectory_min_turn_rad / kDeg
+      << "\ntrajectory_max_gap_s = " << trajectory_max_gap_s << "\nmax_poses_per_channel = " << max_poses_per_channel
+      << "\nmax_place_cell_matches = " << max_place_cell_matches << "\n";
+  glue::PrintPanoramaConfig(out, panorama);
+  glue::PrintMirrorConfig(out, mirror);
+}
+
+ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
+    : bus_(bus), config_(config), frames_to_panoramas_(config.panorama, config.mirror) {
+  scene_.truth_channel = config_.truth_channel;
+  scene_.source = bus_.url();
+  bus_.SubscribeRaw(config_.pose_channels, [this](const void* d, size_t n) { OnPose(d, n); });
+  bus_.Subscribe(config_.point_map_channel, &ViewerNode::OnPointMap, this);
+  bus_.Subscribe(config_.panorama_channel, &ViewerNode::OnPanorama, this);
+  bus_.Subscribe(config_.omni_channel, &ViewerNode::OnOmniFrame, this);
+  bus_.SubscribeRaw(config_.landmark_channels, [this](const void* d, size_t n) { OnLandmarks(d, n); });
+  bus_.Subscribe(config_.homing_vector_channel, &ViewerNode::OnHomingVector, this);
+  bus_.Subscribe(config_.place_cell_match_channel, &ViewerNode::OnPlaceCellMatch, this);
+  bus_.Subscribe(config_.scan_channel, &ViewerNode::OnScan, this);
+}
+
+void ViewerNode::SawUtime(int64_t utime) {
+  if (utime <= 0) return;
+  if (scene_.first_utime == 0) scene_.first_utime = utime;
+  if (utime > scene_.latest_utime) scene_.latest_utime = utime;
+}
+
+void ViewerNode::OnPose(const void* data, size_t size) {
+  std::string error;
+  const auto msg = glue::Decode<pose_t>(data, size, &error);
+  if (!msg) {
+    bus_.CountDecodeError(error);
+    return;
+  }
+  const nav::Pose2 pose = glue::FromPoseMsg(*msg);
+  if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad)) {
+    Reject("non-finite pose", bus_.current().channel);
+    return;
+  }
+  SawUtime(msg->utime);
+  viewer::Track& track = scene_.tracks[bus_.current().channel];
+  viewer::PoseSample sample{msg->utime, pose, glue::CovarianceOf(*msg)};
+  if (!sample.covariance.allFinite()) sample.covariance.setZero();
+  // Time going back by more than a second: a new run on the same channel starts a new track.
+  if (track.received > 0 && msg->utime < track.latest.utime - 1'000'000) track.poses.clear();
+  track.estimator = msg->estimator;
+  track.frame = msg->frame;
+  track.latest = sample;
+  ++track.received;
+  bool keep = track.poses.empty();
+  if (!keep) {
+    const viewer::PoseSample& last = track.poses.back();
+    keep = std::hypot(pose.x_m - last.pose.x_m, pose.y_m - last.pose.y_m) >= config_.trajectory_min_step_m ||
+           std::abs(nav::WrapAngle(pose.theta_rad - last.pose.theta_rad)) >= config_.trajectory_min_turn_rad ||
+           (msg->utime - last.utime) * 1e-6 >= config_.trajectory_max_gap_s;
+  }
+  if (!keep) return;
+  track.poses.push_back(sample);
+  if (static_cast<int>(track.poses.size()) > config_.max_poses_per_channel) {
+    // Halve the density, keeping the first and the last pose.
+    std::vector<viewer::PoseSample> thinned;
+    thinned.reserve(track.poses.size() / 2 + 2);
+    for (size_t i = 0; i < track.poses.size(); i += 2) thinned.push_back(track.poses[i]);
+    if (thinned.back().utime != track.poses.back().utime) thinned.push_back(track.poses.back());
+    track.poses.swap(thinned);
+  }
+}
+
+void ViewerNode::OnPointMap(const point_map_t& msg) {
+  SawUtime(msg.utime);
+  scene_.map_points.clear();
+  scene_.map_points.reserve(msg.npoints);
+  for (int i = 0; i < msg.npoints; ++i) {
+    if (std::isfinite(msg.x_m[i]) && std::isfinite(msg.y_m[i])) scene_.map_points.emplace_back(msg.x_m[i], msg.y_m[i]);
+  }
+  scene_.map_estimator = msg.estimator;
+  scene_.map_utime = msg.utime;
+}
+
+void ViewerNode::OnPanorama(const omni_frame_t& msg) {
+  SawUtime(msg.utime);
+  have_panorama_channel_ = true;
+  pending_frame_ = msg;
+}
+
+void ViewerNode::OnOmniFrame(const omni_frame_t& msg) {
+  SawUtime(msg.utime);
+  if (!have_panorama_channel_) pending_frame_ = msg;
+}
+
+void ViewerNode::OnLandmarks(const void* data, size_t size) {
+  std::string error;
+  const auto msg = glue::Decode<landmark_set_t>(data, size, &error);
+  if (!msg) {
+    bus_.CountDecodeError(error);
+    return;
+  }
+  if (msg->panorama_width_px <= 0 || msg->panorama_height_px <= 0) {
+    Reject("landmark panorama size", bus_.current().channel + ": " + std::to_string(msg->panorama_width_px) + "x" +
+                                         std::to_string(msg->panorama_height_px));
+    return;
+  }
+  SawUtime(msg->utime);
+  viewer::LandmarkMarks& marks = scene_.landmarks[bus_.current().channel];
+  marks.utime = msg->utime;
+  marks.method = MethodName(msg->method);
+  marks.panorama_width_px = msg->panorama_width_px;
+  marks.panorama_height_px = msg->panorama_height_px;
+  marks.bearings_rad.clear();
+  marks.rows_px.clear();
+  for (int i = 0; i < msg->nlandmarks; ++i) {
+    if (!std::isfinite(msg->bearings_rad[i])) continue;
+    marks.bearings_rad.push_back(msg->bearings_rad[i]);
+    marks.rows_px.push_back(msg->rows_px[i]);
+  }
+}
+
+void ViewerNode::OnHomingVector(const homing_vector_t& msg) {
+  SawUtime(msg.utime);
+  viewer::HomingView h;
+  h.utime = msg.utime;
+  h.valid = msg.valid && std::isfinite(msg.direction_rad);
+  h.direction_rad = msg.direction_rad;
+  h.magnitude = msg.magnitude;
+  h.compass_rotation_rad = msg.compass_rotation_rad;
+  h.landmarks_used = msg.nlandmarks_used;
+  h.method = MethodName(msg.method);
+  h.alv_variant = msg.alv_variant;
+  scene_.homing = h;
+}
+
+void ViewerNode::OnPlaceCellMatch(const place_cell_match_t& msg) {
+  SawUtime(msg.utime);
+  if (msg.cell_id < 0) return;  // nothing matched
+  if (!std::isfinite(msg.x_m) || !std::isfinite(msg.y_m)) {
+    Reject("non-finite place cell", bus_.current().channel);
+    return;
+  }
+  scene_.matches.push_back({msg.utime, msg.cell_id, msg.x_m, msg.y_m, msg.theta_rad, msg.distance, msg.score});
+  if (static_cast<int>(scene_.matches.size()) > config_.max_place_cell_matches) {
+    scene_.matches.erase(scene_.matches.begin(),
+                         scene_.matches.begin() + (scene_.matches.size() - config_.max_place_cell_matches));
+  }
+}
+
+void ViewerNode::OnScan(const laser_scan_t& msg) {
+  SawUtime(msg.utime);
+  viewer::ScanView scan;
+  scan.utime = msg.utime;
+  scan.mount = {msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad};
+  scan.points.reserve(msg.nranges);
+  for (int i = 0; i < msg.nranges; ++i) {
+    const float r = msg.ranges_m[i];
+    if (!(r >= msg.range_min_m) || !(r < msg.range_max_m)) continue;
+    const double a = msg.angle_min_rad + i * static_cast<double>(msg.angle_increment_rad);
+    scan.points.emplace_back(static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)));
+  }
+  scene_.scan = std::move(scan);
+}
+
+void ViewerNode::Reject(const std::string& reason, const std::string& detail) {
+  const int64_t n = ++rejected_[reason];
+  if (n <= 5 || n % 100 == 0) std::cerr << "viewer: refused #" << n << " (" << reason << "): " << detail << "\n";
+}
+
+int64_t ViewerNode::rejected_total() const {
+  int64_t n = 0;
+  for (const auto& [_, k] : rejected_) n += k;
+  return n;
+}
+
+void ViewerNode::UpdatePanorama() {
+  if (!pending_frame_) return;
+  const omni_frame_t frame = std::move(*pending_frame_);
+  pending_frame_.reset();
+  viewer::PanoramaView view;
+  view.utime = frame.utime;
+  if (frame.kind == omni_frame_t::PANORAMA) {
+    try {
+      view.image = glue::FrameToImage(frame);
+    } catch (const std::exception& e) {
+      Reject("undecodable image", config_.panorama_channel + ": " + e.what());
+      return;
+    }
+    view.bearing_col0_rad = frame.bearing_col0_rad;
+    view.source = config_.panorama_channel;
+  } else {
+    auto panorama = frames_to_panoramas_.Convert(frame);
+    if (!panorama) {
+      Reject(frames_to_panoramas_.reason(), config_.omni_channel + ": " + frames_to_panoramas_.detail());
+      return;
+    }
+    view.image = *panorama;
+    view.bearing_col0_rad = config_.panorama.bearing_col0_rad;
+    view.source = config_.omni_channel + " (unwrapped)";
+  }
+  scene_.panorama = std::move(view);
+}
+
+const viewer::ViewerScene& ViewerNode::Scene() {
+  UpdatePanorama();
+  scene_.channel_counts.clear();
+  for (const auto& [ch, s] : bus_.stats()) scene_.channel_counts[ch] = static_cast<int64_t>(s.received);
+  scene_.rejected = static_cast<int64_t>(bus_.total_errors()) + rejected_total();
+  return scene_;
+}
+
+void ViewerNode::Report(std::ostream& out) const {
+  out << "viewer: " << scene_.tracks.size() << " pose channels, " << scene_.matches.size() << " place-cell matches, "
+      << scene_.map_points.size() << " map points, " << rejected_total() << " refused";
+  for (const auto& [reason, n] : rejected_) out << "; " << reason << ": " << n;
+  out << "\n";
+}
+
+}  // namespace snapnav::processes

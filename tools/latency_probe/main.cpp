@@ -1,0 +1,109 @@
+// latency-probe: end-to-end latency from an omni frame to the outputs it produced (homing vector,
+// place-cell pose, fused pose), timed by this process's receive times.
+#include <cctype>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "latency_probe.hpp"
+#include "snapnav/glue/app.hpp"
+#include "snapnav/glue/channels.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/time.hpp"
+
+namespace {
+
+using namespace snapnav;
+
+std::string Key(const std::string& channel) {
+  std::string k = channel;
+  for (auto& c : k) c = std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::tolower(c)) : '_';
+  return k;
+}
+
+int Main(int argc, char** argv) {
+  glue::CommonFlags common;
+  std::string input = channels::kOmniFrame;
+  std::string outputs_text = std::string(channels::kHomingVector) + "," + channels::kPosePlaceCells + "," +
+                             channels::kPoseFusedSlam + "@" + channels::kPosePlaceCells;
+  std::string out_json, csv, ready_file;
+  double duration_s = 0, window_s = 30;
+  glue::Flags flags("latency-probe",
+                    "End-to-end latency: receives the frames of --input and the messages of every --outputs channel,\n"
+                    "and pairs an output with the frame of the same utime (every snapnav type starts with utime).\n"
+                    "Latency = this process's receive time of the output - its receive time of the frame. CHANNEL@AFTER\n"
+                    "counts an output only after AFTER's output of the same frame (the fused pose of a place-cell fix,\n"
+                    "when scans share the frames' utimes). Runs until --duration-s, SIGINT or the end of a log; prints\n"
+                    "and writes median / p95 / max per output. The channels get --channel-prefix.");
+  flags.AddCommon(&common);
+  flags.AddString("input", &input, "frame channel");
+  flags.AddString("outputs", &outputs_text, "output channels, comma-separated, each CHANNEL or CHANNEL@AFTER");
+  flags.AddDouble("duration-s", &duration_s, "stop after this long [s, wall clock]; 0: until SIGINT");
+  flags.AddDouble("window-s", &window_s, "frames are paired for this much message time [s]");
+  flags.AddString("out", &out_json, "write the figures to this JSON file (flat keys, ms)");
+  flags.AddString("csv", &csv, "write every latency sample to this CSV file (output,latency_ms)");
+  flags.AddString("ready-file", &ready_file, "create this file once subscribed");
+  if (!flags.Parse(argc, argv)) return 0;
+  if (!common.config.empty()) throw glue::FlagError("latency-probe has no config file; use --input and --outputs");
+  std::vector<tools::LatencyOutput> outputs;
+  try {
+    outputs = tools::ParseLatencyOutputs(outputs_text);
+  } catch (const std::invalid_argument& e) {
+    throw glue::FlagError(std::string("--outputs: ") + e.what());
+  }
+  for (auto& o : outputs) {
+    o.channel = common.channel_prefix + o.channel;
+    if (!o.after.empty()) o.after = common.channel_prefix + o.after;
+  }
+  input = common.channel_prefix + input;
+
+  glue::InstallShutdownHandlers();
+  glue::Bus bus(common.lcm_url);
+  tools::LatencyProbe probe(bus, input, outputs, window_s);
+  std::cerr << "latency-probe: frames " << input << ", outputs " << outputs_text << " (" << bus.url() << ")\n";
+  if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
+  const int64_t end = duration_s > 0 ? glue::MonotonicUtime() + static_cast<int64_t>(duration_s * 1e6) : 0;
+  bus.Run([&] { return end == 0 || glue::MonotonicUtime() < end; });
+
+  std::ostringstream json;
+  json << std::fixed << std::setprecision(3) << "{\n  \"frames\": " << probe.frames();
+  std::cout << "latency-probe: " << probe.frames() << " frames on " << input << "\n"
+            << std::left << std::setw(24) << "output" << std::right << std::setw(9) << "matched" << std::setw(11)
+            << "median_ms" << std::setw(9) << "p95_ms" << std::setw(9) << "max_ms" << std::setw(11) << "unmatched"
+            << "\n";
+  for (const auto& o : probe.outputs()) {
+    const tools::LatencyStats s = probe.Stats(o.channel);
+    std::cout << std::left << std::setw(24) << o.channel << std::right << std::setw(9) << s.matched << std::fixed
+              << std::setprecision(1) << std::setw(11) << s.median_ms << std::setw(9) << s.p95_ms << std::setw(9)
+              << s.max_ms << std::setw(11) << s.unmatched << "\n";
+    const std::string k = Key(o.channel);
+    json << ",\n  \"" << k << "_messages\": " << s.outputs << ",\n  \"" << k << "_matched\": " << s.matched
+         << ",\n  \"" << k << "_unmatched\": " << s.unmatched << ",\n  \"" << k
+         << "_frames_without_output\": " << probe.frames_without(o.channel);
+    if (s.matched > 0) {
+      json << ",\n  \"" << k << "_latency_median_ms\": " << s.median_ms << ",\n  \"" << k
+           << "_latency_p95_ms\": " << s.p95_ms << ",\n  \"" << k << "_latency_max_ms\": " << s.max_ms << ",\n  \""
+           << k << "_latency_min_ms\": " << s.min_ms << ",\n  \"" << k << "_latency_mean_ms\": " << s.mean_ms;
+    }
+  }
+  json << "\n}\n";
+  if (!out_json.empty()) {
+    std::ofstream f(out_json);
+    f << json.str();
+    if (!f) throw std::runtime_error("cannot write " + out_json);
+  }
+  if (!csv.empty()) {
+    std::ofstream f(csv);
+    f << "output,latency_ms\n";
+    for (const auto& o : probe.outputs())
+      for (double v : probe.samples_ms(o.channel)) f << o.channel << "," << v << "\n";
+  }
+  bus.ReportStats(std::cerr);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return glue::RunMain(argc, argv, Main); }
