@@ -117,6 +117,7 @@ struct Supervisor::Child {
   pid_t pid = -1;
   int fd[2] = {-1, -1};  // stdout, stderr read ends
   std::string partial[2];
+  bool after_cr[2] = {false, false};
   bool reaped = false;
   ExitStatus status;
   double started_s = 0;
@@ -470,11 +471,13 @@ void Supervisor::ReadFrom(Child& child, bool err_stream) {
     const ssize_t n = ::read(fd, buf, sizeof buf);
     if (n > 0) {
       partial.append(buf, static_cast<size_t>(n));
+      // A line ends at \n, \r\n or a lone \r (progress that rewrites itself in a terminal).
       size_t start = 0;
-      for (size_t nl; (nl = partial.find('\n', start)) != std::string::npos; start = nl + 1) {
-        std::string line = partial.substr(start, nl - start);
-        if (!line.empty() && line.back() == '\r') line.pop_back();
-        EmitLine(slot, err_stream, line);
+      bool& after_cr = child.after_cr[err_stream ? 1 : 0];
+      for (size_t end; (end = partial.find_first_of("\r\n", start)) != std::string::npos; start = end + 1) {
+        const bool newline_after_cr = partial[end] == '\n' && after_cr && end == start;
+        after_cr = partial[end] == '\r';
+        if (!newline_after_cr) EmitLine(slot, err_stream, partial.substr(start, end - start));
       }
       partial.erase(0, start);
       while (partial.size() > kMaxLineBytes) {
