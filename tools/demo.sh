@@ -19,19 +19,22 @@ COUNT=90
 DURATION=60
 SCENE=indoor13
 FAULT=""
+EXPLORED=""
 FAULT_AT=""
 BUS_HEALTH=1
 KEEP_LOG=1
 usage() {
   cat <<'EOF'
 usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROCESS]] [--fault-at-s T]
-                      [--no-bus-health] [--drop-log]
+                      [--explored DIR] [--no-bus-health] [--drop-log]
   --out DIR         output folder (default logs/demo-<UTC time>)
   --duration-s S    seconds of the simulated lab in real time (default 60)
   --scene NAME      config/scenes/NAME.scene (default indoor13; its grid must have a 6_6 position)
   --fault [PROC]    kill -9 PROC (default homing) half-way; the launcher must restart it and the
                     logger must lose nothing (the report compares published and recorded counts)
   --fault-at-s T    when to kill it, seconds after sim started (default: half the duration)
+  --explored DIR    reuse the place-cell memory and grid of an earlier demo's folder DIR (same
+                    scene): skips step 2
   --no-bus-health   skip step 1
   --drop-log        delete run.lcmlog after the report (it holds every 1 MB frame: ~9 MB/s)
 EOF
@@ -44,6 +47,7 @@ while [ $# -gt 0 ]; do
     --fault)
       if [ $# -gt 1 ] && [ "${2#--}" = "$2" ]; then FAULT="$2"; shift 2; else FAULT=homing; shift; fi ;;
     --fault-at-s) FAULT_AT="$2"; shift 2 ;;
+    --explored) EXPLORED="$(cd "$2" && pwd)"; shift 2 ;;
     --no-bus-health) BUS_HEALTH=0; shift ;;
     --drop-log) KEEP_LOG=0; shift ;;
     -h | --help) usage; exit 0 ;;
@@ -65,6 +69,9 @@ trap cleanup EXIT
 step() { printf '\n[demo] %s\n' "$*"; }
 wait_for_file() { for _ in $(seq 200); do [ -s "$1" ] && return 0; sleep 0.05; done; echo "demo: $1 did not appear" >&2; exit 1; }
 verdict() { [ "$1" = 0 ] && echo PASS || echo FAIL; }
+# The launcher's output filters ignore Ctrl-C: the launcher gets it, stops the processes in
+# reverse order, and its last words (and the report of what was recorded) still come through.
+quiet() { (trap '' INT; exec "$@"); }
 SECONDS=0
 STEPS=4
 
@@ -93,15 +100,24 @@ else
 fi
 t_bus=$SECONDS
 
-step "2/$STEPS place-cell memory of '$SCENE': launch $(basename "$DEPLOY") --group explore"
-set +e
-"$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE" 2>&1 |
-  grep --line-buffered -vE '^ {11}|^launch: variable ' | sed -u 's/^/  /'
-explore_rc=${PIPESTATUS[0]}
-set -e
-[ -s "$OUT/placecells.mem" ] || explore_rc=1
+EXPLORE_OUT="$OUT"
+if [ -n "$EXPLORED" ]; then
+  step "2/$STEPS place-cell memory: reusing $EXPLORED/placecells.mem (--explored)"
+  EXPLORE_OUT="$EXPLORED"
+  explore_rc=0
+  [ -s "$EXPLORED/placecells.mem" ] && [ -s "$EXPLORED/grid/images/6_6.png" ] ||
+    { echo "demo: --explored $EXPLORED: no placecells.mem or grid/images/6_6.png there" >&2; exit 2; }
+else
+  step "2/$STEPS place-cell memory of '$SCENE': launch $(basename "$DEPLOY") --group explore"
+  set +e
+  "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE" 2>&1 |
+    quiet grep --line-buffered -vE '^ {11}|^launch: variable ' | quiet sed -u 's/^/  /'
+  explore_rc=${PIPESTATUS[0]}
+  set -e
+  [ -s "$OUT/placecells.mem" ] || explore_rc=1
+fi
 t_explore=$((SECONDS - t_bus))
-HOME_XY=$(awk -F, '$1=="images/6_6.png" { printf "%s,%s", $4, $5 }' "$OUT/grid/positions.csv" 2>/dev/null || true)
+HOME_XY=$(awk -F, '$1=="images/6_6.png" { printf "%s,%s", $4, $5 }' "$EXPLORE_OUT/grid/positions.csv" 2>/dev/null || true)
 
 step "3/$STEPS the simulated lab '$SCENE' for $DURATION s in real time: launch $(basename "$DEPLOY") --group lab${FAULT:+, fault: kill -9 $FAULT at ${FAULT_AT} s}"
 STATUS="$OUT/launch.status"
@@ -127,8 +143,9 @@ if [ -n "$FAULT" ]; then
 fi
 set +e
 "$BIN/launch" "$DEPLOY" --group lab --out "$OUT" --status-every-s 10 --status-file "$STATUS" \
-  "scene=$SCENE" "duration_s=$DURATION" 2>&1 | tee "$OUT/launch.log" |
-  grep --line-buffered -vE '^ {11}|^launch: variable |^[a-z-]+ +\|   [A-Z_]+ +received' | sed -u 's/^/  /'
+  "scene=$SCENE" "duration_s=$DURATION" "memory=$EXPLORE_OUT/placecells.mem" \
+  "home_image=$EXPLORE_OUT/grid/images/6_6.png" 2>&1 | quiet tee "$OUT/launch.log" |
+  quiet grep --line-buffered -vE '^ {11}|^launch: variable |^[a-z-]+ +\|   [A-Z_]+ +received' | quiet sed -u 's/^/  /'
 lab_rc=${PIPESTATUS[0]}
 set -e
 t_lab=$((SECONDS - t_bus - t_explore))
@@ -189,7 +206,8 @@ fi
   echo
   echo "## 2. Place-cell memory ($(verdict $explore_rc))"
   echo
-  grep -hE "^gridgen: scene|^placecells: explore, memory" "$OUT/explore/gridgen.log" "$OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
+  [ -z "$EXPLORED" ] || echo "Reused from \`$EXPLORED\` (--explored)."
+  grep -hE "^gridgen: scene|^placecells: explore, memory" "$EXPLORE_OUT/explore/gridgen.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
   echo
   echo "## 3. Simulated lab: scene $SCENE, $DURATION s ($(verdict $lab_rc))"
   echo

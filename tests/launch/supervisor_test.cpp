@@ -272,6 +272,19 @@ TEST(Supervisor, ReadyExitedAndReadyLineGateTheNextStart) {
   fs::remove_all(dir);
 }
 
+TEST(Supervisor, AStopWhileAProcessStartsIsNoFailure) {
+  ProcessSpec slow = Sh("slow", "trap 'exit 0' INT; while :; do sleep 0.05; done");
+  slow.ready = ReadyKind::kLine;
+  slow.ready_pattern = "never printed";
+  ProcessSpec later = Sh("later", "echo should not start");
+  const RunResult r = RunAll({slow, later}, {}, [](Supervisor& s, double t) {
+    if (t > 0.2) s.RequestStop("Ctrl-C");
+  });
+  EXPECT_EQ(r.rc, 0) << r.err;
+  EXPECT_EQ(Find(r, "slow").state, State::kStopped);
+  EXPECT_EQ(Find(r, "later").runs, 0);
+}
+
 TEST(Supervisor, NotReadyInTimeStopsTheDeployment) {
   ProcessSpec silent = Sh("silent", "trap 'exit 0' INT; while :; do sleep 0.05; done");
   silent.ready = ReadyKind::kLine;

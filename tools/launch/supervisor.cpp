@@ -364,6 +364,11 @@ void Supervisor::AdvanceStart(double now) {
 void Supervisor::CheckGate(double now) {
   if (gate_ < 0) return;
   Slot& s = *slots_[static_cast<size_t>(gate_)];
+  if (stopping_) {  // nothing more starts; a process stopped while it started has not failed
+    gate_ = -1;
+    if (s.state == State::kStarting) s.state = State::kRunning;
+    return;
+  }
   const ProcessSpec& spec = s.spec;
   bool ready = false;
   std::string what;
