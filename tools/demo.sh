@@ -190,7 +190,11 @@ fi
   echo "- Bus: UDP multicast in a private network namespace (loopback only, ttl=0)"
   echo "- Deployment: \`config/deploy/demo.deploy\`, run by \`build/bin/launch\` (groups explore, lab); process logs in \`processes/\`"
   if [ -f "$LOG" ]; then
-    echo "- Log: \`$LOG\` ($(stat -c %s "$LOG") bytes); replay it with \`./snapnav bus -- lcm-logplayer $LOG\`"
+    if [ "$KEEP_LOG" = 1 ]; then
+      echo "- Log: \`$LOG\` ($(stat -c %s "$LOG") bytes); replay it with \`./snapnav bus -- lcm-logplayer $LOG\`"
+    else
+      echo "- Log: $(stat -c %s "$LOG") bytes, deleted after the report (--drop-log)"
+    fi
   fi
   echo
   echo "## 1. Bus health"
@@ -206,7 +210,7 @@ fi
   echo
   echo "## 2. Place-cell memory ($(verdict $explore_rc))"
   echo
-  [ -z "$EXPLORED" ] || echo "Reused from \`$EXPLORED\` (--explored)."
+  [ -z "$EXPLORED" ] || printf 'Reused from `%s` (--explored).\n\n' "$EXPLORED"
   grep -hE "^gridgen: scene|^placecells: explore, memory" "$EXPLORE_OUT/explore/gridgen.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
   echo
   echo "## 3. Simulated lab: scene $SCENE, $DURATION s ($(verdict $lab_rc))"
