@@ -121,7 +121,8 @@ HOME_XY=$(awk -F, '$1=="images/6_6.png" { printf "%s,%s", $4, $5 }' "$EXPLORE_OU
 
 step "3/$STEPS the simulated lab '$SCENE' for $DURATION s in real time: launch $(basename "$DEPLOY") --group lab${FAULT:+, fault: kill -9 $FAULT at ${FAULT_AT} s}"
 STATUS="$OUT/launch.status"
-rm -f "$STATUS" "$OUT/fault.txt"
+rm -f "$STATUS" "$OUT/fault.txt" "$OUT/run.lcmlog"  # the logger appends (-a), so that a restart keeps the start
+rm -rf "$OUT/processes"                             # the process logs are appended to as well
 if [ -n "$FAULT" ]; then
   (
     # Wait for sim to run, then kill the process by the pid the launcher reports.
