@@ -56,6 +56,21 @@ struct MapFrame {
   }
 };
 
+// The series with a gap (NaN) wherever the time jumps by more than max_dt_s (e.g. a process that
+// was down), so the chart does not bridge it.
+plot::Series WithGaps(const std::string& name, const std::vector<double>& t, const std::vector<double>& y, double max_dt_s) {
+  plot::Series s{name, {}, {}};
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (i > 0 && t[i] - t[i - 1] > max_dt_s) {
+      s.x.push_back(0.5 * (t[i] + t[i - 1]));
+      s.y.push_back(NAN);
+    }
+    s.x.push_back(t[i]);
+    s.y.push_back(y[i]);
+  }
+  return s;
+}
+
 }  // namespace
 
 HomingErrors EvaluateHoming(const std::vector<homing_vector_t>& vectors, const std::vector<nav::StampedPose>& truth,
@@ -154,7 +169,7 @@ Section HomingSection(const std::string& channel, const std::vector<homing_vecto
   axes.y_label = "angular error (deg)";
   axes.y_min = 0;
   axes.y_max = 180;
-  plot::SavePng(plot::LineChart(axes, {{"|direction - true direction|", h.t_s, h.error_deg}}),
+  plot::SavePng(plot::LineChart(axes, {WithGaps("|direction - true direction|", h.t_s, h.error_deg, 1.0)}),
                 (fs::path(out_dir) / chart).string());
 
   // The map: the true path, the home, and every n-th vector drawn at the true pose.
@@ -229,7 +244,7 @@ Section PlaceCellSection(const std::string& channel, const std::vector<place_cel
   axes.x_label = "time (s)";
   axes.y_label = "distance (m)";
   axes.y_from_zero = true;
-  plot::SavePng(plot::LineChart(axes, {{"matched cell - true position", e.t_s, e.error_m}}),
+  plot::SavePng(plot::LineChart(axes, {WithGaps("matched cell - true position", e.t_s, e.error_m, 2.0)}),
                 (fs::path(out_dir) / chart).string());
   md << "\n![place-cell error](" << chart << ")\n";
   s.markdown = md.str();
