@@ -339,6 +339,20 @@ TEST(Supervisor, PassesTheBusUrlAndWritesTheStatusFile) {
   fs::remove_all(dir);
 }
 
+TEST(Supervisor, ChildrenGetOnlyTheirOwnOutputDescriptors) {
+  const fs::path dir = TempDir("fds");
+  ProcessSpec a = Sh("a", "ls /proc/self/fd | sort -n | tr '\\n' ' '");
+  a.log_file = (dir / "a.log").string();
+  ProcessSpec b = a;
+  b.name = "b";
+  b.log_file = (dir / "b.log").string();
+  const RunResult r = RunAll({a, b});
+  // 0 1 2, and 3: the folder ls reads; no log file, no other process's pipe.
+  EXPECT_NE(r.out.find("a | 0 1 2 3 \n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("b | 0 1 2 3 \n"), std::string::npos) << r.out;
+  fs::remove_all(dir);
+}
+
 TEST(Supervisor, StopAfterADuration) {
   ProcessSpec p = Sh("long", "trap 'exit 0' INT; while :; do sleep 0.05; done");
   SupervisorOptions o;

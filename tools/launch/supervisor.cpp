@@ -298,6 +298,11 @@ void Supervisor::Start(Slot& slot, double now) {
     if (devnull >= 0) ::dup2(devnull, 0);
     ::dup2(out_pipe[1], 1);
     ::dup2(err_pipe[1], 2);
+    // Nothing else of the launcher's (its log files, other processes' pipes) leaks into the child;
+    // the exec pipe closes itself on exec.
+    const unsigned exec_fd = static_cast<unsigned>(exec_pipe[1]);
+    if (exec_fd > 3) ::close_range(3, exec_fd - 1, 0);
+    ::close_range(exec_fd + 1, ~0U, 0);
     ::execvpe(argv[0], argv.data(), envp.data());
     const int e = errno;
     [[maybe_unused]] const ssize_t n = ::write(exec_pipe[1], &e, sizeof e);
