@@ -1,94 +1,246 @@
 #!/usr/bin/env bash
-# The demo deployment, run by `./snapnav demo` inside the private bus namespace:
+# The demo, run by `./snapnav demo` inside the private bus namespace:
 #  1. bus health: probe frames of 100 B..1 MB from a publisher to a subscriber process,
 #     recorded by lcm-logger and replayed by lcm-logplayer, checked byte for byte;
-#  2. the simulated lab: sim (robot, omni camera, laser, odometry, ground truth) and
-#     dead-reckoning run as separate processes in real time, lcm-logger records the bus;
-#  3. log-report turns the recording into report.md, summary.json and PNG plots.
-# Later issues add the navigation processes to step 2.
+#  2. the place-cell memory: `launch config/deploy/demo.deploy --group explore` (gridgen renders
+#     the scene's grid, placecells explores it);
+#  3. the simulated lab in real time: `launch config/deploy/demo.deploy --group lab` (sim driven by
+#     the navigator, homing, landmarks, place cells, laser SLAM, dead reckoning, lcm-logger, and
+#     RatSLAM / fused SLAM when built); with --fault, one process is killed with SIGKILL half-way
+#     and the launcher restarts it;
+#  4. log-report turns the recording and the process logs into report.md, summary.json and PNGs;
+#     demo-report.md gathers everything, with the verdicts.
 set -euo pipefail
 BIN="$1"; shift
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+DEPLOY="$ROOT/config/deploy/demo.deploy"
 OUT="$ROOT/logs/demo-$(date -u +%Y%m%d-%H%M%S)"
 COUNT=90
-DURATION=30
+DURATION=60
 SCENE=indoor13
+FAULT=""
+EXPLORED=""
+FAULT_AT=""
+BUS_HEALTH=1
+KEEP_LOG=1
+usage() {
+  cat <<'EOF'
+usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROCESS]] [--fault-at-s T]
+                      [--explored DIR] [--no-bus-health] [--drop-log]
+  --out DIR         output folder (default logs/demo-<UTC time>)
+  --duration-s S    seconds of the simulated lab in real time (default 60)
+  --scene NAME      config/scenes/NAME.scene (default indoor13; its grid must have a 6_6 position)
+  --fault [PROC]    kill -9 PROC (default homing) half-way; the launcher must restart it and the
+                    logger must lose nothing (the report compares published and recorded counts)
+  --fault-at-s T    when to kill it, seconds after sim started (default: half the duration)
+  --explored DIR    reuse the place-cell memory and grid of an earlier demo's folder DIR (same
+                    scene): skips step 2
+  --no-bus-health   skip step 1
+  --drop-log        delete run.lcmlog after the report (it holds every 1 MB frame: ~9 MB/s)
+EOF
+}
 while [ $# -gt 0 ]; do
   case "$1" in
     --out) OUT="$2"; shift 2 ;;
     --duration-s) DURATION="$2"; shift 2 ;;
     --scene) SCENE="$2"; shift 2 ;;
-    *) echo "demo: unknown argument $1 (use --out DIR, --duration-s S, --scene NAME)" >&2; exit 2 ;;
+    --fault)
+      if [ $# -gt 1 ] && [ "${2#--}" = "$2" ]; then FAULT="$2"; shift 2; else FAULT=homing; shift; fi ;;
+    --fault-at-s) FAULT_AT="$2"; shift 2 ;;
+    --explored) EXPLORED="$(cd "$2" && pwd)"; shift 2 ;;
+    --no-bus-health) BUS_HEALTH=0; shift ;;
+    --drop-log) KEEP_LOG=0; shift ;;
+    -h | --help) usage; exit 0 ;;
+    *) echo "demo: unknown argument $1" >&2; usage >&2; exit 2 ;;
   esac
 done
+[ -n "$FAULT_AT" ] || FAULT_AT=$(awk -v d="$DURATION" 'BEGIN { print d / 2 }')
+if [ -n "$FAULT" ]; then
+  case "$FAULT" in
+    lcm-logger | sim) echo "demo: --fault $FAULT: pick a processing process (homing, laser-slam, landmarks, placecells, navigator, dead-reckoning)" >&2; exit 2 ;;
+  esac
+fi
 SIZES=100,65536,1048576
 mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
 pids=()
 cleanup() { for p in "${pids[@]:-}"; do kill "$p" 2>/dev/null || true; done; }
 trap cleanup EXIT
 step() { printf '\n[demo] %s\n' "$*"; }
 wait_for_file() { for _ in $(seq 200); do [ -s "$1" ] && return 0; sleep 0.05; done; echo "demo: $1 did not appear" >&2; exit 1; }
+verdict() { [ "$1" = 0 ] && echo PASS || echo FAIL; }
+# The launcher's output filters ignore Ctrl-C: the launcher gets it, stops the processes in
+# reverse order, and its last words (and the report of what was recorded) still come through.
+quiet() { (trap '' INT; exec "$@"); }
 SECONDS=0
+STEPS=4
 
 step "private bus: $(ip -brief link show lo | tr -s ' '); route $(ip route show 224.0.0.0/4)"
-step "1/3 bus health: $COUNT probe frames ($SIZES bytes) at 30 Hz, recorded and replayed"
-PROBES="$OUT/probes.lcmlog"
-lcm-logger -f -q -c BUS_CHECK "$PROBES" &
-logger_pid=$!; pids+=($logger_pid)
-"$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.live.ready" >"$OUT/probes-live.txt" 2>/dev/null &
-verify_pid=$!; pids+=($verify_pid)
-wait_for_file "$OUT/.live.ready"; sleep 0.5
-"$BIN/bus-check" publish --count "$COUNT" --sizes "$SIZES" --rate-hz 30 2>/dev/null
-live_rc=0; wait "$verify_pid" || live_rc=$?
-sleep 0.3; kill -INT "$logger_pid"; wait "$logger_pid" || true
-"$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.replay.ready" >"$OUT/probes-replay.txt" 2>/dev/null &
-verify_pid=$!; pids+=($verify_pid)
-wait_for_file "$OUT/.replay.ready"
-lcm-logplayer -s 2 "$PROBES" >/dev/null
-replay_rc=0; wait "$verify_pid" || replay_rc=$?
-rm -f "$OUT"/.*.ready "$PROBES"
-sed 's/^/  live:   /' "$OUT/probes-live.txt"; sed 's/^/  replay: /' "$OUT/probes-replay.txt"
+live_rc=0; replay_rc=0
+if [ "$BUS_HEALTH" = 1 ]; then
+  step "1/$STEPS bus health: $COUNT probe frames ($SIZES bytes) at 30 Hz, recorded and replayed"
+  PROBES="$OUT/probes.lcmlog"
+  lcm-logger -f -q -c BUS_CHECK "$PROBES" &
+  logger_pid=$!; pids+=($logger_pid)
+  "$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.live.ready" >"$OUT/probes-live.txt" 2>/dev/null &
+  verify_pid=$!; pids+=($verify_pid)
+  wait_for_file "$OUT/.live.ready"; sleep 0.5
+  "$BIN/bus-check" publish --count "$COUNT" --sizes "$SIZES" --rate-hz 30 2>/dev/null
+  wait "$verify_pid" || live_rc=$?
+  sleep 0.3; kill -INT "$logger_pid"; wait "$logger_pid" || true
+  "$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.replay.ready" >"$OUT/probes-replay.txt" 2>/dev/null &
+  verify_pid=$!; pids+=($verify_pid)
+  wait_for_file "$OUT/.replay.ready"
+  lcm-logplayer -s 2 "$PROBES" >/dev/null
+  wait "$verify_pid" || replay_rc=$?
+  rm -f "$OUT"/.*.ready "$PROBES"
+  sed 's/^/  live:   /' "$OUT/probes-live.txt"; sed 's/^/  replay: /' "$OUT/probes-replay.txt"
+else
+  step "1/$STEPS bus health: skipped (--no-bus-health)"
+fi
+t_bus=$SECONDS
 
-step "2/3 simulated lab '$SCENE' for $DURATION s in real time: sim + dead-reckoning + homing, lcm-logger recording"
-LOG="$OUT/run.lcmlog"
-lcm-logger -f -q "$LOG" &
-logger_pid=$!; pids+=($logger_pid)
-"$BIN/dead-reckoning" 2>"$OUT/dead-reckoning.log" &
-dr_pid=$!; pids+=($dr_pid)
-"$BIN/homing" --home-first 2>"$OUT/homing.log" &
-homing_pid=$!; pids+=($homing_pid)
-sleep 0.5
-sim_rc=0
-"$BIN/sim" --scene "$SCENE" --duration-s "$DURATION" --mode realtime 2>&1 | tee "$OUT/sim.log" | grep --line-buffered -E "^sim: (t=|done)" | sed 's/^/  /' || sim_rc=$?
-sleep 0.5
-kill -INT "$dr_pid" "$homing_pid" "$logger_pid"; wait "$dr_pid" || true; wait "$homing_pid" || true; wait "$logger_pid" || true
-sed 's/^/  /' "$OUT/dead-reckoning.log" | grep -E "published|ODOMETRY|POSE" || true
-sed 's/^/  /' "$OUT/homing.log" | grep -E "^homing: (published|frames|home)|HOMING_VECTOR" || true
+EXPLORE_OUT="$OUT"
+if [ -n "$EXPLORED" ]; then
+  step "2/$STEPS place-cell memory: reusing $EXPLORED/placecells.mem (--explored)"
+  EXPLORE_OUT="$EXPLORED"
+  explore_rc=0
+  [ -s "$EXPLORED/placecells.mem" ] && [ -s "$EXPLORED/grid/images/6_6.png" ] ||
+    { echo "demo: --explored $EXPLORED: no placecells.mem or grid/images/6_6.png there" >&2; exit 2; }
+else
+  step "2/$STEPS place-cell memory of '$SCENE': launch $(basename "$DEPLOY") --group explore"
+  set +e
+  "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE" 2>&1 |
+    quiet grep --line-buffered -vE '^ {11}|^launch: variable ' | quiet sed -u 's/^/  /'
+  explore_rc=${PIPESTATUS[0]}
+  set -e
+  [ -s "$OUT/placecells.mem" ] || explore_rc=1
+fi
+t_explore=$((SECONDS - t_bus))
+HOME_XY=$(awk -F, '$1=="images/6_6.png" { printf "%s,%s", $4, $5 }' "$EXPLORE_OUT/grid/positions.csv" 2>/dev/null || true)
 
-step "3/3 report"
+step "3/$STEPS the simulated lab '$SCENE' for $DURATION s in real time: launch $(basename "$DEPLOY") --group lab${FAULT:+, fault: kill -9 $FAULT at ${FAULT_AT} s}"
+STATUS="$OUT/launch.status"
+rm -f "$STATUS" "$OUT/fault.txt" "$OUT/run.lcmlog"  # the logger appends (-a), so that a restart keeps the start
+rm -rf "$OUT/processes"                             # the process logs are appended to as well
+if [ -n "$FAULT" ]; then
+  (
+    # Wait for sim to run, then kill the process by the pid the launcher reports.
+    for _ in $(seq 1200); do
+      awk -F'\t' '$1=="sim" && $2=="running" { found=1 } END { exit !found }' "$STATUS" 2>/dev/null && break
+      sleep 0.1
+    done
+    sleep "$FAULT_AT"
+    pid=$(awk -F'\t' -v n="$FAULT" '$1==n && $2=="running" { print $3 }' "$STATUS" 2>/dev/null)
+    if [ -z "$pid" ] || [ "$pid" = 0 ]; then
+      echo "[demo] fault: $FAULT is not running; nothing killed" >&2
+      exit 0
+    fi
+    printf '\n[demo] fault: kill -9 %s (pid %s), %s s after sim started\n\n' "$FAULT" "$pid" "$FAULT_AT" >&2
+    kill -9 "$pid"
+    printf '%s\t%s\t%s\n' "$FAULT" "$pid" "$FAULT_AT" >"$OUT/fault.txt"
+  ) &
+  pids+=($!)
+fi
+set +e
+"$BIN/launch" "$DEPLOY" --group lab --out "$OUT" --status-every-s 10 --status-file "$STATUS" \
+  "scene=$SCENE" "duration_s=$DURATION" "memory=$EXPLORE_OUT/placecells.mem" \
+  "home_image=$EXPLORE_OUT/grid/images/6_6.png" 2>&1 | quiet tee "$OUT/launch.log" |
+  quiet grep --line-buffered -vE '^ {11}|^launch: variable |^[a-z-]+ +\|   [A-Z_]+ +received' | quiet sed -u 's/^/  /'
+lab_rc=${PIPESTATUS[0]}
+set -e
+t_lab=$((SECONDS - t_bus - t_explore))
+
+step "4/$STEPS report"
 report_rc=0
-"$BIN/log-report" "$LOG" --out "$OUT" >/dev/null || report_rc=$?
-verdict() { [ "$1" = 0 ] && echo PASS || echo FAIL; }
+LOG="$OUT/run.lcmlog"
+"$BIN/log-report" "$LOG" --out "$OUT" ${HOME_XY:+--home "$HOME_XY"} --process-logs "$OUT/processes" >/dev/null || report_rc=$?
+# The fault's verdict: restarted, sim's channels complete in the log, the other processes never restarted.
+fault_rc=0
+fault_text=""
+if [ -n "$FAULT" ]; then
+  fault_text=$(python3 - "$OUT/summary.json" "$FAULT" "$OUT/fault.txt" <<'PY' || true
+import json, os, sys
+s = json.load(open(sys.argv[1])); fault = sys.argv[2]
+ok = True; lines = []
+if not os.path.exists(sys.argv[3]):
+    ok = False; lines.append("- %s was not killed (it was not running)" % fault)
+runs = s.get("process_%s_runs" % fault, 0)
+lines.append("- %s: %d runs (killed once, restarted by the launcher)" % (fault, runs))
+ok &= runs == 2
+for ch in ("omni_frame", "laser_scan", "odometry", "pose_ground_truth"):
+    p, r = s.get("delivery_%s_published" % ch), s.get("delivery_%s_recorded" % ch)
+    lines.append("- sim %s: published %s, recorded %s" % (ch.upper(), p, r))
+    ok &= p is not None and p == r and p > 0
+others = {k[8:-5]: v for k, v in s.items() if k.startswith("process_") and k.endswith("_runs") and k[8:-5] != fault}
+restarted = [k for k, v in others.items() if v != 1]
+lines.append("- the other processes: %s" % (", ".join("%s %d run%s" % (k, v, "s" if v != 1 else "") for k, v in sorted(others.items()))))
+ok &= not restarted
+lines.append("- lost in total (channels with exact counts): %s" % s.get("delivery_lost_total"))
+ok &= s.get("delivery_lost_total") == 0
+print("PASS" if ok else "FAIL")
+print("\n".join(lines))
+PY
+)
+  [ "$(echo "$fault_text" | head -1)" = PASS ] || fault_rc=1
+fi
 {
   echo "# snapnav demo report"
   echo
-  echo "- Date (UTC): $(date -u +%Y-%m-%dT%H:%M:%SZ); run time ${SECONDS} s"
+  echo "- Date (UTC): $(date -u +%Y-%m-%dT%H:%M:%SZ); run time ${SECONDS} s (bus health ${t_bus} s, place-cell memory ${t_explore} s, lab ${t_lab} s)"
   echo "- Bus: UDP multicast in a private network namespace (loopback only, ttl=0)"
-  echo "- Log: \`$LOG\` ($(stat -c %s "$LOG") bytes); replay it with \`./snapnav bus -- lcm-logplayer $LOG\`"
+  echo "- Deployment: \`config/deploy/demo.deploy\`, run by \`build/bin/launch\` (groups explore, lab); process logs in \`processes/\`"
+  if [ -f "$LOG" ]; then
+    if [ "$KEEP_LOG" = 1 ]; then
+      echo "- Log: \`$LOG\` ($(stat -c %s "$LOG") bytes); replay it with \`./snapnav bus -- lcm-logplayer $LOG\`"
+    else
+      echo "- Log: $(stat -c %s "$LOG") bytes, deleted after the report (--drop-log)"
+    fi
+  fi
   echo
   echo "## 1. Bus health"
   echo
-  echo "| step | result | details |"
-  echo "|---|---|---|"
-  echo "| live: publisher -> subscriber | $(verdict $live_rc) | $(sed 's/^bus-check verify: //' "$OUT/probes-live.txt") |"
-  echo "| replay: lcm-logplayer -> subscriber | $(verdict $replay_rc) | $(sed 's/^bus-check verify: //' "$OUT/probes-replay.txt") |"
+  if [ "$BUS_HEALTH" = 1 ]; then
+    echo "| step | result | details |"
+    echo "|---|---|---|"
+    echo "| live: publisher -> subscriber | $(verdict $live_rc) | $(sed 's/^bus-check verify: //' "$OUT/probes-live.txt") |"
+    echo "| replay: lcm-logplayer -> subscriber | $(verdict $replay_rc) | $(sed 's/^bus-check verify: //' "$OUT/probes-replay.txt") |"
+  else
+    echo "Skipped (--no-bus-health)."
+  fi
   echo
-  echo "## 2. Simulated lab: scene $SCENE, $DURATION s"
+  echo "## 2. Place-cell memory ($(verdict $explore_rc))"
   echo
-  grep -E "^sim: done" "$OUT/sim.log" | sed 's/^/    /'
+  [ -z "$EXPLORED" ] || printf 'Reused from `%s` (--explored).\n\n' "$EXPLORED"
+  grep -hE "^gridgen: scene|^placecells: explore, memory" "$EXPLORE_OUT/explore/gridgen.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
+  echo
+  echo "## 3. Simulated lab: scene $SCENE, $DURATION s ($(verdict $lab_rc))"
+  echo
+  grep -E "^sim: done" "$OUT/processes/sim.log" 2>/dev/null | sed 's/^/    /' || true
+  echo
+  echo "The launcher's final status:"
+  echo
+  sed -n '/^launch: final status/,$p' "$OUT/launch.log" | sed 's/^/    /'
+  echo
+  echo "What each process did (its own last lines):"
+  echo
+  for f in "$OUT"/processes/*.log; do
+    n=$(basename "$f" .log)
+    grep -E "^$n: (frames [0-9]|(surf|sift|vline), frames|localize, memory|scans [0-9]|mean update|published [0-9]|[0-9]+ drive|fixes accepted)" "$f" | sed 's/^/    /' || true
+  done
+  if [ -n "$FAULT" ]; then
+    echo
+    echo "## Fault: kill -9 $FAULT ${FAULT_AT} s into the run ($(echo "$fault_text" | head -1))"
+    echo
+    echo "$fault_text" | tail -n +2
+    grep -hE "^launch: $FAULT: (ended|restarted)" "$OUT/launch.log" | sed 's/^/    /' || true
+  fi
   echo
   sed -n '/^## Messages/,$p' "$OUT/report.md" | sed 's/^## /### /'
 } >"$OUT/demo-report.md"
-step "report: $OUT/demo-report.md"
-cat "$OUT/demo-report.md"
-[ "$live_rc" = 0 ] && [ "$replay_rc" = 0 ] && [ "$sim_rc" = 0 ] && [ "$report_rc" = 0 ]
+[ "$KEEP_LOG" = 1 ] || rm -f "$LOG"
+step "report: $OUT/demo-report.md ($(ls "$OUT"/*.png 2>/dev/null | wc -l) figures); run time ${SECONDS} s"
+sed -n '1,/^### Messages/p' "$OUT/demo-report.md" | head -n -1
+rc=0
+for r in $live_rc $replay_rc $explore_rc $lab_rc $report_rc $fault_rc; do [ "$r" = 0 ] || rc=1; done
+exit $rc

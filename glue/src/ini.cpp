@@ -1,5 +1,6 @@
 #include "snapnav/glue/ini.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <fstream>
@@ -44,6 +45,7 @@ IniFile IniFile::Parse(const std::string& text, const std::string& origin) {
       section = Trim(t.substr(1, t.size() - 2));
       if (section.empty()) throw ConfigError(where + ": empty section name");
       ini.sections_[section];
+      ini.section_lines_.emplace(section, lineno);
       continue;
     }
     const auto eq = t.find('=');
@@ -75,6 +77,35 @@ std::vector<std::string> IniFile::Sections() const {
   std::vector<std::string> out;
   for (const auto& [name, _] : sections_) out.push_back(name);
   return out;
+}
+
+std::vector<std::string> IniFile::SectionsInFileOrder() const {
+  std::vector<std::pair<int, std::string>> by_line;
+  for (const auto& [name, line] : section_lines_) by_line.emplace_back(line, name);
+  std::sort(by_line.begin(), by_line.end());
+  std::vector<std::string> out;
+  for (const auto& [_, name] : by_line) out.push_back(name);
+  return out;
+}
+
+int IniFile::SectionLine(const std::string& section) const {
+  const auto s = section_lines_.find(section);
+  return s == section_lines_.end() ? 0 : s->second;
+}
+
+std::vector<std::string> IniFile::Keys(const std::string& section) const {
+  std::vector<std::string> out;
+  if (const auto s = sections_.find(section); s != sections_.end()) {
+    for (const auto& [key, _] : s->second) out.push_back(key);
+  }
+  return out;
+}
+
+int IniFile::KeyLine(const std::string& section, const std::string& key) const {
+  const auto s = sections_.find(section);
+  if (s == sections_.end()) return 0;
+  const auto k = s->second.find(key);
+  return k == s->second.end() ? 0 : k->second.line;
 }
 
 const IniFile::Entry& IniFile::Find(const std::string& section, const std::string& key) const {

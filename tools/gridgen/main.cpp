@@ -89,14 +89,16 @@ int Main(int argc, char** argv) {
           log.Write(raw ? channels::kOmniFrame : channels::kPanorama, f);
           return file.filename().string();
         };
+        // The pose first: a process that looks up each frame's pose when the frame arrives
+        // (placecells --mode explore on file://grid.lcmlog) finds it.
+        log.Write(channels::kPoseGroundTruth,
+                  glue::ToPoseMsg(utime, "ground_truth", "map", pose, Eigen::Matrix3d::Zero()));
         std::string name;
         if (!no_raw) name = "images/" + emit(true);
         if (panorama) {
           const std::string pano = "panoramas/" + emit(false);
           if (name.empty()) name = pano;
         }
-        log.Write(channels::kPoseGroundTruth,
-                  glue::ToPoseMsg(utime, "ground_truth", "map", pose, Eigen::Matrix3d::Zero()));
         csv << name << "," << ix << "," << iy << "," << p.x() << "," << p.y() << "," << heading << "," << utime << "\n";
         if (++done % 20 == 0 || done == total) std::cerr << "gridgen: " << done << "/" << total << " positions\r" << std::flush;
       }

@@ -1,13 +1,17 @@
 // log-report: what a recorded run contains and how well each estimator did.
 // Reads an LCM log and writes into --out: report.md, summary.json,
 // trajectories.png (every pose channel against the ground truth, over the laser
-// map drawn from the ground-truth poses) and the first omni frame as PNG.
+// map drawn from the ground-truth poses, with the navigator's waypoints), the first omni
+// frame as PNG, and for the navigation stack's outputs (run_sections.hpp): the homing
+// vectors against the true direction home (--home), the place-cell matches, the navigator's
+// progress, and with --process-logs the delivery of every message (published / recorded).
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include <lcm/lcm-cpp.hpp>
@@ -24,6 +28,8 @@
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/omni_frame_t.hpp"
 #include "snapnav/pose_t.hpp"
+#include "process_logs.hpp"
+#include "run_sections.hpp"
 
 namespace {
 
@@ -46,12 +52,16 @@ struct Plot {
 
 int Main(int argc, char** argv) {
   std::string out_dir, truth_channel = channels::kPoseGroundTruth, scan_channel = channels::kLaserScan;
+  std::string home_text, process_logs_dir;
   glue::Flags flags("log-report LOG",
                     "Summarises an LCM log: messages per channel, and for every pose_t channel its trajectory\n"
                     "error (ATE) against the ground truth; writes report.md, summary.json and PNG plots.");
   flags.AddString("out", &out_dir, "output folder (default: beside the log)");
   flags.AddString("truth", &truth_channel, "ground-truth pose channel");
   flags.AddString("scan", &scan_channel, "laser channel for the map drawn from the ground truth");
+  flags.AddString("home", &home_text, "X,Y: the homing vectors' home in the map frame [m]; judged against the truth");
+  flags.AddString("process-logs", &process_logs_dir,
+                  "folder of the launcher's process logs (NAME.log): published counts against the recorded ones");
   flags.AllowPositional("LOG", "the LCM log");
   if (!flags.Parse(argc, argv)) return 0;
   if (flags.positional().size() != 1) throw glue::FlagError("expected one LOG (see --help)");
@@ -59,6 +69,29 @@ int Main(int argc, char** argv) {
   if (out_dir.empty()) out_dir = fs::path(log_path).parent_path().string();
   if (out_dir.empty()) out_dir = ".";
   fs::create_directories(out_dir);
+  std::optional<Eigen::Vector2d> home;
+  if (!home_text.empty()) {
+    const auto parts = glue::SplitList(home_text);
+    char* end1 = nullptr;
+    char* end2 = nullptr;
+    if (parts.size() != 2) throw glue::FlagError("--home expects X,Y, got '" + home_text + "'");
+    const double x = std::strtod(parts[0].c_str(), &end1), y = std::strtod(parts[1].c_str(), &end2);
+    if (parts[0].empty() || parts[1].empty() || *end1 || *end2) throw glue::FlagError("--home expects X,Y, got '" + home_text + "'");
+    home = Eigen::Vector2d(x, y);
+  }
+  std::vector<report::ProcessLog> process_logs;
+  if (!process_logs_dir.empty()) {
+    if (!fs::is_directory(process_logs_dir)) throw glue::FlagError("--process-logs: no folder '" + process_logs_dir + "'");
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(process_logs_dir)) {
+      if (e.path().extension() == ".log") files.push_back(e.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const auto& f : files) {
+      std::ifstream in(f);
+      process_logs.push_back(report::ParseProcessLog(f.stem().string(), in));
+    }
+  }
 
   lcm::LogFile log(log_path, "r");
   if (!log.good()) throw std::runtime_error("cannot open LCM log '" + log_path + "'");
@@ -67,6 +100,9 @@ int Main(int argc, char** argv) {
   std::map<std::string, std::vector<nav::StampedPose>> poses;  // by channel
   std::vector<laser_scan_t> scans;
   std::optional<omni_frame_t> first_frame;
+  std::map<std::string, std::vector<homing_vector_t>> homing;        // by channel
+  std::map<std::string, std::vector<place_cell_match_t>> matches;    // by channel
+  std::map<std::string, std::vector<navigator_status_t>> statuses;   // by channel
   int64_t good_offset = 0;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     good_offset = ftell(log.getFilePtr());
@@ -92,6 +128,24 @@ int Main(int argc, char** argv) {
       }
     } else if (*fp == static_cast<uint64_t>(omni_frame_t::getHash()) && !first_frame) {
       if (auto f = glue::Decode<omni_frame_t>(ev->data, ev->datalen, &error)) first_frame = std::move(*f);
+    } else if (*fp == static_cast<uint64_t>(homing_vector_t::getHash())) {
+      if (auto v = glue::Decode<homing_vector_t>(ev->data, ev->datalen, &error)) {
+        homing[ev->channel].push_back(std::move(*v));
+      } else {
+        ++ci.rejected;
+      }
+    } else if (*fp == static_cast<uint64_t>(place_cell_match_t::getHash())) {
+      if (auto m = glue::Decode<place_cell_match_t>(ev->data, ev->datalen, &error)) {
+        matches[ev->channel].push_back(std::move(*m));
+      } else {
+        ++ci.rejected;
+      }
+    } else if (*fp == static_cast<uint64_t>(navigator_status_t::getHash())) {
+      if (auto st = glue::Decode<navigator_status_t>(ev->data, ev->datalen, &error)) {
+        statuses[ev->channel].push_back(std::move(*st));
+      } else {
+        ++ci.rejected;
+      }
     }
   }
   const bool truncated = good_offset < file_size;
@@ -131,8 +185,40 @@ int Main(int argc, char** argv) {
            << "_aligned_ate_rmse_m\": " << aligned.rmse_m << ",\n  \"" << key << "_final_error_m\": " << raw.final_m;
     }
   }
+  // The navigation stack's outputs, judged against the ground truth; the delivery of every message.
+  const std::vector<nav::StampedPose> no_truth;
+  const auto& truth = truth_it != poses.end() ? truth_it->second : no_truth;
+  int64_t t0_us = truth.empty() ? INT64_MAX : truth.front().utime;
+  if (truth.empty()) {
+    for (const auto& [_, v] : homing) t0_us = std::min(t0_us, v.front().utime);
+    for (const auto& [_, m] : matches) t0_us = std::min(t0_us, m.front().utime);
+    for (const auto& [_, st] : statuses) t0_us = std::min(t0_us, st.front().utime);
+  }
+  std::vector<report::Section> sections;
+  for (const auto& [ch, v] : homing) sections.push_back(report::HomingSection(ch, v, truth, home, t0_us, out_dir));
+  for (const auto& [ch, m] : matches) sections.push_back(report::PlaceCellSection(ch, m, truth, t0_us, out_dir));
+  for (const auto& [ch, st] : statuses) sections.push_back(report::NavigatorSection(ch, st, truth, t0_us, out_dir));
+  if (!process_logs.empty()) {
+    std::map<std::string, int64_t> recorded;
+    for (const auto& [ch, ci] : info) recorded[ch] = ci.count;
+    sections.push_back(report::DeliverySection(process_logs, recorded));
+  }
+  for (const auto& section : sections) {
+    for (const auto& [k, v] : section.json) json << ",\n  \"" << k << "\": " << v;
+  }
   json << "\n}\n";
   std::ofstream(fs::path(out_dir) / "summary.json") << json.str();
+  // The navigator's waypoints, for the map.
+  std::vector<std::pair<int, Eigen::Vector2d>> waypoints;
+  for (const auto& [_, sts] : statuses) {
+    for (const auto& st : sts) {
+      if (st.waypoint_index < 0) continue;
+      const Eigen::Vector2d w(st.waypoint_x_m, st.waypoint_y_m);
+      bool known = false;
+      for (const auto& [i, p] : waypoints) known = known || (i == st.waypoint_index && (p - w).norm() < 1e-6);
+      if (!known) waypoints.emplace_back(st.waypoint_index, w);
+    }
+  }
 
   // The plot: laser map from the ground truth, then every trajectory.
   std::vector<Eigen::Vector2d> map_points;
@@ -162,6 +248,7 @@ int Main(int argc, char** argv) {
     for (const auto& [_, t] : poses)
       for (const auto& p : t) extend(p.pose.x_m, p.pose.y_m);
     for (const auto& p : map_points) extend(p.x(), p.y());
+    for (const auto& [_, w] : waypoints) extend(w.x(), w.y());
     const double span = std::max({plot.hi.x() - plot.lo.x(), plot.hi.y() - plot.lo.y(), 0.5});
     plot.scale = 820.0 / span;
     cv::Mat img(static_cast<int>((plot.hi.y() - plot.lo.y()) * plot.scale) + 2 * plot.margin + 40,
@@ -186,6 +273,12 @@ int Main(int argc, char** argv) {
       cv::putText(img, ch, {legend_x, legend_y}, cv::FONT_HERSHEY_SIMPLEX, 0.45, colour, 1, cv::LINE_AA);
       legend_x += 14 + 9 * static_cast<int>(ch.size());
     }
+    for (const auto& [i, w] : waypoints) {
+      const cv::Point c = plot.Px(w.x(), w.y());
+      cv::rectangle(img, c - cv::Point(4, 4), c + cv::Point(4, 4), cv::Scalar(120, 0, 120), 1, cv::LINE_AA);
+      cv::putText(img, std::to_string(i), c + cv::Point(6, -6), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(120, 0, 120), 1,
+                  cv::LINE_AA);
+    }
     // One-metre scale bar.
     cv::line(img, {10, 15}, {10 + static_cast<int>(plot.scale), 15}, cv::Scalar(0, 0, 0), 2);
     cv::putText(img, "1 m", {14 + static_cast<int>(plot.scale), 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
@@ -207,6 +300,7 @@ int Main(int argc, char** argv) {
   if (!ate_table.str().empty()) md << "\n## Trajectory error against " << truth_channel << "\n\n" << ate_table.str();
   if (have_plot) md << "\n![trajectories](trajectories.png)\n";
   if (first_frame) md << "\n![first omni frame](first_frame.png)\n";
+  for (const auto& section : sections) md << section.markdown;
   std::cout << "log-report: " << out_dir << "/report.md\n" << table.str() << ate_table.str();
   return truncated ? 1 : 0;
 }

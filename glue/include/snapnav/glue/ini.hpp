@@ -26,6 +26,12 @@ class IniFile {
   const std::string& origin() const { return origin_; }
   bool Has(const std::string& section, const std::string& key) const;
   std::vector<std::string> Sections() const;
+  // Sections in the order their headers first appear; the header's line (0: no such section).
+  std::vector<std::string> SectionsInFileOrder() const;
+  int SectionLine(const std::string& section) const;
+  // The keys of a section (sorted) and the line of a key (0: no such key); neither marks a key used.
+  std::vector<std::string> Keys(const std::string& section) const;
+  int KeyLine(const std::string& section, const std::string& key) const;
 
   // Getters mark the key as used; a missing key or a bad value throws ConfigError.
   std::string GetString(const std::string& section, const std::string& key) const;
@@ -49,6 +55,7 @@ class IniFile {
 
   std::string origin_;
   std::map<std::string, std::map<std::string, Entry>> sections_;
+  std::map<std::string, int> section_lines_;  // first header line of each section
   mutable std::set<std::pair<std::string, std::string>> used_;
 };
 

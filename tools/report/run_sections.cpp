@@ -1,0 +1,400 @@
+#include "run_sections.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "report_text.hpp"
+#include "snapnav/plot/plot.hpp"
+
+namespace snapnav::report {
+namespace {
+
+namespace fs = std::filesystem;
+using eval::Fixed;
+constexpr double kDeg = M_PI / 180;
+constexpr int64_t kTruthToleranceUs = 30000;  // sim: ground truth at 50 Hz, on the frames' steps
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+std::string Lower(std::string s) {
+  for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::string StateName(int8_t s) {
+  switch (s) {
+    case navigator_status_t::IDLE: return "idle";
+    case navigator_status_t::WAITING_FOR_POSE: return "waiting for a pose";
+    case navigator_status_t::TURNING: return "turning";
+    case navigator_status_t::DRIVING: return "driving";
+    case navigator_status_t::HOMING: return "homing";
+    case navigator_status_t::FINISHED: return "finished";
+  }
+  return "state " + std::to_string(s);
+}
+
+// World (x, y) -> pixel of a map covering lo..hi.
+struct MapFrame {
+  Eigen::Vector2d lo, hi;
+  double scale = 1;
+  int margin = 40;
+  cv::Point Px(double x, double y) const {
+    return {margin + static_cast<int>((x - lo.x()) * scale), margin + static_cast<int>((hi.y() - y) * scale)};
+  }
+  cv::Mat Blank() const {
+    return cv::Mat(static_cast<int>((hi.y() - lo.y()) * scale) + 2 * margin,
+                   static_cast<int>((hi.x() - lo.x()) * scale) + 2 * margin, CV_8UC3, cv::Scalar(255, 255, 255));
+  }
+};
+
+// The series with a gap (NaN) wherever the time jumps by more than max_dt_s (e.g. a process that
+// was down), so the chart does not bridge it.
+plot::Series WithGaps(const std::string& name, const std::vector<double>& t, const std::vector<double>& y, double max_dt_s) {
+  plot::Series s{name, {}, {}};
+  for (size_t i = 0; i < t.size(); ++i) {
+    if (i > 0 && t[i] - t[i - 1] > max_dt_s) {
+      s.x.push_back(0.5 * (t[i] + t[i - 1]));
+      s.y.push_back(NAN);
+    }
+    s.x.push_back(t[i]);
+    s.y.push_back(y[i]);
+  }
+  return s;
+}
+
+}  // namespace
+
+HomingErrors EvaluateHoming(const std::vector<homing_vector_t>& vectors, const std::vector<nav::StampedPose>& truth,
+                            const Eigen::Vector2d& home, int64_t t0_us, double min_distance_m) {
+  HomingErrors h;
+  double sum = 0;
+  int in45 = 0, in90 = 0;
+  for (const auto& v : vectors) {
+    ++h.vectors;
+    if (!v.valid || !std::isfinite(v.direction_rad)) continue;
+    ++h.valid;
+    const auto j = nav::NearestInTime(truth, v.utime, kTruthToleranceUs);
+    if (!j) continue;
+    const nav::Pose2& p = truth[*j].pose;
+    const Eigen::Vector2d to_home = home - Eigen::Vector2d(p.x_m, p.y_m);
+    if (to_home.norm() < min_distance_m) continue;
+    const double true_dir = std::atan2(to_home.y(), to_home.x()) - p.theta_rad;
+    const double err = std::abs(nav::WrapAngle(v.direction_rad - true_dir)) / kDeg;
+    ++h.evaluated;
+    sum += err;
+    h.max_deg = std::max(h.max_deg, err);
+    in45 += err <= 45;
+    in90 += err <= 90;
+    h.t_s.push_back((v.utime - t0_us) * 1e-6);
+    h.error_deg.push_back(err);
+  }
+  if (h.evaluated > 0) {
+    h.mean_deg = sum / h.evaluated;
+    h.median_deg = Median(h.error_deg);
+    h.within_45 = static_cast<double>(in45) / h.evaluated;
+    h.within_90 = static_cast<double>(in90) / h.evaluated;
+  }
+  return h;
+}
+
+PlaceCellErrors EvaluatePlaceCells(const std::vector<place_cell_match_t>& matches,
+                                   const std::vector<nav::StampedPose>& truth, int64_t t0_us) {
+  PlaceCellErrors e;
+  double sum = 0;
+  for (const auto& m : matches) {
+    ++e.matches;
+    if (m.cell_id < 0) {
+      ++e.unmatched;
+      continue;
+    }
+    const auto j = nav::NearestInTime(truth, m.utime, kTruthToleranceUs);
+    if (!j) continue;
+    const double err = std::hypot(m.x_m - truth[*j].pose.x_m, m.y_m - truth[*j].pose.y_m);
+    ++e.evaluated;
+    sum += err;
+    e.max_m = std::max(e.max_m, err);
+    e.t_s.push_back((m.utime - t0_us) * 1e-6);
+    e.error_m.push_back(err);
+  }
+  if (e.evaluated > 0) {
+    e.mean_m = sum / e.evaluated;
+    e.median_m = Median(e.error_m);
+  }
+  return e;
+}
+
+Section HomingSection(const std::string& channel, const std::vector<homing_vector_t>& vectors,
+                      const std::vector<nav::StampedPose>& truth, const std::optional<Eigen::Vector2d>& home,
+                      int64_t t0_us, const std::string& out_dir) {
+  Section s;
+  const std::string key = Lower(channel);
+  int valid = 0;
+  for (const auto& v : vectors) valid += v.valid;
+  std::ostringstream md;
+  md << "\n## Homing: " << channel << "\n\n" << vectors.size() << " vectors, " << valid << " valid";
+  s.json.emplace_back(key + "_vectors", std::to_string(vectors.size()));
+  s.json.emplace_back(key + "_valid", std::to_string(valid));
+  if (!home || truth.empty()) {
+    md << " (no " << (home ? "ground truth" : "home position (--home X,Y)") << ": directions not judged).\n";
+    s.markdown = md.str();
+    return s;
+  }
+  const HomingErrors h = EvaluateHoming(vectors, truth, *home, t0_us);
+  md << "; home (" << Fixed(home->x()) << ", " << Fixed(home->y()) << ") m. Against the true direction home ("
+     << h.evaluated << " vectors further than 0.1 m from home):\n\n"
+     << "| mean angular error (deg) | median (deg) | max (deg) | within 45 deg | within 90 deg |\n|---|---|---|---|---|\n| "
+     << Fixed(h.mean_deg, 1) << " | " << Fixed(h.median_deg, 1) << " | " << Fixed(h.max_deg, 1) << " | "
+     << Fixed(100 * h.within_45, 0) << " % | " << Fixed(100 * h.within_90, 0) << " % |\n";
+  s.json.emplace_back(key + "_evaluated", std::to_string(h.evaluated));
+  s.json.emplace_back(key + "_mean_error_deg", Fixed(h.mean_deg, 2));
+  s.json.emplace_back(key + "_median_error_deg", Fixed(h.median_deg, 2));
+  s.json.emplace_back(key + "_within_90_fraction", Fixed(h.within_90, 3));
+  if (h.evaluated == 0) {
+    s.markdown = md.str();
+    return s;
+  }
+  const std::string chart = key + "_error.png";
+  plot::Axes axes;
+  axes.title = "Homing error against the true direction home (" + channel + ")";
+  axes.x_label = "time (s)";
+  axes.y_label = "angular error (deg)";
+  axes.y_min = 0;
+  axes.y_max = 180;
+  plot::SavePng(plot::LineChart(axes, {WithGaps("|direction - true direction|", h.t_s, h.error_deg, 1.0)}),
+                (fs::path(out_dir) / chart).string());
+
+  // The map: the true path, the home, and every n-th vector drawn at the true pose.
+  MapFrame f;
+  f.lo = *home;
+  f.hi = *home;
+  for (const auto& p : truth) {
+    f.lo = f.lo.cwiseMin(Eigen::Vector2d(p.pose.x_m, p.pose.y_m));
+    f.hi = f.hi.cwiseMax(Eigen::Vector2d(p.pose.x_m, p.pose.y_m));
+  }
+  f.lo -= Eigen::Vector2d::Constant(0.4);
+  f.hi += Eigen::Vector2d::Constant(0.4);
+  f.scale = 700.0 / std::max(f.hi.x() - f.lo.x(), f.hi.y() - f.lo.y());
+  cv::Mat img = f.Blank();
+  std::vector<cv::Point> path;
+  for (const auto& p : truth) path.push_back(f.Px(p.pose.x_m, p.pose.y_m));
+  cv::polylines(img, path, false, cv::Scalar(160, 160, 160), 1, cv::LINE_AA);
+  const size_t step = std::max<size_t>(1, vectors.size() / 80);
+  for (size_t i = 0; i < vectors.size(); i += step) {
+    const auto& v = vectors[i];
+    if (!v.valid) continue;
+    const auto j = nav::NearestInTime(truth, v.utime, kTruthToleranceUs);
+    if (!j) continue;
+    const nav::Pose2& p = truth[*j].pose;
+    const Eigen::Vector2d to_home = *home - Eigen::Vector2d(p.x_m, p.y_m);
+    if (to_home.norm() < 0.1) continue;
+    const double err =
+        std::abs(nav::WrapAngle(v.direction_rad - (std::atan2(to_home.y(), to_home.x()) - p.theta_rad))) / kDeg;
+    const double a = p.theta_rad + v.direction_rad;
+    const cv::Scalar colour = err <= 45 ? cv::Scalar(0, 150, 0) : err <= 90 ? cv::Scalar(0, 140, 255) : cv::Scalar(0, 0, 220);
+    cv::arrowedLine(img, f.Px(p.x_m, p.y_m), f.Px(p.x_m + 0.25 * std::cos(a), p.y_m + 0.25 * std::sin(a)), colour, 2,
+                    cv::LINE_AA, 0, 0.3);
+  }
+  cv::drawMarker(img, f.Px(home->x(), home->y()), cv::Scalar(0, 0, 0), cv::MARKER_STAR, 18, 2);
+  cv::putText(img, "home", f.Px(home->x(), home->y()) + cv::Point(10, -8), cv::FONT_HERSHEY_SIMPLEX, 0.5, {0, 0, 0}, 1,
+              cv::LINE_AA);
+  cv::putText(img, "homing vectors at the true pose: green <= 45 deg, orange <= 90 deg, red > 90 deg error",
+              {10, img.rows - 12}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {0, 0, 0}, 1, cv::LINE_AA);
+  cv::line(img, {10, 15}, {10 + static_cast<int>(f.scale), 15}, cv::Scalar(0, 0, 0), 2);
+  cv::putText(img, "1 m", {14 + static_cast<int>(f.scale), 20}, cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0));
+  const std::string map = key + "_map.png";
+  plot::SavePng(img, (fs::path(out_dir) / map).string());
+  md << "\n![homing error](" << chart << ")\n\n![homing vectors](" << map << ")\n";
+  s.markdown = md.str();
+  return s;
+}
+
+Section PlaceCellSection(const std::string& channel, const std::vector<place_cell_match_t>& matches,
+                         const std::vector<nav::StampedPose>& truth, int64_t t0_us, const std::string& out_dir) {
+  Section s;
+  const std::string key = Lower(channel);
+  const PlaceCellErrors e = EvaluatePlaceCells(matches, truth, t0_us);
+  std::ostringstream md;
+  md << "\n## Place cells: " << channel << "\n\n"
+     << e.matches << " matches, " << e.unmatched << " views matched no cell";
+  s.json.emplace_back(key + "_matches", std::to_string(e.matches));
+  s.json.emplace_back(key + "_unmatched", std::to_string(e.unmatched));
+  if (e.evaluated == 0) {
+    md << (truth.empty() ? " (no ground truth)" : "") << ".\n";
+    s.markdown = md.str();
+    return s;
+  }
+  md << ". Distance from the matched cell to the true position (" << e.evaluated << " views):\n\n"
+     << "| mean (m) | median (m) | max (m) |\n|---|---|---|\n| " << Fixed(e.mean_m, 3) << " | " << Fixed(e.median_m, 3)
+     << " | " << Fixed(e.max_m, 3) << " |\n";
+  s.json.emplace_back(key + "_mean_cell_error_m", Fixed(e.mean_m, 4));
+  s.json.emplace_back(key + "_median_cell_error_m", Fixed(e.median_m, 4));
+  s.json.emplace_back(key + "_max_cell_error_m", Fixed(e.max_m, 4));
+  const std::string chart = key + "_error.png";
+  plot::Axes axes;
+  axes.title = "Matched place cell against the true position (" + channel + ")";
+  axes.x_label = "time (s)";
+  axes.y_label = "distance (m)";
+  axes.y_from_zero = true;
+  plot::SavePng(plot::LineChart(axes, {WithGaps("matched cell - true position", e.t_s, e.error_m, 2.0)}),
+                (fs::path(out_dir) / chart).string());
+  md << "\n![place-cell error](" << chart << ")\n";
+  s.markdown = md.str();
+  return s;
+}
+
+Section NavigatorSection(const std::string& channel, const std::vector<navigator_status_t>& statuses,
+                         const std::vector<nav::StampedPose>& truth, int64_t t0_us, const std::string& out_dir) {
+  Section s;
+  const std::string key = Lower(channel);
+  std::ostringstream md;
+  md << "\n## Navigator: " << channel << "\n\n";
+  if (statuses.empty()) {
+    md << "No status.\n";
+    s.markdown = md.str();
+    return s;
+  }
+  const navigator_status_t& last = statuses.back();
+  md << "Route '" << last.route_name << "' (" << last.nwaypoints << " waypoints): " << last.arrivals
+     << " waypoints reached, " << last.laps << " laps completed, final state " << StateName(last.state) << "; place-cell fixes "
+     << last.fixes_accepted << " accepted, " << last.fixes_rejected << " rejected, " << last.tracker_resets
+     << " tracker resets.\n";
+  s.json.emplace_back(key + "_arrivals", std::to_string(last.arrivals));
+  s.json.emplace_back(key + "_laps", std::to_string(last.laps));
+  s.json.emplace_back(key + "_fixes_accepted", std::to_string(last.fixes_accepted));
+  s.json.emplace_back(key + "_fixes_rejected", std::to_string(last.fixes_rejected));
+  // Arrivals (the count going up) and the tracked position against the truth.
+  std::vector<double> t, dist, err;
+  double err_sum = 0, err_max = 0;
+  int err_n = 0, prev_arrivals = 0, prev_waypoint = -1;
+  std::ostringstream arrivals;
+  for (const auto& st : statuses) {
+    const double ts = (st.utime - t0_us) * 1e-6;
+    if (st.arrivals > prev_arrivals) {  // the waypoint it headed for before this status
+      arrivals << (arrivals.tellp() > 0 ? ", " : "") << prev_waypoint << " at " << Fixed(ts, 1) << " s";
+      prev_arrivals = st.arrivals;
+    }
+    prev_waypoint = st.waypoint_index;
+    if (st.state == navigator_status_t::IDLE || st.state == navigator_status_t::WAITING_FOR_POSE) continue;
+    t.push_back(ts);
+    dist.push_back(st.distance_to_waypoint_m);
+    double e = NAN;
+    if (const auto j = nav::NearestInTime(truth, st.utime, kTruthToleranceUs)) {
+      e = std::hypot(st.x_m - truth[*j].pose.x_m, st.y_m - truth[*j].pose.y_m);
+      err_sum += e;
+      err_max = std::max(err_max, e);
+      ++err_n;
+    }
+    err.push_back(e);
+  }
+  if (arrivals.tellp() > 0) md << "\nWaypoints reached (index, time since the start of the log): " << arrivals.str() << ".\n";
+  if (err_n > 0) {
+    md << "\nTracked position against the true position: mean " << Fixed(err_sum / err_n, 3) << " m, max "
+       << Fixed(err_max, 3) << " m (" << err_n << " statuses).\n";
+    s.json.emplace_back(key + "_mean_tracking_error_m", Fixed(err_sum / err_n, 4));
+    s.json.emplace_back(key + "_max_tracking_error_m", Fixed(err_max, 4));
+  }
+  if (!t.empty()) {
+    const std::string chart = key + ".png";
+    plot::Axes axes;
+    axes.title = "Navigator progress (" + channel + ")";
+    axes.x_label = "time (s)";
+    axes.y_label = "m";
+    axes.y_from_zero = true;
+    std::vector<plot::Series> series{{"distance to the waypoint (tracked)", t, dist}};
+    if (err_n > 0) series.push_back({"tracked position - true position", t, err});
+    plot::SavePng(plot::LineChart(axes, series), (fs::path(out_dir) / chart).string());
+    md << "\n![navigator](" << chart << ")\n";
+  }
+  s.markdown = md.str();
+  return s;
+}
+
+std::vector<Delivery> CompareDelivery(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded) {
+  std::map<std::string, Delivery> by_channel;
+  for (const auto& log : logs) {
+    const auto totals = log.Totals();
+    for (const auto& [ch, c] : totals) {
+      Delivery& d = by_channel[ch];
+      d.channel = ch;
+      if (c.published > 0) {  // a run that reported published on it; a run that did not may have too
+        d.publishers.push_back(log.name);
+        d.published += c.published;
+        d.exact = d.exact && log.complete();
+      }
+      if (c.received > 0) d.received.emplace_back(log.name, c.received);
+    }
+  }
+  std::vector<Delivery> out;
+  for (auto& [ch, d] : by_channel) {
+    if (d.publishers.empty()) continue;
+    const auto it = recorded.find(ch);
+    d.recorded = it == recorded.end() ? 0 : static_cast<uint64_t>(it->second);
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded) {
+  Section s;
+  std::ostringstream md;
+  md << "\n## Delivery: published by the processes, recorded by lcm-logger\n\n"
+     << "Counts each process printed at its end (its bus statistics, in the launcher's process logs) against the "
+        "messages in the log. A run killed by a signal prints no counts: its channels' published counts are lower "
+        "bounds (marked >=).\n\n"
+     << "| channel | publisher | published | recorded | lost | received by |\n|---|---|---|---|---|---|\n";
+  uint64_t lost_total = 0;
+  int exact_channels = 0;
+  for (const auto& d : CompareDelivery(logs, recorded)) {
+    std::string pubs, recv;
+    for (const auto& p : d.publishers) pubs += (pubs.empty() ? "" : ", ") + p;
+    for (const auto& [name, n] : d.received) recv += (recv.empty() ? "" : ", ") + name + " " + std::to_string(n);
+    std::string lost;
+    if (d.exact) {
+      ++exact_channels;
+      const uint64_t l = d.published > d.recorded ? d.published - d.recorded : 0;
+      lost_total += l;
+      lost = std::to_string(l);
+      if (d.recorded > d.published) lost += " (" + std::to_string(d.recorded - d.published) + " more recorded)";
+      s.json.emplace_back("delivery_" + Lower(d.channel) + "_published", std::to_string(d.published));
+      s.json.emplace_back("delivery_" + Lower(d.channel) + "_recorded", std::to_string(d.recorded));
+    } else {
+      lost = "unknown";
+    }
+    md << "| " << d.channel << " | " << pubs << " | " << (d.exact ? "" : ">= ") << d.published << " | " << d.recorded
+       << " | " << lost << " | " << (recv.empty() ? "-" : recv) << " |\n";
+  }
+  s.json.emplace_back("delivery_exact_channels", std::to_string(exact_channels));
+  s.json.emplace_back("delivery_lost_total", std::to_string(lost_total));
+  // The runs of each process and the launcher's words about them.
+  md << "\n| process | runs | runs that reported counts | launcher |\n|---|---|---|---|\n";
+  int restarts = 0;
+  for (const auto& log : logs) {
+    int reported = 0;
+    for (const auto& r : log.runs) reported += r.reported;
+    restarts += std::max<int>(0, static_cast<int>(log.runs.size()) - 1);
+    std::string notes;
+    for (const auto& l : log.launcher_lines) {
+      if (l.find("ended (") != std::string::npos || l.find("FAILED") != std::string::npos ||
+          l.find("restarted") != std::string::npos || l.find("not a clean stop") != std::string::npos) {
+        notes += (notes.empty() ? "" : "; ") + l;
+      }
+    }
+    md << "| " << log.name << " | " << log.runs.size() << " | " << reported << " | " << (notes.empty() ? "-" : notes)
+       << " |\n";
+    s.json.emplace_back("process_" + Lower(log.name) + "_runs", std::to_string(log.runs.size()));
+  }
+  s.json.emplace_back("process_restarts_total", std::to_string(restarts));
+  s.markdown = md.str();
+  return s;
+}
+
+}  // namespace snapnav::report

@@ -1,0 +1,74 @@
+#pragma once
+// Sections of log-report about a recorded run of the navigation stack, each judged against the
+// ground truth: the homing vectors (angular error against the true direction home), the
+// place-cell matches (position error of the matched cell), the navigator's progress, and the
+// delivery of every message (counts each process published, from the launcher's process logs,
+// against what lcm-logger recorded).
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "process_logs.hpp"
+#include "snapnav/homing_vector_t.hpp"
+#include "snapnav/navigator_status_t.hpp"
+#include "snapnav/nav/trajectory.hpp"
+#include "snapnav/place_cell_match_t.hpp"
+
+namespace snapnav::report {
+
+// Markdown, flat summary.json entries ("key": value, value already formatted) and PNG files
+// written into the output folder.
+struct Section {
+  std::string markdown;
+  std::vector<std::pair<std::string, std::string>> json;
+};
+
+struct HomingErrors {
+  int vectors = 0, valid = 0, evaluated = 0;  // evaluated: valid, ground truth found, not at home
+  double mean_deg = 0, median_deg = 0, max_deg = 0;
+  double within_45 = 0, within_90 = 0;  // fraction of the evaluated vectors
+  std::vector<double> t_s, error_deg;   // per evaluated vector (time since t0)
+};
+// Angular error of each valid vector: direction_rad (robot frame) against the direction from the
+// true pose to `home`; vectors closer than min_distance_m to home are left out.
+HomingErrors EvaluateHoming(const std::vector<homing_vector_t>& vectors, const std::vector<nav::StampedPose>& truth,
+                            const Eigen::Vector2d& home, int64_t t0_us, double min_distance_m = 0.1);
+
+struct PlaceCellErrors {
+  int matches = 0, unmatched = 0, evaluated = 0;
+  double mean_m = 0, median_m = 0, max_m = 0;
+  std::vector<double> t_s, error_m;
+};
+// Distance from the matched cell's position to the true position at the view's time.
+PlaceCellErrors EvaluatePlaceCells(const std::vector<place_cell_match_t>& matches,
+                                   const std::vector<nav::StampedPose>& truth, int64_t t0_us);
+
+// Sections; figures are written into out_dir. `truth` may be empty (nothing to judge against).
+Section HomingSection(const std::string& channel, const std::vector<homing_vector_t>& vectors,
+                      const std::vector<nav::StampedPose>& truth, const std::optional<Eigen::Vector2d>& home,
+                      int64_t t0_us, const std::string& out_dir);
+Section PlaceCellSection(const std::string& channel, const std::vector<place_cell_match_t>& matches,
+                         const std::vector<nav::StampedPose>& truth, int64_t t0_us, const std::string& out_dir);
+Section NavigatorSection(const std::string& channel, const std::vector<navigator_status_t>& statuses,
+                         const std::vector<nav::StampedPose>& truth, int64_t t0_us, const std::string& out_dir);
+
+// Per channel: what the processes published (sum over the runs that reported it; a run killed
+// by a signal reports nothing, so its channel's count is a lower bound) against what the log
+// holds, and what each subscriber received. `recorded`: messages per channel in the log.
+struct Delivery {
+  std::string channel;
+  std::vector<std::string> publishers;
+  uint64_t published = 0;
+  bool exact = true;  // every run of every publisher reported its counts
+  uint64_t recorded = 0;
+  std::vector<std::pair<std::string, uint64_t>> received;  // subscriber, received
+};
+std::vector<Delivery> CompareDelivery(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded);
+Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded);
+
+}  // namespace snapnav::report
