@@ -125,6 +125,38 @@ bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) 
   return true;
 }
 
+uint32_t PointGridMap::TileTable::Find(uint64_t key) const {
+  if (count == 0) return kNone;
+  const size_t mask = values.size() - 1;
+  for (size_t i = Slot(key);; i = (i + 1) & mask) {
+    if (values[i] == kNone) return kNone;
+    if (keys[i] == key) return values[i];
+  }
+}
+
+uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
+  if (2 * (count + 1) > values.size()) {  // keep it at most half full
+    std::vector<uint64_t> old_keys = std::move(keys);
+    std::vector<uint32_t> old_values = std::move(values);
+    bits = std::max(6, bits + 1);
+    keys.assign(size_t{1} << bits, 0);
+    values.assign(size_t{1} << bits, kNone);
+    count = 0;
+    for (size_t i = 0; i < old_values.size(); ++i) {
+      if (old_values[i] != kNone) FindOrAdd(old_keys[i], old_values[i]);
+    }
+  }
+  const size_t mask = values.size() - 1;
+  size_t i = Slot(key);
+  for (; values[i] != kNone; i = (i + 1) & mask) {
+    if (keys[i] == key) return values[i];
+  }
+  keys[i] = key;
+  values[i] = value;
+  ++count;
+  return value;
+}
+
 void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   // Every cell whose centre lies within the radius (plus half a cell diagonal, so that a query
   // anywhere in the cell within the radius of p finds a point) may now have p as its nearest.
@@ -136,8 +168,8 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   const int64_t y1 = static_cast<int64_t>(std::floor((p.y() + reach) / lookup_cell_));
   for (int64_t tx = x0 >> kTileBits; tx <= x1 >> kTileBits; ++tx) {
     for (int64_t ty = y0 >> kTileBits; ty <= y1 >> kTileBits; ++ty) {
-      const auto [slot, added] = tile_index_.emplace(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
-      if (added) {
+      const uint32_t tile_slot = tile_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
+      if (tile_slot == tiles_.size()) {
         tiles_.emplace_back();
         Tile& t = tiles_.back();
         for (int c = 0; c < kTile * kTile; ++c) {
@@ -145,7 +177,7 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
           std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
         }
       }
-      Tile* tile = &tiles_[slot->second];
+      Tile* tile = &tiles_[tile_slot];
       const int64_t cx0 = std::max(x0, tx << kTileBits), cx1 = std::min(x1, ((tx + 1) << kTileBits) - 1);
       const int64_t cy0 = std::max(y0, ty << kTileBits), cy1 = std::min(y1, ((ty + 1) << kTileBits) - 1);
       for (int64_t cy = cy0; cy <= cy1; ++cy) {
@@ -174,13 +206,23 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   }
 }
 
+namespace {
+
+// floor(v) as an integer, without the library call (the lookup's hot path).
+int64_t FloorToInt(double v) {
+  const auto i = static_cast<int64_t>(v);
+  return i - (static_cast<double>(i) > v);
+}
+
+}  // namespace
+
 int PointGridMap::LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const {
   if (!(max_distance_m <= lookup_radius_)) return NearestIndex(p, max_distance_m);
-  const int64_t cx = static_cast<int64_t>(std::floor(p.x() / lookup_cell_));
-  const int64_t cy = static_cast<int64_t>(std::floor(p.y() / lookup_cell_));
-  const auto it = tile_index_.find(Key(cx >> kTileBits, cy >> kTileBits));
-  if (it == tile_index_.end()) return -1;
-  const uint32_t* candidates = tiles_[it->second].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
+  const int64_t cx = FloorToInt(p.x() / lookup_cell_);
+  const int64_t cy = FloorToInt(p.y() / lookup_cell_);
+  const uint32_t tile = tile_index_.Find(Key(cx >> kTileBits, cy >> kTileBits));
+  if (tile == kNone) return -1;
+  const uint32_t* candidates = tiles_[tile].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
   double best = max_distance_m * max_distance_m;
   int found = -1;
   for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {

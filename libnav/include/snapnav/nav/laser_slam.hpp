@@ -99,11 +99,22 @@ class PointGridMap {
   static uint64_t Key(int64_t ix, int64_t iy) {
     return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
   }
+  // Tile key -> index in tiles_: open addressing with linear probing in a power-of-two table
+  // (the lookup's hot path: a multiply and, mostly, one probe).
+  struct TileTable {
+    std::vector<uint64_t> keys;
+    std::vector<uint32_t> values;  // kNone: empty slot
+    size_t count = 0;
+    int bits = 0;
+    size_t Slot(uint64_t key) const { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ULL) >> (64 - bits)); }
+    uint32_t Find(uint64_t key) const;                 // kNone if absent
+    uint32_t FindOrAdd(uint64_t key, uint32_t value);  // the stored value (`value` if it was absent)
+  };
   void AddToLookup(const Eigen::Vector2d& p, uint32_t index);
   double resolution_, bucket_, lookup_radius_, lookup_cell_;
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
-  std::unordered_map<uint64_t, uint32_t> tile_index_;            // lookup tile -> index in tiles_
+  TileTable tile_index_;                                         // lookup tile -> index in tiles_
   std::vector<Tile> tiles_;
   std::vector<Eigen::Vector2d> points_, normals_;
 };
