@@ -45,6 +45,7 @@ const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translatio
                                                                     {"recovery_fit", "0.6"},
                                                                     {"turn_noise_rad_per_rad", "1"},
                                                                     {"stale_odometry", "true"},
+                                                                    {"update_score_margin", "0.05"},
                                                                     {"icp_iterations", "15"},
                                                                     {"icp_convergence_m", "0.0001"},
                                                                     {"point_sigma_m", "0.03"},

@@ -281,6 +281,9 @@ void LaserSlamOptions::Validate() const {
   if (min_matches < 3) throw std::invalid_argument("laser slam: min_matches must be >= 3");
   if (!(map_resolution_m > 0) || !(add_distance_m > 0)) throw std::invalid_argument("laser slam: map sizes must be > 0");
   if (scan_step < 1) throw std::invalid_argument("laser slam: scan_step must be >= 1");
+  if (!(update_score_margin >= 0 && update_score_margin < 1)) {
+    throw std::invalid_argument("laser slam: update_score_margin must be in [0, 1)");
+  }
   if (!(turn_noise_rad_per_rad >= 0)) throw std::invalid_argument("laser slam: turn_noise_rad_per_rad must be >= 0");
   if (!(lookup_cell_m >= 0)) throw std::invalid_argument("laser slam: lookup_cell_m must be >= 0 (0: exact search)");
 }
@@ -531,7 +534,23 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
       u.measured = true;
       u.measurement = icp.estimate;
       u.measurement_covariance = info.inverse();
+      const Pose2 predicted = pose_;
+      const Eigen::Matrix3d predicted_covariance = covariance_;
       pose_ = EkfPoseUpdate(pose_, &covariance_, icp.estimate, u.measurement_covariance);
+      if (options_.update_score_margin > 0) {
+        // The update should sit where the scan fits: if it scores clearly below the ICP pose
+        // against the map, the prediction was off by more than its covariance allowed (odometry
+        // jitter along a corridor, a late turn); widen it by the innovation and update again.
+        const double at_icp = Score(icp.estimate, points, 1), at_update = Score(pose_, points, 1);
+        if (at_update < (1 - options_.update_score_margin) * at_icp) {
+          const Eigen::Vector3d off(icp.estimate.x_m - predicted.x_m, icp.estimate.y_m - predicted.y_m,
+                                    WrapAngle(icp.estimate.theta_rad - predicted.theta_rad));
+          covariance_ = predicted_covariance;
+          covariance_ += off.cwiseProduct(off).asDiagonal();
+          pose_ = EkfPoseUpdate(predicted, &covariance_, icp.estimate, u.measurement_covariance);
+          u.widened = true;
+        }
+      }
     }
   }
   previous_odometry_turn_rad_ = odometry_since_scan_.theta_rad;

@@ -50,6 +50,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.recovery_fit = ini.GetDouble(s, "recovery_fit");
   o.turn_noise_rad_per_rad = ini.GetDouble(s, "turn_noise_rad_per_rad");
   o.stale_odometry = ini.GetBool(s, "stale_odometry");
+  o.update_score_margin = ini.GetDouble(s, "update_score_margin");
   o.icp_iterations = ini.GetInt(s, "icp_iterations");
   o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
   o.point_sigma_m = ini.GetDouble(s, "point_sigma_m");
@@ -87,6 +88,7 @@ void LaserSlamConfig::Print(std::ostream& out) const {
       << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nrecovery_fit = " << o.recovery_fit
       << "\nturn_noise_rad_per_rad = " << o.turn_noise_rad_per_rad
       << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false")
+      << "\nupdate_score_margin = " << o.update_score_margin
       << "\nicp_iterations = " << o.icp_iterations
       << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
       << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m

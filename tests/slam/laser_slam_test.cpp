@@ -189,6 +189,7 @@ TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
   for (const bool stale : {true, false}) {
     LaserSlamOptions options;
     options.stale_odometry = stale;
+    options.update_score_margin = 0;  // the model alone (the score check would catch the catch-up, too)
     LaserSlam slam(options, start);
     slam.Update(scan_at(truth[0]));
     int stale_scans = 0;
@@ -210,6 +211,42 @@ TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
     } else {
       EXPECT_EQ(stale_scans, 0);
       EXPECT_GT(heading_error, 5.0) << "the catch-up should fail without the model; the test would prove nothing";
+    }
+  }
+}
+
+// Odometry misses a 0.3 m step and the prediction is confident (a small covariance): the EKF
+// update alone stays near the prediction, although the scan fits only 0.3 m on; the score check
+// widens the prediction and the update follows the scan.
+TEST(LaserSlam, UpdateThatScoresBelowTheScanIsRedone) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const auto scan_at = [&](const Pose2& p) {
+    world.SetTruePose(p);
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m,
+                        laser.range_max_m, {laser.mount_x_m, 0, 0});
+  };
+  const Pose2 start{2.0, 3.5, 0.3}, moved = start.Compose({0.3, 0, 0});
+  for (const double margin : {0.05, 0.0}) {
+    LaserSlamOptions options;
+    options.update_score_margin = margin;
+    options.initial_sigma_xy_m = 0.001;
+    options.initial_sigma_theta_rad = 0.0001;
+    LaserSlam slam(options, start);
+    slam.Update(scan_at(start));
+    slam.Predict({0.002, 0, 0});  // odometry saw almost nothing
+    const LaserSlamUpdate u = slam.Update(scan_at(moved));
+    const double error = std::hypot(slam.pose().x_m - moved.x_m, slam.pose().y_m - moved.y_m);
+    std::cout << "score margin " << margin << ": position error " << error << " m, ICP error "
+              << std::hypot(u.measurement.x_m - moved.x_m, u.measurement.y_m - moved.y_m) << " m\n";
+    ASSERT_TRUE(u.measured);
+    if (margin > 0) {
+      EXPECT_TRUE(u.widened);
+      EXPECT_LT(error, 0.02);
+    } else {
+      EXPECT_FALSE(u.widened);
+      EXPECT_GT(error, 0.1) << "the update alone should stay near the prediction; the test would prove nothing";
     }
   }
 }

@@ -64,7 +64,7 @@ int Main(int argc, char** argv) {
   flags.AddInt("scan-step", &options.scan_step, "laser slam: use every n-th beam");
   bool sweep = false;
   flags.AddBool("sweep", &sweep,
-                "with --reference: also run the laser slam at neighbouring settings (each of six options one step\n"
+                "with --reference: also run the laser slam at neighbouring settings (each of seven options one step\n"
                 "down and up) and write the ATE of each and its min / median / max to sweep.md and sweep.csv");
   flags.AddString("out", &out_dir, "output folder (required)");
   if (!flags.Parse(argc, argv)) return 0;
@@ -89,6 +89,7 @@ int Main(int argc, char** argv) {
   thesis.motion = nav::DeadReckoningOptions{};
   thesis.turn_noise_rad_per_rad = 0;
   thesis.stale_odometry = false;
+  thesis.update_score_margin = 0;
   thesis.lookup_cell_m = 0;  // the exact nearest map point
   const eval::SlamRun thesis_run = eval::RunSlam(log, thesis);
   std::cerr << "eval-slam: thesis configuration " << thesis_run.ms_per_scan() << " ms/scan\n";
@@ -200,6 +201,8 @@ int Main(int argc, char** argv) {
             [f](auto& o) { o.search_sigmas += f < 1 ? -0.5 : 0.5; });
         add("turn_noise_rad_per_rad x" + Fixed(f < 1 ? 0.8 : 1.2, 1),
             [f](auto& o) { o.turn_noise_rad_per_rad *= f < 1 ? 0.8 : 1.2; });
+        add("update_score_margin x" + Fixed(f < 1 ? 0.6 : 1.4, 1),
+            [f](auto& o) { o.update_score_margin *= f < 1 ? 0.6 : 1.4; });
       }
       std::vector<double> ates;
       std::ofstream csv(out / "sweep.csv");

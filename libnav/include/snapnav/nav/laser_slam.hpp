@@ -157,6 +157,12 @@ struct LaserSlamOptions {
   // of its increment. (A robot that really stopped: the last motion is small, the scan corrects it.)
   bool stale_odometry = true;
   double recovery_fit = 0.6;
+  // The update should sit where the scan fits: when the updated pose scores (against the map,
+  // every point) more than this fraction below the ICP pose, the prediction was off by more than
+  // its covariance allowed (odometry jitter along a corridor, where the measurement covariance
+  // leaves the axis to the prediction; a late turn): its covariance is widened by the innovation
+  // and the update redone. 0: off.
+  double update_score_margin = 0.05;
   int icp_iterations = 15;
   double icp_convergence_m = 1e-4;          // stop when an iteration moves less than this
   double point_sigma_m = 0.03;              // noise of one matched point, floor of the residual estimate
@@ -178,6 +184,7 @@ struct LaserSlamUpdate {
   int searches = 0;            // 1 if the heading was searched before ICP
   int recoveries = 0;          // 1 if a poor fit started a wider search
   bool stale_odometry = false; // odometry had not moved since the last scan: predicted from the last motion
+  bool widened = false;        // the update scored below the ICP pose: the prediction was widened
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
 };
