@@ -22,7 +22,9 @@
 #include "importers.hpp"
 #include "report_text.hpp"
 #include "slam_log.hpp"
+#include "slam_plot.hpp"
 #include "slam_sim.hpp"
+#include "snapnav/plot/plot.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -148,6 +150,37 @@ int Main(int argc, char** argv) {
   std::vector<std::optional<nav::Pose2>> ours_at_scans(run.slam.begin(), run.slam.end());
   const eval::MapConsistency ours_consistency = eval::ComputeMapConsistency(log, ours_at_scans);
   const eval::MapConsistency icp_consistency = eval::ComputeMapConsistency(log, cmp.icp_at_scans);
+  {
+    // Both trajectories over each one's map (every scan placed at that trajectory's poses, one
+    // point per 5 cm cell): where they differ, the crisper map is the right one.
+    const nav::Pose2 to_slam = cmp.slam_to_icp.Inverse();
+    std::vector<nav::Pose2> icp_track;
+    std::vector<std::optional<nav::Pose2>> icp_in_our_frame;
+    for (const auto& p : cmp.icp_at_scans) {
+      icp_in_our_frame.push_back(p ? std::optional<nav::Pose2>(to_slam.Compose(*p)) : std::nullopt);
+      if (p) icp_track.push_back(*icp_in_our_frame.back());
+    }
+    const auto scans_map = [&](const std::vector<std::optional<nav::Pose2>>& poses) {
+      nav::PointGridMap grid(0.05, 0.25);
+      size_t k = 0;
+      for (const eval::SlamStep& step : log.steps) {
+        if (!step.is_scan) continue;
+        if (k < poses.size() && poses[k]) {
+          for (const Eigen::Vector2d& q : step.points) grid.Add(poses[k]->Transform(q));
+        }
+        ++k;
+      }
+      return grid.points();
+    };
+    const std::vector<std::vector<nav::Pose2>> tracks = {run.slam, icp_track};
+    const std::vector<std::string> names = {"laser slam (ours)", "icp-slam (MRPT)"};
+    plot::SavePng(eval::DrawRun(tracks, names, scans_map(ours_at_scans),
+                                "scans at our poses; consistency " + Fixed(ours_consistency.median_m, 4) + " m"),
+                  (out / "map_ours.png").string());
+    plot::SavePng(eval::DrawRun(tracks, names, scans_map(icp_in_our_frame),
+                                "scans at icp-slam's poses; consistency " + Fixed(icp_consistency.median_m, 4) + " m"),
+                  (out / "map_icp_slam.png").string());
+  }
   {
     std::ofstream csv(out / "trajectories.csv");
     csv << "utime,slam_x_m,slam_y_m,slam_theta_rad,icp_x_m,icp_y_m,icp_theta_rad,difference_m,"
@@ -298,8 +331,9 @@ int Main(int argc, char** argv) {
      << Spread(icp_ms) << " ms/scan; the whole process takes " << Fixed(theirs_wall_ms, 3) << " ms/scan.\n"
      << "- Both run on one core (`taskset -c 0`), interleaved run by run, so load from elsewhere falls on both.\n\n"
      << "## Where the trajectories differ\n\n"
-     << "`trajectories.csv` has both trajectories (icp-slam's in our frame), their distance per scan and each map's "
-     << "consistency per scan. Map consistency: each scan placed at the trajectory's pose, each point paired with the "
+     << "`map_ours.png` and `map_icp_slam.png` draw both trajectories over the scans placed at our poses and at "
+     << "icp-slam's (doubled walls show where a trajectory is off); `trajectories.csv` has both trajectories "
+     << "(icp-slam's in our frame), their distance per scan and each map's consistency per scan. Map consistency: each scan placed at the trajectory's pose, each point paired with the "
      << "nearest point (within 0.5 m) of scans at least 30 scans away; the median pair distance per scan, then the "
      << "median over scans. Ours " << Fixed(ours_consistency.median_m, 4) << " m, icp-slam "
      << Fixed(icp_consistency.median_m, 4) << " m.\n";
