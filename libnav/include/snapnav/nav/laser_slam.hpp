@@ -12,6 +12,7 @@
 // faster than the area explored.
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -115,7 +116,7 @@ class PointGridMap {
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
-  std::vector<Tile> tiles_;
+  std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
   std::vector<Eigen::Vector2d> points_, normals_;
 };
 
