@@ -316,7 +316,7 @@ int Main(int argc, char** argv) {
      << "| ms/scan, " << log.beams << " beams | " << Fixed(ours_ms, 3) << " | " << Fixed(theirs_ms, 3) << " (wall "
      << Fixed(theirs_wall_ms, 3) << ") | ratio " << Fixed(ratio, 2) << " >= 2 |\n"
      << "| RMS difference | " << Fixed(cmp.difference.rmse_m, 3) << " m | | <= 0.05 m |\n"
-     << "| scans/s, " << sim.log.beams << " beams | " << Fixed(sim_scans_per_s, 0) << " | | >= 500 |\n\n"
+     << "| scans/s, " << sim.log.beams << " beams | " << Fixed(sim_scans_per_s, 0) << " | | >= 500 |\n"
      << "| map consistency (median distance to the scans seen on a revisit) | " << Fixed(ours_consistency.median_m, 4)
      << " m | " << Fixed(icp_consistency.median_m, 4) << " m | lower is crisper |\n\n"
      << "## What each time includes\n\n"
