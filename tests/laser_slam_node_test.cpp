@@ -43,6 +43,9 @@ const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translatio
                                                                     {"search_window_max_deg", "30"},
                                                                     {"search_step_deg", "0.5"},
                                                                     {"recovery_fit", "0.6"},
+                                                                    {"turn_noise_rad_per_rad", "1"},
+                                                                    {"stale_odometry", "true"},
+                                                                    {"update_score_margin", "0.05"},
                                                                     {"icp_iterations", "15"},
                                                                     {"icp_convergence_m", "0.0001"},
                                                                     {"point_sigma_m", "0.03"},
@@ -50,6 +53,7 @@ const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translatio
                                                                     {"map_resolution_m", "0.05"},
                                                                     {"add_distance_m", "0.08"},
                                                                     {"scan_step", "1"},
+                                                                    {"lookup_cell_m", "0.05"},
                                                                     {"map_every_n_scans", "10"}};
 
 // The config as INI text; `drop` leaves a [laser_slam] key out, `extra` is appended to [laser_slam],

@@ -105,8 +105,12 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
   return points;
 }
 
-PointGridMap::PointGridMap(double resolution_m, double bucket_m) : resolution_(resolution_m), bucket_(bucket_m) {
+PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m, double lookup_cell_m)
+    : resolution_(resolution_m), bucket_(bucket_m), lookup_radius_(lookup_radius_m), lookup_cell_(lookup_cell_m) {
   if (!(resolution_m > 0) || !(bucket_m > 0)) throw std::invalid_argument("point map: cell sizes must be > 0");
+  if (!(lookup_radius_m >= 0) || !(lookup_cell_m > 0)) {
+    throw std::invalid_argument("point map: lookup radius must be >= 0 and its cell > 0");
+  }
 }
 
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
@@ -115,9 +119,120 @@ bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) 
   if (!cells_.emplace(fine, static_cast<uint32_t>(points_.size())).second) return false;
   buckets_[Key(static_cast<int64_t>(std::floor(p.x() / bucket_)), static_cast<int64_t>(std::floor(p.y() / bucket_)))]
       .push_back(static_cast<uint32_t>(points_.size()));
+  if (lookup_radius_ > 0) AddToLookup(p, static_cast<uint32_t>(points_.size()));
   points_.push_back(p);
   normals_.push_back(normal);
   return true;
+}
+
+uint32_t PointGridMap::TileTable::Find(uint64_t key) const {
+  if (count == 0) return kNone;
+  const size_t mask = values.size() - 1;
+  for (size_t i = Slot(key);; i = (i + 1) & mask) {
+    if (values[i] == kNone) return kNone;
+    if (keys[i] == key) return values[i];
+  }
+}
+
+uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
+  if (2 * (count + 1) > values.size()) {  // keep it at most half full
+    std::vector<uint64_t> old_keys = std::move(keys);
+    std::vector<uint32_t> old_values = std::move(values);
+    bits = std::max(6, bits + 1);
+    keys.assign(size_t{1} << bits, 0);
+    values.assign(size_t{1} << bits, kNone);
+    count = 0;
+    for (size_t i = 0; i < old_values.size(); ++i) {
+      if (old_values[i] != kNone) FindOrAdd(old_keys[i], old_values[i]);
+    }
+  }
+  const size_t mask = values.size() - 1;
+  size_t i = Slot(key);
+  for (; values[i] != kNone; i = (i + 1) & mask) {
+    if (keys[i] == key) return values[i];
+  }
+  keys[i] = key;
+  values[i] = value;
+  ++count;
+  return value;
+}
+
+void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
+  // Every cell whose centre lies within the radius (plus half a cell diagonal, so that a query
+  // anywhere in the cell within the radius of p finds a point) may now have p as its nearest.
+  const double reach = lookup_radius_ + 0.7072 * lookup_cell_;
+  const double reach2 = reach * reach;
+  const int64_t x0 = static_cast<int64_t>(std::floor((p.x() - reach) / lookup_cell_));
+  const int64_t x1 = static_cast<int64_t>(std::floor((p.x() + reach) / lookup_cell_));
+  const int64_t y0 = static_cast<int64_t>(std::floor((p.y() - reach) / lookup_cell_));
+  const int64_t y1 = static_cast<int64_t>(std::floor((p.y() + reach) / lookup_cell_));
+  for (int64_t tx = x0 >> kTileBits; tx <= x1 >> kTileBits; ++tx) {
+    for (int64_t ty = y0 >> kTileBits; ty <= y1 >> kTileBits; ++ty) {
+      const uint32_t tile_slot = tile_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
+      if (tile_slot == tiles_.size()) {
+        tiles_.emplace_back();
+        Tile& t = tiles_.back();
+        for (int c = 0; c < kTile * kTile; ++c) {
+          std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
+          std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
+        }
+      }
+      Tile* tile = &tiles_[tile_slot];
+      const int64_t cx0 = std::max(x0, tx << kTileBits), cx1 = std::min(x1, ((tx + 1) << kTileBits) - 1);
+      const int64_t cy0 = std::max(y0, ty << kTileBits), cy1 = std::min(y1, ((ty + 1) << kTileBits) - 1);
+      for (int64_t cy = cy0; cy <= cy1; ++cy) {
+        const double dy = (static_cast<double>(cy) + 0.5) * lookup_cell_ - p.y();
+        const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
+        for (int64_t cx = cx0; cx <= cx1; ++cx) {
+          const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
+          const double d2 = dx * dx + dy * dy;
+          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          if (d2 > reach2) continue;
+          // Insert into the cell's candidates, nearest first.
+          float* dist = tile->d2[c];
+          uint32_t* idx = tile->index[c];
+          int k = kLookupCandidates;
+          while (k > 0 && static_cast<float>(d2) < dist[k - 1]) --k;
+          if (k == kLookupCandidates) continue;
+          for (int j = kLookupCandidates - 1; j > k; --j) {
+            dist[j] = dist[j - 1];
+            idx[j] = idx[j - 1];
+          }
+          dist[k] = static_cast<float>(d2);
+          idx[k] = index;
+        }
+      }
+    }
+  }
+}
+
+namespace {
+
+// floor(v) as an integer, without the library call (the lookup's hot path).
+int64_t FloorToInt(double v) {
+  const auto i = static_cast<int64_t>(v);
+  return i - (static_cast<double>(i) > v);
+}
+
+}  // namespace
+
+int PointGridMap::LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const {
+  if (!(max_distance_m <= lookup_radius_)) return NearestIndex(p, max_distance_m);
+  const int64_t cx = FloorToInt(p.x() / lookup_cell_);
+  const int64_t cy = FloorToInt(p.y() / lookup_cell_);
+  const uint32_t tile = tile_index_.Find(Key(cx >> kTileBits, cy >> kTileBits));
+  if (tile == kNone) return -1;
+  const uint32_t* candidates = tiles_[tile].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
+  double best = max_distance_m * max_distance_m;
+  int found = -1;
+  for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
+    const double d = (points_[candidates[k]] - p).squaredNorm();
+    if (d <= best) {
+      best = d;
+      found = static_cast<int>(candidates[k]);
+    }
+  }
+  return found;
 }
 
 int PointGridMap::NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const {
@@ -166,10 +281,19 @@ void LaserSlamOptions::Validate() const {
   if (min_matches < 3) throw std::invalid_argument("laser slam: min_matches must be >= 3");
   if (!(map_resolution_m > 0) || !(add_distance_m > 0)) throw std::invalid_argument("laser slam: map sizes must be > 0");
   if (scan_step < 1) throw std::invalid_argument("laser slam: scan_step must be >= 1");
+  if (!(update_score_margin >= 0 && update_score_margin < 1)) {
+    throw std::invalid_argument("laser slam: update_score_margin must be in [0, 1)");
+  }
+  if (!(turn_noise_rad_per_rad >= 0)) throw std::invalid_argument("laser slam: turn_noise_rad_per_rad must be >= 0");
+  if (!(lookup_cell_m >= 0)) throw std::invalid_argument("laser slam: lookup_cell_m must be >= 0 (0: exact search)");
 }
 
 LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
-    : options_(options), pose_(start), map_(options.map_resolution_m, std::max(0.25, options.match_distance_m)) {
+    : options_(options),
+      pose_(start),
+      map_(options.map_resolution_m, std::max(0.25, options.match_distance_m),
+           options.lookup_cell_m > 0 ? std::max(options.match_distance_start_m, options.add_distance_m) : 0,
+           options.lookup_cell_m > 0 ? options.lookup_cell_m : 1.0) {
   options_.Validate();
   covariance_ = Eigen::Vector3d(options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_xy_m * options.initial_sigma_xy_m,
@@ -179,11 +303,20 @@ LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
 
 void LaserSlam::Predict(const Pose2& odometry_delta) {
   PredictWithOdometry(options_.motion, odometry_delta, &pose_, &covariance_);
+  odometry_since_scan_ = odometry_since_scan_.Compose(odometry_delta);
 }
 
 namespace {
 
 Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
+
+// A pose as a rotation and translation, its sine and cosine computed once for many points.
+struct Rigid {
+  explicit Rigid(const Pose2& p) : c(std::cos(p.theta_rad)), s(std::sin(p.theta_rad)), t(p.x_m, p.y_m) {}
+  Eigen::Vector2d operator()(const Eigen::Vector2d& v) const { return Rotate(c, s, v) + t; }
+  double c, s;
+  Eigen::Vector2d t;
+};
 
 }  // namespace
 
@@ -203,9 +336,10 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
       int matches = 0;
       double residual2 = 0, weight_sum = 0;
+      const Rigid to_map(r.estimate);
       for (size_t i = 0; i < points.size(); ++i) {
-        const Eigen::Vector2d w = r.estimate.Transform(points[i]);
-        const int j = map_.NearestIndex(w, distance);
+        const Eigen::Vector2d w = to_map(points[i]);
+        const int j = map_.LookupIndex(w, distance);
         if (j < 0) continue;
         const Eigen::Vector2d scan_normal = Rotate(c, s, normals[i]);
         Eigen::Vector2d n = map_.normals()[static_cast<size_t>(j)];
@@ -244,8 +378,9 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       src.clear();
       dst.clear();
       index.clear();
+      const Rigid to_map(r.estimate);
       for (size_t i = 0; i < points.size(); ++i) {
-        const int j = map_.NearestIndex(r.estimate.Transform(points[i]), distance);
+        const int j = map_.LookupIndex(to_map(points[i]), distance);
         if (j < 0) continue;
         src.push_back(points[i]);
         dst.push_back(map_.points()[static_cast<size_t>(j)]);
@@ -273,8 +408,8 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
         r.residual2 += (r.estimate.Transform(src[k]) - dst[k]).squaredNorm() / 2.0;
         r.weight_sum += 1;
         const Eigen::Vector2d n = Rotate(c, s, normals[index[k]]);
-        if (n.isZero()) continue;  // isolated point or corner: no surface
         const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());
+        if (n.isZero()) continue;  // isolated point or corner: no surface
         const Eigen::Vector3d jac(n.x(), n.y(), n.dot(d_theta));
         r.info += jac * jac.transpose();
       }
@@ -287,9 +422,10 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
 double LaserSlam::Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
   const double tau = options_.match_distance_m, tau2 = tau * tau;
   double score = 0;
+  const Rigid to_map(pose);
   for (size_t i = 0; i < points.size(); i += stride) {
-    const Eigen::Vector2d w = pose.Transform(points[i]);
-    const int j = map_.NearestIndex(w, tau);
+    const Eigen::Vector2d w = to_map(points[i]);
+    const int j = map_.LookupIndex(w, tau);
     if (j >= 0) score += 1.0 - (map_.points()[static_cast<size_t>(j)] - w).squaredNorm() / tau2;
   }
   return score;
@@ -321,8 +457,9 @@ Pose2 LaserSlam::SearchHeading(const Pose2& around, double window_rad, double sh
 
 double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
   size_t near = 0, total = 0;
+  const Rigid to_map(pose);
   for (size_t i = 0; i < points.size(); i += stride, ++total) {
-    near += map_.HasPointWithin(pose.Transform(points[i]), 0.5 * options_.match_distance_m);
+    near += map_.HasPointWithin(to_map(points[i]), 0.5 * options_.match_distance_m);
   }
   return total > 0 ? static_cast<double>(near) / static_cast<double>(total) : 0.0;
 }
@@ -339,6 +476,22 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
   const std::vector<Eigen::Vector2d> normals = ScanNormals(points);
   u.points = static_cast<int>(points.size());
   ++scans_;
+  if (options_.stale_odometry && last_scan_pose_) {
+    // (Increments between two equal odometry poses are zero up to rounding.)
+    const bool odometry_moved = std::hypot(odometry_since_scan_.x_m, odometry_since_scan_.y_m) > 1e-6 ||
+                                std::abs(odometry_since_scan_.theta_rad) > 1e-6;
+    if (!odometry_moved) {
+      // Stale (or the robot stopped: then the last motion is small and the scan corrects it).
+      if (!stale_since_) stale_since_ = *last_scan_pose_;
+      PredictWithOdometry(options_.motion, last_motion_, &pose_, &covariance_);
+      u.stale_odometry = true;
+    } else if (stale_since_) {
+      // Odometry's increment covers the stale interval too: take out what the scans tracked.
+      const Pose2 tracked = stale_since_->Between(*last_scan_pose_);
+      pose_ = last_scan_pose_->Compose(tracked.Inverse().Compose(odometry_since_scan_));
+      stale_since_.reset();
+    }
+  }
   if (map_.size() > 0 && !points.empty()) {
     // Heading search: the prediction's heading may be off by more than ICP can pull in (a fast
     // turn, odometry late against the laser). Headings within search_sigmas standard deviations
@@ -346,6 +499,8 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
     const size_t stride = std::max<size_t>(1, points.size() / 90);
     const double step = options_.search_step_rad;
     Pose2 start = pose_;
+    const double turn = std::max(std::abs(odometry_since_scan_.theta_rad), std::abs(previous_odometry_turn_rad_));
+    covariance_(2, 2) += std::pow(options_.turn_noise_rad_per_rad * turn, 2);
     const double window = std::min(options_.search_window_max_rad, options_.search_sigmas * std::sqrt(covariance_(2, 2)));
     if (window >= step) {
       start = SearchHeading(pose_, window, 0.0, points, stride);
@@ -379,15 +534,35 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
       u.measured = true;
       u.measurement = icp.estimate;
       u.measurement_covariance = info.inverse();
+      const Pose2 predicted = pose_;
+      const Eigen::Matrix3d predicted_covariance = covariance_;
       pose_ = EkfPoseUpdate(pose_, &covariance_, icp.estimate, u.measurement_covariance);
+      if (options_.update_score_margin > 0) {
+        // The update should sit where the scan fits: if it scores clearly below the ICP pose
+        // against the map, the prediction was off by more than its covariance allowed (odometry
+        // jitter along a corridor, a late turn); widen it by the innovation and update again.
+        const double at_icp = Score(icp.estimate, points, 1), at_update = Score(pose_, points, 1);
+        if (at_update < (1 - options_.update_score_margin) * at_icp) {
+          const Eigen::Vector3d off(icp.estimate.x_m - predicted.x_m, icp.estimate.y_m - predicted.y_m,
+                                    WrapAngle(icp.estimate.theta_rad - predicted.theta_rad));
+          covariance_ = predicted_covariance;
+          covariance_ += off.cwiseProduct(off).asDiagonal();
+          pose_ = EkfPoseUpdate(predicted, &covariance_, icp.estimate, u.measurement_covariance);
+          u.widened = true;
+        }
+      }
     }
   }
+  previous_odometry_turn_rad_ = odometry_since_scan_.theta_rad;
+  odometry_since_scan_ = {};
+  if (last_scan_pose_) last_motion_ = last_scan_pose_->Between(pose_);
+  last_scan_pose_ = pose_;
   // Points with no map point near them join the map at the updated pose, with their normals.
-  const double c = std::cos(pose_.theta_rad), s = std::sin(pose_.theta_rad);
+  const Rigid to_map(pose_);
   for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector2d w = pose_.Transform(points[i]);
+    const Eigen::Vector2d w = to_map(points[i]);
     if (map_.size() > 0 && map_.HasPointWithin(w, options_.add_distance_m)) continue;
-    if (map_.Add(w, Rotate(c, s, normals[i]))) ++u.added;
+    if (map_.Add(w, Rotate(to_map.c, to_map.s, normals[i]))) ++u.added;
   }
   return u;
 }

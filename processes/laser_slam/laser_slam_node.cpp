@@ -48,6 +48,9 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.search_window_max_rad = ini.GetDouble(s, "search_window_max_deg") / kDegPerRad;
   o.search_step_rad = ini.GetDouble(s, "search_step_deg") / kDegPerRad;
   o.recovery_fit = ini.GetDouble(s, "recovery_fit");
+  o.turn_noise_rad_per_rad = ini.GetDouble(s, "turn_noise_rad_per_rad");
+  o.stale_odometry = ini.GetBool(s, "stale_odometry");
+  o.update_score_margin = ini.GetDouble(s, "update_score_margin");
   o.icp_iterations = ini.GetInt(s, "icp_iterations");
   o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
   o.point_sigma_m = ini.GetDouble(s, "point_sigma_m");
@@ -55,6 +58,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.map_resolution_m = ini.GetDouble(s, "map_resolution_m");
   o.add_distance_m = ini.GetDouble(s, "add_distance_m");
   o.scan_step = ini.GetInt(s, "scan_step");
+  o.lookup_cell_m = ini.GetDouble(s, "lookup_cell_m");
   c.map_every_n_scans = ini.GetInt(s, "map_every_n_scans");
   ini.CheckAllUsed();
   try {
@@ -82,10 +86,14 @@ void LaserSlamConfig::Print(std::ostream& out) const {
       << "\nmax_range_m = " << o.max_range_m << "\nsearch_sigmas = " << o.search_sigmas
       << "\nsearch_window_max_deg = " << o.search_window_max_rad * kDegPerRad
       << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nrecovery_fit = " << o.recovery_fit
+      << "\nturn_noise_rad_per_rad = " << o.turn_noise_rad_per_rad
+      << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false")
+      << "\nupdate_score_margin = " << o.update_score_margin
       << "\nicp_iterations = " << o.icp_iterations
       << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
       << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
       << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step
+      << "\nlookup_cell_m = " << o.lookup_cell_m
       << "\nmap_every_n_scans = " << map_every_n_scans << "\n";
 }
 

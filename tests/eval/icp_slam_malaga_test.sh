@@ -2,10 +2,11 @@
 # MRPT's icp-slam beside our laser SLAM on MRPT's Malaga loop (Debian's mrpt-common and
 # mrpt-apps; skipped, exit 77, without them): eval-slam --icp-slam pairs icp-slam's pose after
 # each rawlog entry with our scan of the same time (icp-slam starts at the second scan: the first
-# sensory frame has no action before it), and the two trajectories agree within 0.3 m RMS after
-# SE(2) alignment. Measured 0.087 and 0.194 m with two versions of our LaserSlam (the goal, 0.05 m,
-# is bench-slam's); dead reckoning is 2.3 m from icp-slam, our trajectory shifted by two scans
-# 0.5 m. Then a short bench-slam run writes every figure.
+# sensory frame has no action before it), and the two trajectories agree within 0.15 m RMS after
+# SE(2) alignment. Measured 0.087 m (0.194 m before the stale-odometry model; the goal, 0.05 m, is
+# bench-slam's); dead reckoning is 2.3 m from icp-slam, our trajectory shifted by two scans 0.5 m.
+# Then a short bench-slam run writes every figure, and our map is the more consistent one (scans
+# against the scans seen on a revisit: measured 0.012 m against icp-slam's 0.020 m).
 set -euo pipefail
 BIN="$1"
 RAWLOG="/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
@@ -25,7 +26,7 @@ print(f"icp-slam: {s['icp_slam_scans_paired']}/{s['scans']} scans paired, {s['la
 assert s["scans"] == 225, s["scans"]
 assert s["icp_slam_scans"] == 224, s["icp_slam_scans"]  # the first frame has no action: icp-slam skips it
 assert s["icp_slam_scans_paired"] >= 0.95 * s["scans"], s["icp_slam_scans_paired"]
-assert s["laser_slam_vs_icp_slam_rms_m"] <= 0.3, s["laser_slam_vs_icp_slam_rms_m"]
+assert s["laser_slam_vs_icp_slam_rms_m"] <= 0.15, s["laser_slam_vs_icp_slam_rms_m"]
 assert s["icp_slam_ms_per_scan"] > 0 and s["icp_slam_wall_ms_per_scan"] >= s["icp_slam_ms_per_scan"]
 assert "icp_slam_ate_rmse_m" not in s  # no reference for the Malaga loop
 PY
@@ -50,6 +51,8 @@ for key in ("laser_slam_ms_per_scan", "icp_slam_ms_per_scan", "icp_slam_over_las
     assert s[key] > 0, key
 assert s["sim_beams"] == 681, s["sim_beams"]
 assert s["icp_slam_scans_paired"] >= 0.95 * s["scans"], s["icp_slam_scans_paired"]
-assert s["laser_slam_vs_icp_slam_rms_m"] <= 0.3, s["laser_slam_vs_icp_slam_rms_m"]
+assert s["laser_slam_vs_icp_slam_rms_m"] <= 0.15, s["laser_slam_vs_icp_slam_rms_m"]
+assert 0 < s["laser_slam_map_consistency_m"] < s["icp_slam_map_consistency_m"], s
+assert 0 < s["icp_slam_dense_vs_laser_slam_rms_m"] < s["laser_slam_vs_icp_slam_rms_m"], s
 PY
 test -s "$OUT/bench/bench.md"

@@ -66,6 +66,44 @@ TEST(PointGridMap, OnePointPerCellAndNearestWithinRadius) {
   EXPECT_EQ(map.size(), 2u);
 }
 
+// The lookup grid gives the nearest point wherever it is unambiguous, nothing beyond the query
+// distance, and an exact search beyond its radius.
+TEST(PointGridMap, LookupGridFindsTheNearestPoint) {
+  PointGridMap exact(0.05, 0.25), lookup(0.05, 0.25, 0.5, 0.025);
+  for (int i = 0; i < 40; ++i) {
+    const Eigen::Vector2d p(0.05 * i, 0.3 * std::sin(0.2 * i));  // a curve
+    exact.Add(p);
+    lookup.Add(p);
+  }
+  ASSERT_EQ(exact.size(), lookup.size());
+  int agree = 0, total = 0;
+  for (double x = -0.3; x < 2.3; x += 0.013) {
+    for (double y = -0.7; y < 0.7; y += 0.017) {
+      const Eigen::Vector2d q(x, y);
+      const int e = exact.NearestIndex(q, 0.4), l = lookup.LookupIndex(q, 0.4);
+      if (e < 0) {
+        EXPECT_LT(l, 0) << x << " " << y;
+        continue;
+      }
+      if (l < 0) {  // only next to the query distance: its point may lie a cell diagonal farther
+        EXPECT_GT((exact.points()[e] - q).norm(), 0.4 - 0.025 * std::sqrt(2.0)) << x << " " << y;
+        continue;
+      }
+      ++total;
+      agree += e == l;
+      // Where it differs, the point it gives is nearly as near (within a cell diagonal).
+      EXPECT_LE((lookup.points()[l] - q).norm(), (exact.points()[e] - q).norm() + 0.025 * std::sqrt(2.0) + 1e-9);
+    }
+  }
+  EXPECT_GT(agree, 0.9 * total);
+  EXPECT_EQ(lookup.LookupIndex({5, 5}, 0.4), -1);
+  EXPECT_EQ(lookup.LookupIndex({1.0, 0.75}, 0.4), -1);  // the curve lies 0.45 m away or more
+  // Beyond the lookup radius: the exact search.
+  EXPECT_EQ(lookup.LookupIndex({1.0, 1.6}, 1.5), exact.NearestIndex({1.0, 1.6}, 1.5));
+  EXPECT_GE(lookup.LookupIndex({1.0, 1.6}, 1.5), 0);
+  EXPECT_THROW(PointGridMap(0.05, 0.25, -1), std::invalid_argument);
+}
+
 sim::Scene SquareRoom() {
   sim::Scene scene;
   scene.name = "square room";
@@ -127,6 +165,88 @@ TEST(LaserSlam, HeadingSearchRecoversATurnOdometryMissed) {
       EXPECT_GT(u.fit, 0.9);
     } else {
       EXPECT_GT(heading_error, 5.0) << "ICP alone should not pull in 20 degrees; the test would prove nothing";
+    }
+  }
+}
+
+// Odometry that stops reporting while the robot turns (CSAIL: the same odometry pose for up to 5
+// scans, then one increment for the whole turn): the stale-odometry model predicts the frozen
+// scans from the last motion and takes the tracked turn out of the catch-up increment; without
+// it the catch-up increment counts the turn twice and the pose ends far off.
+TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const auto scan_at = [&](const Pose2& p) {
+    world.SetTruePose(p);
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m,
+                        laser.range_max_m, {laser.mount_x_m, 0, 0});
+  };
+  const Pose2 start{2.0, 3.5, 0.3};
+  const Pose2 step{0.05, 0, 10.0 * M_PI / 180.0};  // per scan: 5 cm and 10 degrees
+  std::vector<Pose2> truth = {start};
+  for (int k = 0; k < 9; ++k) truth.push_back(truth.back().Compose(step));
+  for (const bool stale : {true, false}) {
+    LaserSlamOptions options;
+    options.stale_odometry = stale;
+    options.update_score_margin = 0;  // the model alone (the score check would catch the catch-up, too)
+    LaserSlam slam(options, start);
+    slam.Update(scan_at(truth[0]));
+    int stale_scans = 0;
+    for (int k = 1; k < static_cast<int>(truth.size()); ++k) {
+      // Odometry reports scans 1-2, freezes for scans 3-6 and catches up at scan 7.
+      if (k <= 2 || k >= 8) slam.Predict(step);
+      if (k == 7) slam.Predict(truth[2].Between(truth[7]));
+      stale_scans += slam.Update(scan_at(truth[static_cast<size_t>(k)])).stale_odometry;
+    }
+    const Pose2& end = truth.back();
+    const double heading_error = std::abs(WrapAngle(slam.pose().theta_rad - end.theta_rad)) * 180 / M_PI;
+    const double position_error = std::hypot(slam.pose().x_m - end.x_m, slam.pose().y_m - end.y_m);
+    std::cout << (stale ? "with" : "without") << " the stale-odometry model: heading error " << heading_error
+              << " deg, position error " << position_error << " m\n";
+    if (stale) {
+      EXPECT_EQ(stale_scans, 4);
+      EXPECT_LT(heading_error, 1.0);
+      EXPECT_LT(position_error, 0.05);
+    } else {
+      EXPECT_EQ(stale_scans, 0);
+      EXPECT_GT(heading_error, 5.0) << "the catch-up should fail without the model; the test would prove nothing";
+    }
+  }
+}
+
+// Odometry misses a 0.3 m step and the prediction is confident (a small covariance): the EKF
+// update alone stays near the prediction, although the scan fits only 0.3 m on; the score check
+// widens the prediction and the update follows the scan.
+TEST(LaserSlam, UpdateThatScoresBelowTheScanIsRedone) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const auto scan_at = [&](const Pose2& p) {
+    world.SetTruePose(p);
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m,
+                        laser.range_max_m, {laser.mount_x_m, 0, 0});
+  };
+  const Pose2 start{2.0, 3.5, 0.3}, moved = start.Compose({0.3, 0, 0});
+  for (const double margin : {0.05, 0.0}) {
+    LaserSlamOptions options;
+    options.update_score_margin = margin;
+    options.initial_sigma_xy_m = 0.001;
+    options.initial_sigma_theta_rad = 0.0001;
+    LaserSlam slam(options, start);
+    slam.Update(scan_at(start));
+    slam.Predict({0.002, 0, 0});  // odometry saw almost nothing
+    const LaserSlamUpdate u = slam.Update(scan_at(moved));
+    const double error = std::hypot(slam.pose().x_m - moved.x_m, slam.pose().y_m - moved.y_m);
+    std::cout << "score margin " << margin << ": position error " << error << " m, ICP error "
+              << std::hypot(u.measurement.x_m - moved.x_m, u.measurement.y_m - moved.y_m) << " m\n";
+    ASSERT_TRUE(u.measured);
+    if (margin > 0) {
+      EXPECT_TRUE(u.widened);
+      EXPECT_LT(error, 0.02);
+    } else {
+      EXPECT_FALSE(u.widened);
+      EXPECT_GT(error, 0.1) << "the update alone should stay near the prediction; the test would prove nothing";
     }
   }
 }

@@ -145,7 +145,7 @@ TEST(MalagaLaserSlam, ImportedLoopGivesABoundedMapAndRevisitsTheFirstCorridor) {
   // The loop closes: laser SLAM drives down the first corridor again where it did the first
   // time (0.5-0.9 m measured), where dead reckoning is 4.4 m off.
   EXPECT_GE(slam_gap.poses, 15);
-  EXPECT_LT(slam_gap.max_m, 1.2);
+  EXPECT_LT(slam_gap.max_m, 0.9);  // measured 0.52 m (0.63 m before the stale-odometry model)
   EXPECT_GT(dr_gap.max_m, 3.0);
 }
 

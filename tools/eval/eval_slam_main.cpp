@@ -62,6 +62,10 @@ int Main(int argc, char** argv) {
   flags.AddDouble("map-resolution-m", &options.map_resolution_m, "laser slam: map cell [m]");
   flags.AddDouble("add-distance-m", &options.add_distance_m, "laser slam: new map point if nothing this close [m]");
   flags.AddInt("scan-step", &options.scan_step, "laser slam: use every n-th beam");
+  bool sweep = false;
+  flags.AddBool("sweep", &sweep,
+                "with --reference: also run the laser slam at neighbouring settings (each of seven options one step\n"
+                "down and up) and write the ATE of each and its min / median / max to sweep.md and sweep.csv");
   flags.AddString("out", &out_dir, "output folder (required)");
   if (!flags.Parse(argc, argv)) return 0;
   if (log_path.empty() || out_dir.empty()) throw glue::FlagError("--log LOG and --out DIR are required");
@@ -83,6 +87,10 @@ int Main(int argc, char** argv) {
   thesis.match_distance_m = thesis.match_distance_start_m = 0.25;
   thesis.search_window_max_rad = 0;
   thesis.motion = nav::DeadReckoningOptions{};
+  thesis.turn_noise_rad_per_rad = 0;
+  thesis.stale_odometry = false;
+  thesis.update_score_margin = 0;
+  thesis.lookup_cell_m = 0;  // the exact nearest map point
   const eval::SlamRun thesis_run = eval::RunSlam(log, thesis);
   std::cerr << "eval-slam: thesis configuration " << thesis_run.ms_per_scan() << " ms/scan\n";
 
@@ -168,6 +176,59 @@ int Main(int argc, char** argv) {
       ate_title = "ATE laser slam " + Fixed(slam_ate.rmse_m, 2) + ", dead reckoning " + Fixed(dr_ate.rmse_m, 2) +
                   ", icp-slam " + Fixed(icp_ate.rmse_m, 2) + " m; slam vs icp-slam " +
                   Fixed(cmp->difference.rmse_m, 2) + " m";
+    }
+    if (sweep) {
+      // Sensitivity: the ATE at neighbouring settings, one option changed at a time.
+      struct Variant {
+        std::string name;
+        nav::LaserSlamOptions options;
+      };
+      std::vector<Variant> variants = {{"as configured", options}};
+      const auto add = [&](const std::string& name, auto change) {
+        nav::LaserSlamOptions o = options;
+        change(o);
+        variants.push_back({name, o});
+      };
+      for (const double f : {0.9, 1.1}) {
+        add("match_distance_m x" + Fixed(f, 1), [f](auto& o) { o.match_distance_m *= f; });
+        add("match_distance_start_m x" + Fixed(f - 0.1 * (f < 1 ? 1 : -1), 1),
+            [f](auto& o) { o.match_distance_start_m *= f < 1 ? 0.8 : 1.2; });
+        add("rotation_noise_rad_per_rad x" + Fixed(f < 1 ? 0.75 : 1.25, 2),
+            [f](auto& o) { o.motion.rotation_noise_rad_per_rad *= f < 1 ? 0.75 : 1.25; });
+        add("translation_noise_m_per_m x" + Fixed(f < 1 ? 0.8 : 1.2, 1),
+            [f](auto& o) { o.motion.translation_noise_m_per_m *= f < 1 ? 0.8 : 1.2; });
+        add("search_sigmas " + Fixed(options.search_sigmas + (f < 1 ? -0.5 : 0.5), 1),
+            [f](auto& o) { o.search_sigmas += f < 1 ? -0.5 : 0.5; });
+        add("turn_noise_rad_per_rad x" + Fixed(f < 1 ? 0.8 : 1.2, 1),
+            [f](auto& o) { o.turn_noise_rad_per_rad *= f < 1 ? 0.8 : 1.2; });
+        add("update_score_margin x" + Fixed(f < 1 ? 0.6 : 1.4, 1),
+            [f](auto& o) { o.update_score_margin *= f < 1 ? 0.6 : 1.4; });
+      }
+      std::vector<double> ates;
+      std::ofstream csv(out / "sweep.csv");
+      std::ostringstream md;
+      csv << "setting,ate_rmse_m,ate_max_m,ms_per_scan\n";
+      md << "# eval-slam sweep: ATE at neighbouring settings\n\n| setting | ATE RMSE [m] | max [m] |\n|---|---|---|\n";
+      for (const Variant& v : variants) {
+        v.options.Validate();
+        const eval::SlamRun r = eval::RunSlam(log, v.options);
+        const auto pairs = eval::PairWithReference(r.slam, r, ref);
+        const auto ate = nav::ComputeAte(pairs, nav::AlignSE2(pairs));
+        ates.push_back(ate.rmse_m);
+        csv << v.name << "," << ate.rmse_m << "," << ate.max_m << "," << r.ms_per_scan() << "\n";
+        md << "| " << v.name << " | " << Fixed(ate.rmse_m, 3) << " | " << Fixed(ate.max_m, 3) << " |\n";
+        std::cerr << "eval-slam: sweep " << v.name << ": ATE " << Fixed(ate.rmse_m, 4) << " m\n";
+      }
+      std::vector<double> sorted = ates;
+      std::sort(sorted.begin(), sorted.end());
+      const double median = sorted[sorted.size() / 2];
+      md << "\n" << ates.size() << " runs: min " << Fixed(sorted.front(), 3) << " m, median " << Fixed(median, 3)
+         << " m, max " << Fixed(sorted.back(), 3) << " m\n";
+      std::ofstream(out / "sweep.md") << md.str();
+      std::cerr << "eval-slam: sweep of " << ates.size() << " settings: ATE min " << Fixed(sorted.front(), 4)
+                << " m, median " << Fixed(median, 4) << " m, max " << Fixed(sorted.back(), 4) << " m (sweep.md)\n";
+      json << ",\n  \"sweep_runs\": " << ates.size() << ",\n  \"sweep_ate_rmse_min_m\": " << sorted.front()
+           << ",\n  \"sweep_ate_rmse_median_m\": " << median << ",\n  \"sweep_ate_rmse_max_m\": " << sorted.back();
     }
     title = cmp ? ate_title : title + ": " + ate_title;
     // Draw the reference in the SLAM frame.

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
@@ -183,6 +184,71 @@ std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vect
     if (const auto truth = reference.Find(run.ranges_key[i], run.utime[i])) pairs.push_back({estimate[i], *truth});
   }
   return pairs;
+}
+
+MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::optional<nav::Pose2>>& poses,
+                                     int min_separation_scans, double max_distance_m, int min_pairs) {
+  // The scans' points in the world, in buckets of max_distance_m (3 x 3 buckets hold every
+  // point within max_distance_m of a query).
+  struct WorldPoint {
+    Eigen::Vector2d p;
+    int scan;
+  };
+  std::vector<std::vector<Eigen::Vector2d>> world;
+  for (const SlamStep& step : log.steps) {
+    if (!step.is_scan) continue;
+    const size_t i = world.size();
+    world.emplace_back();
+    if (i >= poses.size() || !poses[i]) continue;
+    for (const Eigen::Vector2d& q : step.points) world.back().push_back(poses[i]->Transform(q));
+  }
+  const double bucket = max_distance_m;
+  const auto key = [bucket](const Eigen::Vector2d& p) {
+    return std::make_pair(static_cast<int64_t>(std::floor(p.x() / bucket)), static_cast<int64_t>(std::floor(p.y() / bucket)));
+  };
+  std::map<std::pair<int64_t, int64_t>, std::vector<WorldPoint>> buckets;
+  for (size_t i = 0; i < world.size(); ++i) {
+    for (const Eigen::Vector2d& p : world[i]) buckets[key(p)].push_back({p, static_cast<int>(i)});
+  }
+  MapConsistency c;
+  c.per_scan_m.assign(world.size(), std::numeric_limits<double>::quiet_NaN());
+  std::vector<double> medians;
+  for (size_t i = 0; i < world.size(); ++i) {
+    std::vector<double> d;
+    for (const Eigen::Vector2d& p : world[i]) {
+      const auto [bx, by] = key(p);
+      double best = max_distance_m * max_distance_m;
+      bool found = false;
+      for (int64_t dx = -1; dx <= 1; ++dx) {
+        for (int64_t dy = -1; dy <= 1; ++dy) {
+          const auto it = buckets.find({bx + dx, by + dy});
+          if (it == buckets.end()) continue;
+          for (const WorldPoint& w : it->second) {
+            if (std::abs(w.scan - static_cast<int>(i)) < min_separation_scans) continue;
+            const double d2 = (w.p - p).squaredNorm();
+            if (d2 <= best) {
+              best = d2;
+              found = true;
+            }
+          }
+        }
+      }
+      if (found) d.push_back(std::sqrt(best));
+    }
+    if (static_cast<int>(d.size()) < min_pairs) continue;
+    std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
+    c.per_scan_m[i] = d[d.size() / 2];
+    medians.push_back(c.per_scan_m[i]);
+  }
+  c.scans = static_cast<int>(medians.size());
+  if (!medians.empty()) {
+    double sum = 0;
+    for (const double m : medians) sum += m;
+    c.mean_m = sum / static_cast<double>(medians.size());
+    std::nth_element(medians.begin(), medians.begin() + static_cast<std::ptrdiff_t>(medians.size() / 2), medians.end());
+    c.median_m = medians[medians.size() / 2];
+  }
+  return c;
 }
 
 }  // namespace snapnav::eval

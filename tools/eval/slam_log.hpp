@@ -65,4 +65,21 @@ SlamRun RunSlam(const SlamLog& log, const nav::LaserSlamOptions& options);
 std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vector<nav::Pose2>& estimate,
                                                                  const SlamRun& run, const Reference& reference);
 
+// Map consistency of a trajectory without a reference: the scans are placed at the trajectory's
+// poses and each scan point is paired with the nearest point (within max_distance_m) of the
+// scans at least min_separation_scans away in the log (the places seen again on a revisit, not
+// the scan's neighbours, which the matcher aligned it with anyway). A scan with at least
+// min_pairs such pairs gets the median pair distance; the trajectory's figure is the median of
+// those over the scans. A consistent map (the same walls seen again in the same place) gives
+// small distances; a trajectory that puts a revisit off gives doubled walls, and larger ones.
+struct MapConsistency {
+  std::vector<double> per_scan_m;  // per scan (in log order): median distance, NaN without enough pairs
+  int scans = 0;                   // scans with a figure
+  double median_m = 0;             // median over those scans
+  double mean_m = 0;
+};
+// `poses[i]` is the pose of the i-th scan of `log`, or nullopt (the scan is left out).
+MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::optional<nav::Pose2>>& poses,
+                                     int min_separation_scans = 30, double max_distance_m = 0.5, int min_pairs = 30);
+
 }  // namespace snapnav::eval

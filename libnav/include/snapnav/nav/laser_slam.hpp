@@ -12,6 +12,7 @@
 // faster than the area explored.
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -53,12 +54,16 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
                                           double angle_increment_rad, double range_min_m, double range_max_m,
                                           const Pose2& sensor = {});
 
-// A point map on two hash grids: at most one point per cell of resolution_m (decimation),
-// and buckets of bucket_m for nearest-neighbour queries (3 x 3 buckets cover a query radius
-// up to bucket_m).
+// A point map on hash grids: at most one point per cell of resolution_m (decimation), and
+// buckets of bucket_m for exact nearest-neighbour queries (3 x 3 buckets cover a query radius
+// up to bucket_m). With lookup_radius_m > 0 it also keeps a nearest-point lookup grid: in tiles
+// of 32 x 32 cells of lookup_cell_m, each cell within lookup_radius_m of a stored point holds
+// the kLookupCandidates stored points nearest to the cell's centre, updated as points are added;
+// a query (LookupIndex) takes the nearest of its cell's candidates: one tile lookup instead of a
+// search over buckets.
 class PointGridMap {
  public:
-  PointGridMap(double resolution_m, double bucket_m);
+  PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m = 0, double lookup_cell_m = 0.05);
   // Adds p (with its unit surface normal, or zero if unknown) unless its cell is taken;
   // returns whether it was added.
   bool Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal = Eigen::Vector2d::Zero());
@@ -66,20 +71,52 @@ class PointGridMap {
   std::optional<Eigen::Vector2d> Nearest(const Eigen::Vector2d& p, double max_distance_m) const;
   // Its index in points() / normals(), or -1.
   int NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const;
-  // Whether a stored point lies within `distance_m` of p.
-  bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return Nearest(p, distance_m).has_value(); }
+  // Nearly the nearest: the nearest to p of the candidates the lookup grid holds for p's cell, if
+  // within max_distance_m of p; -1 otherwise. It is the nearest point unless more than
+  // kLookupCandidates points lie nearer to the cell's centre than the nearest point's distance
+  // plus half a cell diagonal. Without a lookup grid, or for max_distance_m beyond its radius,
+  // it is NearestIndex.
+  int LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const;
+  // Whether a stored point lies within `distance_m` of p (through the lookup grid if there is one).
+  bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return LookupIndex(p, distance_m) >= 0; }
   size_t size() const { return points_.size(); }
   const std::vector<Eigen::Vector2d>& points() const { return points_; }
   const std::vector<Eigen::Vector2d>& normals() const { return normals_; }
   double resolution_m() const { return resolution_; }
+  double lookup_radius_m() const { return lookup_radius_; }
 
  private:
+  static constexpr int kTileBits = 5, kTile = 1 << kTileBits;  // 32 x 32 lookup cells per tile
+ public:
+  static constexpr int kLookupCandidates = 3;
+
+ private:
+  struct Tile {
+    // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
+    uint32_t index[kTile * kTile][kLookupCandidates];
+    float d2[kTile * kTile][kLookupCandidates];  // their squared distances from the cell centre [m^2]
+  };
+  static constexpr uint32_t kNone = 0xffffffffu;
   static uint64_t Key(int64_t ix, int64_t iy) {
     return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
   }
-  double resolution_, bucket_;
+  // Tile key -> index in tiles_: open addressing with linear probing in a power-of-two table
+  // (the lookup's hot path: a multiply and, mostly, one probe).
+  struct TileTable {
+    std::vector<uint64_t> keys;
+    std::vector<uint32_t> values;  // kNone: empty slot
+    size_t count = 0;
+    int bits = 0;
+    size_t Slot(uint64_t key) const { return static_cast<size_t>((key * 0x9E3779B97F4A7C15ULL) >> (64 - bits)); }
+    uint32_t Find(uint64_t key) const;                 // kNone if absent
+    uint32_t FindOrAdd(uint64_t key, uint32_t value);  // the stored value (`value` if it was absent)
+  };
+  void AddToLookup(const Eigen::Vector2d& p, uint32_t index);
+  double resolution_, bucket_, lookup_radius_, lookup_cell_;
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
+  TileTable tile_index_;                                         // lookup tile -> index in tiles_
+  std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
   std::vector<Eigen::Vector2d> points_, normals_;
 };
 
@@ -109,7 +146,24 @@ struct LaserSlamOptions {
   double search_sigmas = 3;
   double search_window_max_rad = 0.5236;    // 30 deg; 0: no search, no recovery
   double search_step_rad = 0.00873;         // 0.5 deg
+  // Fast turns: odometry that lags the laser reports a turn a scan late (CSAIL: 21 deg, then 0.2
+  // where the laser saw 15, then 20), so the prediction's heading also gets this std. dev. per
+  // radian of the larger of odometry's turn since the last scan and its turn over the interval
+  // before; the heading search window follows.
+  double turn_noise_rad_per_rad = 1.0;
+  // Stale odometry: an interval between two scans with no odometry motion at all is taken as
+  // odometry that stopped reporting (CSAIL: the same odometry pose for up to 5 scans while the
+  // robot turns, then a jump of 0.5 m and 85 deg). The prediction is then the last scan-to-scan
+  // motion, and when odometry moves again, the motion the scans tracked meanwhile is taken out
+  // of its increment. (A robot that really stopped: the last motion is small, the scan corrects it.)
+  bool stale_odometry = true;
   double recovery_fit = 0.6;
+  // The update should sit where the scan fits: when the updated pose scores (against the map,
+  // every point) more than this fraction below the ICP pose, the prediction was off by more than
+  // its covariance allowed (odometry jitter along a corridor, where the measurement covariance
+  // leaves the axis to the prediction; a late turn): its covariance is widened by the innovation
+  // and the update redone. 0: off.
+  double update_score_margin = 0.05;
   int icp_iterations = 15;
   double icp_convergence_m = 1e-4;          // stop when an iteration moves less than this
   double point_sigma_m = 0.03;              // noise of one matched point, floor of the residual estimate
@@ -117,6 +171,10 @@ struct LaserSlamOptions {
   double map_resolution_m = 0.05;           // grid cell of the map (decimation)
   double add_distance_m = 0.08;             // a scan point is new if no map point is this close
   int scan_step = 1;                        // use every n-th point of a scan
+  // Nearest map points through the map's lookup grid of cells of this size (PointGridMap): one
+  // table lookup per query, the nearest of the points nearest to the cell's centre. 0: exact
+  // search over buckets.
+  double lookup_cell_m = 0.05;
   void Validate() const;                    // throws std::invalid_argument
 };
 
@@ -126,6 +184,8 @@ struct LaserSlamUpdate {
   double fit = 0;              // fraction of the points within match_distance_m / 2 of the map after ICP
   int searches = 0;            // 1 if the heading was searched before ICP
   int recoveries = 0;          // 1 if a poor fit started a wider search
+  bool stale_odometry = false; // odometry had not moved since the last scan: predicted from the last motion
+  bool widened = false;        // the update scored below the ICP pose: the prediction was widened
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
 };
@@ -158,6 +218,7 @@ class LaserSlam {
   double Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
   Pose2 SearchHeading(const Pose2& around, double window_rad, double shift_m, const std::vector<Eigen::Vector2d>& points,
                       size_t stride) const;
+
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
 
@@ -166,6 +227,11 @@ class LaserSlam {
   Eigen::Matrix3d covariance_;
   PointGridMap map_;
   int64_t scans_ = 0;
+  Pose2 odometry_since_scan_;         // odometry's motion since the last scan
+  double previous_odometry_turn_rad_ = 0;  // odometry's heading change over the interval before
+  std::optional<Pose2> last_scan_pose_;    // the pose after the last scan
+  Pose2 last_motion_;                  // the estimate's motion between the last two scans
+  std::optional<Pose2> stale_since_;   // the pose at the last scan before odometry went stale
 };
 
 }  // namespace snapnav::nav
