@@ -570,8 +570,14 @@ TEST(OmniCameraBinary, SigintStopsCleanly) {
   ScratchDir dir;
   for (int i = 0; i < 3; ++i) ASSERT_TRUE(cv::imwrite(dir / (std::to_string(i) + ".png"), TestImage(i)));
   snapnav::testing::WriteTextFile(dir / "cam.ini", ConfigText("folder:" + dir.path().string(), "gray8", true, 50));
+  // A background job of a non-interactive shell starts with SIGINT ignored until the program installs
+  // its handler, so the signal is sent only once the camera has started capturing (slow on a loaded
+  // machine), not after a fixed delay.
+  const std::string err = dir / "err.txt";
   const std::string command = snapnav::testing::BinDir() + "/omni-camera --config " + (dir / "cam.ini") +
-                              " --lcm-url memq:// & pid=$!; sleep 0.7; kill -INT $pid; wait $pid; echo \"rc=$?\"";
+                              " --lcm-url memq:// 2>" + err + " & pid=$!; for i in $(seq 600); do grep -q " +
+                              "\"capturing from\" " + err + " && break; sleep 0.1; done; sleep 0.7; kill -INT $pid; " +
+                              "wait $pid; echo \"rc=$?\"; cat " + err;
   const auto r = snapnav::testing::RunCommand("sh -c '" + command + "'");
   EXPECT_NE(r.output.find("rc=0"), std::string::npos) << r.output;
   std::smatch m;
