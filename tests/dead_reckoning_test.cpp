@@ -67,7 +67,9 @@ TEST(DeadReckoningNode, BadOdometryIsCountedAndSkipped) {
   while (bus.HandleOnce(0)) {
   }
   EXPECT_EQ(poses, 2);
-  EXPECT_EQ(bus.stats().at("T2_ODOMETRY").handler_errors, 2u);
+  EXPECT_EQ(bus.stats().at("T2_ODOMETRY").decode_errors, 2u);  // rejected, with the reason
+  EXPECT_EQ(node.rejected().at("bad odometry"), 1);
+  EXPECT_EQ(node.rejected().at("odometry back in time"), 1);
 }
 
 TEST(DeadReckoningNode, ConfigMissingKeyIsAnError) {

@@ -141,8 +141,11 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
     if (!slam_) slam_.emplace(config_.options, glue::OdometryPose(msg));
     return;
   }
-  if (!Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)) {
-    Skip("non-finite odometry", "increment is not finite", true);
+  if (const std::string problem = glue::OdometryProblem(msg, false); !problem.empty()) {
+    Skip(std::isfinite(msg.delta_x_m) && std::isfinite(msg.delta_y_m) && std::isfinite(msg.delta_theta_rad)
+             ? "absurd odometry"
+             : "non-finite odometry",
+         problem, true);
     return;
   }
   if (scans_ > 0 && msg.utime < last_scan_utime_) ++late_odometry_;  // applied anyway: arrival order

@@ -24,6 +24,9 @@ const std::vector<NodeEntry>& ReplayRegistry() {
          return c.Hold<DeadReckoningNode>(
              [](const DeadReckoningNode& n, std::ostream& out) {
                out << "dead-reckoning: published " << n.published() << " poses\n";
+               for (const auto& [reason, k] : n.rejected()) {
+                 out << "dead-reckoning:   rejected (" << reason << "): " << k << "\n";
+               }
              },
              nullptr, c.bus, config);
        }},
