@@ -1,5 +1,7 @@
 #include "fuzz_samples.hpp"
 
+#include <cmath>
+
 #include "snapnav/glue/codec.hpp"
 
 namespace snapnav::fuzz {
@@ -165,6 +167,20 @@ waypoint_route_t SampleRoute() {
 
 namespace {
 
+bool AllFinite(std::initializer_list<double> values) {
+  for (const double x : values) {
+    if (!std::isfinite(x)) return false;
+  }
+  return true;
+}
+template <class V>
+bool AllFinite(const std::vector<V>& values) {
+  for (const auto& x : values) {
+    if (!std::isfinite(x)) return false;
+  }
+  return true;
+}
+
 template <class Msg>
 TypeCase Case(const Msg& sample) {
   return {Msg::getTypeName(), glue::Encode(sample),
@@ -183,5 +199,56 @@ std::vector<TypeCase> AllTypes() {
           Case(SampleOmniFrame()),    Case(SamplePlaceCellMatch()),  Case(SamplePointMap()),
           Case(SamplePose()),         Case(SampleRoute())};
 }
+
+// "" when the published payload decodes and holds only finite numbers; else what is wrong.
+std::string OutputProblem(const std::string& channel, const std::string& payload) {
+  const auto fp = glue::PayloadFingerprint(payload.data(), payload.size());
+  if (!fp) return channel + ": short payload";
+  std::string error;
+  auto bad = [&](bool ok, const char* type) { return ok ? std::string() : channel + ": non-finite " + type; };
+  if (*fp == static_cast<uint64_t>(pose_t::getHash())) {
+    const auto m = glue::Decode<pose_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    bool ok = AllFinite({m->x_m, m->y_m, m->theta_rad});
+    for (const double c : m->covariance) ok = ok && std::isfinite(c);
+    return bad(ok, "pose_t");
+  }
+  if (*fp == static_cast<uint64_t>(point_map_t::getHash())) {
+    const auto m = glue::Decode<point_map_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(std::isfinite(m->resolution_m) && AllFinite(m->x_m) && AllFinite(m->y_m), "point_map_t");
+  }
+  if (*fp == static_cast<uint64_t>(landmark_set_t::getHash())) {
+    const auto m = glue::Decode<landmark_set_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    bool ok = AllFinite(m->bearings_rad) && AllFinite(m->rows_px) && AllFinite(m->strengths) && AllFinite(m->scales_px);
+    for (const auto& d : m->descriptors) ok = ok && AllFinite(d);
+    return bad(ok, "landmark_set_t");
+  }
+  if (*fp == static_cast<uint64_t>(homing_vector_t::getHash())) {
+    const auto m = glue::Decode<homing_vector_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->direction_rad, m->magnitude, m->compass_rotation_rad}), "homing_vector_t");
+  }
+  if (*fp == static_cast<uint64_t>(place_cell_match_t::getHash())) {
+    const auto m = glue::Decode<place_cell_match_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->distance, m->score, m->x_m, m->y_m, m->theta_rad}), "place_cell_match_t");
+  }
+  if (*fp == static_cast<uint64_t>(drive_command_t::getHash())) {
+    const auto m = glue::Decode<drive_command_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->linear_velocity_mps, m->angular_velocity_radps}), "drive_command_t");
+  }
+  if (*fp == static_cast<uint64_t>(navigator_status_t::getHash())) {
+    const auto m = glue::Decode<navigator_status_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->waypoint_x_m, m->waypoint_y_m, m->distance_to_waypoint_m, m->heading_error_rad, m->x_m,
+                          m->y_m, m->theta_rad, m->position_sigma_m, m->linear_velocity_mps, m->angular_velocity_radps}),
+               "navigator_status_t");
+  }
+  return channel + ": unexpected output type";
+}
+
 
 }  // namespace snapnav::fuzz

@@ -43,4 +43,9 @@ struct TypeCase {
 // Every type of lcmtypes/.
 std::vector<TypeCase> AllTypes();
 
+// "" when a payload a node published decodes and holds only finite numbers (the output types:
+// pose_t, point_map_t, landmark_set_t, homing_vector_t, place_cell_match_t, drive_command_t,
+// navigator_status_t); else what is wrong.
+std::string OutputProblem(const std::string& channel, const std::string& payload);
+
 }  // namespace snapnav::fuzz
