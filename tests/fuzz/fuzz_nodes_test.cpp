@@ -75,7 +75,7 @@ void Int(std::vector<Mutation<T>>* out, const std::string& field, Ref ref) {
 template <class T>
 void Times(std::vector<Mutation<T>>* out) {
   for (const int64_t v : {int64_t{-1}, int64_t{0}, std::numeric_limits<int64_t>::max(),
-                          std::numeric_limits<int64_t>::min(), kStart - 3600000000}) {
+                          std::numeric_limits<int64_t>::min(), kStart - 3600000000, kStart * 10 /* year 2508 */}) {
     out->push_back({"utime = " + std::to_string(v), "utime", false, true, [v](T& m) { m.utime = v; }});
   }
 }
