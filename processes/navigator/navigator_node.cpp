@@ -287,7 +287,7 @@ void NavigatorNode::PublishStatus(int64_t utime, int8_t state) {
 }
 
 void NavigatorNode::OnPose(const pose_t& msg) {
-  if (msg.utime < 0 || msg.utime > glue::MessageClock::kMaxPlausibleUtime) {
+  if (!glue::PlausibleUtime(msg.utime)) {
     Reject("implausible utime", "fix at utime " + std::to_string(msg.utime));
     return;
   }
@@ -327,7 +327,7 @@ void NavigatorNode::OnHomingVector(const homing_vector_t& msg) {
     Reject("non-finite homing vector", "utime " + std::to_string(msg.utime));
     return;
   }
-  if (msg.utime < 0 || msg.utime > glue::MessageClock::kMaxPlausibleUtime) {
+  if (!glue::PlausibleUtime(msg.utime)) {
     Reject("implausible utime", "homing vector at utime " + std::to_string(msg.utime));
     return;
   }

@@ -64,8 +64,8 @@ SlamLog LoadSlamLog(const std::string& path, bool progress) {
       // As the laser-slam process checks a scan (processes/laser_slam).
       if (!s || s->ranges_m.empty() || !std::isfinite(s->angle_min_rad) || !std::isfinite(s->angle_increment_rad) ||
           s->angle_increment_rad == 0 || !(s->range_min_m >= 0) || !(s->range_max_m > s->range_min_m) ||
-          !(s->range_max_m <= 10000) || !std::isfinite(s->sensor_x_m) || !std::isfinite(s->sensor_y_m) ||
-          !std::isfinite(s->sensor_theta_rad)) {
+          !(s->range_max_m <= 10000) || !(std::abs(s->sensor_x_m) <= 10000) || !(std::abs(s->sensor_y_m) <= 10000) ||
+          !(std::abs(s->sensor_theta_rad) <= 100)) {
         ++log.rejected;
         continue;
       }

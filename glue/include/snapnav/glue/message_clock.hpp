@@ -11,6 +11,9 @@
 
 namespace snapnav::glue {
 
+// A utime that can be a sensor time: 0 .. 2^62 us (differences of two never overflow).
+inline bool PlausibleUtime(int64_t utime) { return utime >= 0 && utime <= (int64_t{1} << 62); }
+
 class MessageClock {
  public:
   enum class Verdict { kAccepted, kRestarted, kBackInTime, kImplausible };
@@ -19,7 +22,7 @@ class MessageClock {
   explicit MessageClock(int restart_after = 5) : restart_after_(restart_after) {}
 
   Verdict Check(int64_t utime) {
-    if (utime < 0 || utime > kMaxPlausibleUtime) return Verdict::kImplausible;
+    if (!PlausibleUtime(utime)) return Verdict::kImplausible;
     if (!last_ || utime >= *last_) {
       last_ = utime;
       behind_ = 0;
