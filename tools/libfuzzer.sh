@@ -22,7 +22,7 @@ status=0
 for t in decoders nodes; do
   echo "== libfuzzer-$t for $SECONDS_EACH s"
   (cd "$BUILD/findings" && "$BUILD/bin/libfuzzer-$t" -max_total_time="$SECONDS_EACH" -malloc_limit_mb=256 \
-    -rss_limit_mb=2048 -print_final_stats=1 "$BUILD/corpus/$t") 2>&1 | grep -vE "^#[0-9]+.*(NEW|REDUCE|pulse)" || status=1
+    -rss_limit_mb=2048 -print_final_stats=1 "$BUILD/corpus/$t") 2>&1 | grep -avE "^#[0-9]+.*(NEW|REDUCE|pulse)" || status=1
 done
 [ "$status" = 0 ] && echo "libfuzzer: no finding" || echo "libfuzzer: FINDINGS above (inputs in $BUILD/findings)"
 exit "$status"
