@@ -2,7 +2,10 @@
 # 1. Before every `this->x.resize(this->n)` in a decoder, reject a count that is
 #    negative or larger than the bytes left in the buffer (each element takes at
 #    least one byte), so a corrupt count cannot allocate unbounded memory.
-# 2. Reject a string length below 1 (the encoder always writes length + 1).
+# 2. Reject a string length below 1 (the encoder always writes length + 1), and a string that
+#    is not NUL-terminated or holds a NUL inside: the encoder writes strlen() bytes, so such a
+#    string would re-encode shorter than getEncodedSize() says (LCM would publish unwritten
+#    bytes). A decoded message then always re-encodes to the bytes it came from.
 file(GLOB headers "${DIR}/*.hpp")
 foreach(f ${headers})
   file(READ "${f}" text)
@@ -12,7 +15,7 @@ foreach(f ${headers})
     text "${text}")
   string(REGEX REPLACE
     "if\\(__([A-Za-z0-9_]+)_len__ > maxlen - pos\\) return -1;"
-    "if(__\\1_len__ < 1 || __\\1_len__ > maxlen - pos) return -1;"
+    "if(__\\1_len__ < 1 || __\\1_len__ > maxlen - pos) return -1;\n    if(((const char*)buf)[offset + pos + __\\1_len__ - 1] != 0 || memchr(((const char*)buf) + offset + pos, 0, __\\1_len__ - 1) != NULL) return -1;"
     text "${text}")
   file(WRITE "${f}" "${text}")
 endforeach()

@@ -67,7 +67,27 @@ TEST(DeadReckoningNode, BadOdometryIsCountedAndSkipped) {
   while (bus.HandleOnce(0)) {
   }
   EXPECT_EQ(poses, 2);
-  EXPECT_EQ(bus.stats().at("T2_ODOMETRY").handler_errors, 2u);
+  EXPECT_EQ(bus.stats().at("T2_ODOMETRY").decode_errors, 2u);  // rejected, with the reason
+  EXPECT_EQ(node.rejected().at("bad odometry"), 1);
+  EXPECT_EQ(node.rejected().at("odometry back in time"), 1);
+}
+
+// One stamp far in the future must not block the node: five messages in a row behind it
+// restart the stream.
+TEST(DeadReckoningNode, FarFutureStampIsOvercomeAfterFiveMessages) {
+  glue::Bus bus("memq://");
+  DeadReckoningNode node(bus, TestConfig("T3_"));
+  int poses = 0;
+  bus.Subscribe<pose_t>("T3_POSE_DEAD_RECKONING", [&](const pose_t&) { ++poses; });
+  bus.Publish("T3_ODOMETRY", Odo(1000, 0, 0, 0, 0, 0));
+  bus.Publish("T3_ODOMETRY", Odo(int64_t{1} << 61, 0, 0, 0, 0.1, 0));  // far future, accepted
+  for (int i = 0; i < 6; ++i) bus.Publish("T3_ODOMETRY", Odo(2000 + i, 0, 0, 0, 0.1, 0));
+  bus.Publish("T3_ODOMETRY", Odo(-5, 0, 0, 0, 0.1, 0));                  // implausible
+  while (bus.HandleOnce(0)) {
+  }
+  EXPECT_EQ(poses, 2 + 2);  // the first two, then the fifth behind (restart) and the sixth
+  EXPECT_EQ(node.rejected().at("odometry back in time"), 4);
+  EXPECT_EQ(node.rejected().at("implausible utime"), 1);
 }
 
 TEST(DeadReckoningNode, ConfigMissingKeyIsAnError) {

@@ -51,3 +51,23 @@ Eigen::Matrix3d CovarianceOf(const pose_t& msg) {
 }
 
 }  // namespace snapnav::glue
+
+namespace snapnav::glue {
+
+std::string OdometryProblem(const odometry_t& m, bool cumulative) {
+  if (cumulative && !(std::isfinite(m.x_m) && std::isfinite(m.y_m) && std::isfinite(m.theta_rad))) {
+    return "cumulative pose is not finite";
+  }
+  if (!(std::isfinite(m.delta_x_m) && std::isfinite(m.delta_y_m) && std::isfinite(m.delta_theta_rad))) {
+    return "increment is not finite";
+  }
+  if (std::abs(m.delta_x_m) > kMaxOdometryStepM || std::abs(m.delta_y_m) > kMaxOdometryStepM ||
+      std::abs(m.delta_theta_rad) > kMaxOdometryStepRad) {
+    return "increment (" + std::to_string(m.delta_x_m) + " m, " + std::to_string(m.delta_y_m) + " m, " +
+           std::to_string(m.delta_theta_rad) + " rad) exceeds " + std::to_string(kMaxOdometryStepM) + " m or " +
+           std::to_string(kMaxOdometryStepRad) + " rad";
+  }
+  return "";
+}
+
+}  // namespace snapnav::glue

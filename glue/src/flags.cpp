@@ -58,6 +58,10 @@ void Flags::AddBool(const std::string& name, bool* value, const std::string& hel
   Add({name, help, "", true, [value](const std::string&) { *value = true; }});
 }
 
+void Flags::AddStringList(const std::string& name, std::vector<std::string>* values, const std::string& help) {
+  Add({name, help + " (repeatable)", "", false, [values](const std::string& v) { values->push_back(v); }});
+}
+
 void Flags::AddCommon(CommonFlags* common) {
   AddString("config", &common->config, "INI file with this process's options");
   AddString("lcm-url", &common->lcm_url,

@@ -79,14 +79,58 @@ omni_frame_t ImageToFrame(const cv::Mat& input, int8_t encoding, int jpeg_qualit
   return f;
 }
 
+std::optional<cv::Size> CompressedImageSize(const std::vector<uint8_t>& b, int8_t encoding) {
+  auto be16 = [&](size_t at) { return (b[at] << 8) | b[at + 1]; };
+  auto be32 = [&](size_t at) { return (uint32_t{b[at]} << 24) | (uint32_t{b[at + 1]} << 16) | (b[at + 2] << 8) | b[at + 3]; };
+  if (encoding == omni_frame_t::PNG) {
+    static const uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a};
+    if (b.size() < 24 || std::memcmp(b.data(), kSignature, 8) != 0 || std::memcmp(&b[12], "IHDR", 4) != 0) {
+      return std::nullopt;
+    }
+    const uint32_t w = be32(16), h = be32(20);
+    if (w > INT32_MAX || h > INT32_MAX) return cv::Size(-1, -1);
+    return cv::Size(static_cast<int>(w), static_cast<int>(h));
+  }
+  if (encoding == omni_frame_t::JPEG) {
+    if (b.size() < 4 || b[0] != 0xff || b[1] != 0xd8) return std::nullopt;
+    // Segments up to the first start-of-frame marker (SOF0..SOF15 but DHT, JPG, DAC), which
+    // holds the height and width.
+    for (size_t at = 2; at + 4 <= b.size();) {
+      if (b[at] != 0xff) return std::nullopt;
+      const uint8_t marker = b[at + 1];
+      if (marker == 0xff) {  // fill byte
+        ++at;
+        continue;
+      }
+      if (marker == 0xd8 || (marker >= 0xd0 && marker <= 0xd7) || marker == 0x01) {  // no length
+        at += 2;
+        continue;
+      }
+      const size_t length = static_cast<size_t>(be16(at + 2));
+      if (marker >= 0xc0 && marker <= 0xcf && marker != 0xc4 && marker != 0xc8 && marker != 0xcc) {
+        if (at + 9 > b.size() || length < 7) return std::nullopt;
+        return cv::Size(be16(at + 7), be16(at + 5));
+      }
+      if (length < 2) return std::nullopt;
+      at += 2 + length;
+    }
+    return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 cv::Mat FrameToImage(const omni_frame_t& f) {
   if (f.width <= 0 || f.height <= 0) throw std::invalid_argument("frame has no pixels (" + std::to_string(f.width) + "x" + std::to_string(f.height) + ")");
+  if (static_cast<int64_t>(f.width) * f.height > kMaxFramePixels) {
+    throw std::invalid_argument("frame of " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                                " pixels is larger than " + std::to_string(kMaxFramePixels) + " pixels");
+  }
   if (static_cast<size_t>(f.data_size) != f.data.size()) throw std::invalid_argument("frame data_size does not match its data");
   switch (f.encoding) {
     case omni_frame_t::GRAY8:
     case omni_frame_t::RGB8: {
       const int channels = f.encoding == omni_frame_t::GRAY8 ? 1 : 3;
-      if (f.row_stride < channels * f.width) throw std::invalid_argument("frame row_stride smaller than a row of pixels");
+      if (f.row_stride < int64_t{channels} * f.width) throw std::invalid_argument("frame row_stride smaller than a row of pixels");
       if (static_cast<int64_t>(f.row_stride) * f.height > f.data_size) {
         throw std::invalid_argument("frame holds " + std::to_string(f.data_size) + " bytes, its size needs " +
                                     std::to_string(static_cast<int64_t>(f.row_stride) * f.height));
@@ -99,6 +143,15 @@ cv::Mat FrameToImage(const omni_frame_t& f) {
     }
     case omni_frame_t::JPEG:
     case omni_frame_t::PNG: {
+      // The header's size first: OpenCV allocates what the header says before it reads a pixel.
+      const char* format = f.encoding == omni_frame_t::JPEG ? "JPEG" : "PNG";
+      const auto header = CompressedImageSize(f.data, f.encoding);
+      if (!header) throw std::invalid_argument(std::string("frame: data is not a ") + format + " file");
+      if (header->width != f.width || header->height != f.height) {
+        throw std::invalid_argument(std::string("frame: the ") + format + " header says " +
+                                    std::to_string(header->width) + "x" + std::to_string(header->height) +
+                                    ", the frame " + std::to_string(f.width) + "x" + std::to_string(f.height));
+      }
       cv::Mat out = cv::imdecode(f.data, cv::IMREAD_UNCHANGED);
       if (out.empty()) throw std::invalid_argument("frame: compressed image does not decode");
       if (out.cols != f.width || out.rows != f.height) throw std::invalid_argument("frame: decoded size differs from width/height");

@@ -108,6 +108,15 @@ int IniFile::KeyLine(const std::string& section, const std::string& key) const {
   return k == s->second.end() ? 0 : k->second.line;
 }
 
+void IniFile::Set(const std::string& section, const std::string& key, const std::string& value,
+                  const std::string& origin) {
+  const auto s = sections_.find(section);
+  if (s == sections_.end() || !s->second.count(key)) {
+    throw ConfigError(origin + ": " + origin_ + " has no key '" + key + "' in section [" + section + "]");
+  }
+  s->second[key].value = value;
+}
+
 const IniFile::Entry& IniFile::Find(const std::string& section, const std::string& key) const {
   const auto s = sections_.find(section);
   if (s == sections_.end()) throw ConfigError(origin_ + ": missing section [" + section + "] (needed for key '" + key + "')");

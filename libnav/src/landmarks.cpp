@@ -151,6 +151,7 @@ std::vector<LandmarkMatch> MatchLandmarks(const LandmarkSet& home, const Landmar
         d2 = row[h];
       }
     }
+    if (best < 0) continue;  // no finite distance to any home landmark (e.g. descriptors of 1e38)
     const float ratio = std::isfinite(d2) && d2 > 0 ? d1 / d2 : 1.0f;
     if (options.ratio < 1 && std::isfinite(d2) && !(d1 < options.ratio * d2)) continue;
     if (options.max_distance > 0 && d1 > options.max_distance) continue;

@@ -1,5 +1,6 @@
 #include "dead_reckoning_node.hpp"
 
+#include <iostream>
 #include <ostream>
 #include <stdexcept>
 
@@ -32,17 +33,36 @@ DeadReckoningNode::DeadReckoningNode(glue::Bus& bus, const DeadReckoningConfig& 
   bus_.Subscribe(config_.odometry_channel, &DeadReckoningNode::OnOdometry, this);
 }
 
+void DeadReckoningNode::Reject(const std::string& reason, const std::string& detail) {
+  ++rejected_[reason];
+  bus_.CountDecodeError(reason + ": " + detail);  // per channel; printed to stderr, rate-limited
+}
+
 void DeadReckoningNode::OnOdometry(const odometry_t& msg) {
+  // The first message's cumulative pose is the start; after it only increments are used.
+  if (const std::string problem = glue::OdometryProblem(msg, !estimator_); !problem.empty()) {
+    Reject("bad odometry", problem);
+    return;
+  }
+  switch (clock_.Check(msg.utime)) {
+    case glue::MessageClock::Verdict::kImplausible:
+      Reject("implausible utime", std::to_string(msg.utime));
+      return;
+    case glue::MessageClock::Verdict::kBackInTime:
+      Reject("odometry back in time", "utime " + std::to_string(msg.utime) + " after " + std::to_string(*clock_.last()));
+      return;
+    case glue::MessageClock::Verdict::kRestarted:
+      std::cerr << "dead-reckoning: odometry time restarted at utime " << msg.utime << "\n";
+      break;
+    case glue::MessageClock::Verdict::kAccepted:
+      break;
+  }
   if (!estimator_) {
     // The first message fixes the start: the odometry frame's origin is the robot's first pose.
     estimator_.emplace(config_.options, glue::OdometryPose(msg));
   } else {
-    if (msg.utime < last_utime_) {
-      throw std::invalid_argument("odometry utime " + std::to_string(msg.utime) + " goes back in time");
-    }
     estimator_->AddOdometry(glue::OdometryDelta(msg));
   }
-  last_utime_ = msg.utime;
   bus_.Publish(config_.pose_channel, glue::ToPoseMsg(msg.utime, "dead_reckoning", "odom", estimator_->pose(),
                                                      estimator_->covariance()));
   ++published_;

@@ -3,11 +3,13 @@
 // growing covariance, as the baseline for every other estimator.
 
 #include <iosfwd>
+#include <map>
 #include <optional>
 #include <string>
 
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/message_clock.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/odometry_t.hpp"
 
@@ -27,15 +29,20 @@ class DeadReckoningNode {
  public:
   DeadReckoningNode(glue::Bus& bus, const DeadReckoningConfig& config);
   int64_t published() const { return published_; }
+  // Odometry messages skipped, by reason ("bad odometry", "odometry back in time", ...); each is
+  // also counted as rejected on its channel by the bus.
+  const std::map<std::string, int64_t>& rejected() const { return rejected_; }
 
  private:
   void OnOdometry(const odometry_t& msg);
+  void Reject(const std::string& reason, const std::string& detail);
 
   glue::Bus& bus_;
   DeadReckoningConfig config_;
   std::optional<nav::DeadReckoning> estimator_;
-  int64_t last_utime_ = 0;
+  glue::MessageClock clock_;
   int64_t published_ = 0;
+  std::map<std::string, int64_t> rejected_;
 };
 
 }  // namespace snapnav::processes

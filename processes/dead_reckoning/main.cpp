@@ -23,6 +23,7 @@ int Main(int argc, char** argv) {
   processes::DeadReckoningNode node(bus, config);
   bus.Run();
   std::cerr << "dead-reckoning: published " << node.published() << " poses\n";
+  for (const auto& [reason, n] : node.rejected()) std::cerr << "dead-reckoning:   rejected (" << reason << "): " << n << "\n";
   bus.ReportStats(std::cerr);
   return 0;
 }

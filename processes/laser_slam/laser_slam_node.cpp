@@ -149,8 +149,11 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
     if (!slam_) slam_.emplace(config_.options, glue::OdometryPose(msg));
     return;
   }
-  if (!Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)) {
-    Skip("non-finite odometry", "increment is not finite", true);
+  if (const std::string problem = glue::OdometryProblem(msg, false); !problem.empty()) {
+    Skip(std::isfinite(msg.delta_x_m) && std::isfinite(msg.delta_y_m) && std::isfinite(msg.delta_theta_rad)
+             ? "absurd odometry"
+             : "non-finite odometry",
+         problem, true);
     return;
   }
   if (scans_ > 0 && msg.utime < last_scan_utime_) ++late_odometry_;  // applied anyway: arrival order
@@ -185,8 +188,15 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
          true);
     return;
   }
-  if (!Finite(msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad)) {
-    Skip("bad sensor pose", "sensor_x_m, sensor_y_m or sensor_theta_rad is not finite", true);
+  // The mounting is on the robot: within kMaxLaserRangeM of its centre, like every point (larger
+  // coordinates overflow the map's integer cells).
+  if (!Finite(msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad) || std::abs(msg.sensor_x_m) > kMaxLaserRangeM ||
+      std::abs(msg.sensor_y_m) > kMaxLaserRangeM || std::abs(msg.sensor_theta_rad) > 100) {
+    Skip("bad sensor pose",
+         "sensor (" + std::to_string(msg.sensor_x_m) + " m, " + std::to_string(msg.sensor_y_m) + " m, " +
+             std::to_string(msg.sensor_theta_rad) + " rad): finite, within " + std::to_string(kMaxLaserRangeM) +
+             " m and 100 rad",
+         true);
     return;
   }
   last_scan_utime_ = msg.utime;

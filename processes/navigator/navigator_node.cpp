@@ -194,10 +194,23 @@ void NavigatorNode::OnOdometry(const odometry_t& msg) {
                                       std::to_string(delta.theta_rad) + ")");
     return;
   }
-  if (last_odometry_utime_ && msg.utime < *last_odometry_utime_) {
-    Reject("odometry back in time",
-           "utime " + std::to_string(msg.utime) + " after " + std::to_string(*last_odometry_utime_));
+  if (const std::string problem = glue::OdometryProblem(msg, false); !problem.empty()) {
+    Reject("absurd odometry", problem);
     return;
+  }
+  switch (odometry_clock_.Check(msg.utime)) {
+    case glue::MessageClock::Verdict::kImplausible:
+      Reject("implausible utime", "odometry at utime " + std::to_string(msg.utime));
+      return;
+    case glue::MessageClock::Verdict::kBackInTime:
+      Reject("odometry back in time",
+             "utime " + std::to_string(msg.utime) + " after " + std::to_string(*last_odometry_utime_));
+      return;
+    case glue::MessageClock::Verdict::kRestarted:
+      std::cerr << "navigator: odometry time restarted at utime " << msg.utime << "\n";
+      break;
+    case glue::MessageClock::Verdict::kAccepted:
+      break;
   }
   if (msg.utime < tracker_.utime()) {
     // A fix stamped later than this odometry came first: its time is kept, the increment is used.
@@ -274,6 +287,10 @@ void NavigatorNode::PublishStatus(int64_t utime, int8_t state) {
 }
 
 void NavigatorNode::OnPose(const pose_t& msg) {
+  if (!glue::PlausibleUtime(msg.utime)) {
+    Reject("implausible utime", "fix at utime " + std::to_string(msg.utime));
+    return;
+  }
   const nav::Pose2 pose = glue::FromPoseMsg(msg);
   if (!Finite(pose)) {
     Reject("non-finite pose", "from " + msg.estimator + " at utime " + std::to_string(msg.utime));
@@ -308,6 +325,10 @@ void NavigatorNode::OnHomingVector(const homing_vector_t& msg) {
   }
   if (!std::isfinite(msg.direction_rad) || !std::isfinite(msg.magnitude)) {
     Reject("non-finite homing vector", "utime " + std::to_string(msg.utime));
+    return;
+  }
+  if (!glue::PlausibleUtime(msg.utime)) {
+    Reject("implausible utime", "homing vector at utime " + std::to_string(msg.utime));
     return;
   }
   nav::HomingInput h;

@@ -17,6 +17,7 @@
 #include "snapnav/drive_command_t.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/message_clock.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/nav/navigator.hpp"
 #include "snapnav/navigator_status_t.hpp"
@@ -95,6 +96,7 @@ class NavigatorNode {
   nav::FollowStep last_step_;
   nav::DriveCommand last_command_;
   std::optional<int64_t> last_odometry_utime_;
+  glue::MessageClock odometry_clock_;
   std::optional<int64_t> last_status_utime_;
   int64_t commands_ = 0, statuses_ = 0, routes_ = 0, homing_used_ = 0, homing_invalid_ = 0;
   std::map<std::string, int64_t> fixes_;

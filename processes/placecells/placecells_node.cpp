@@ -12,6 +12,7 @@
 
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/message_clock.hpp"
 #include "snapnav/glue/place_cells.hpp"
 #include "snapnav/place_cell_match_t.hpp"
 
@@ -219,6 +220,10 @@ void PlaceCellsNode::OnOdometry(const odometry_t& msg) {
 }
 
 void PlaceCellsNode::OnExplorePose(const pose_t& msg) {
+  if (!glue::PlausibleUtime(msg.utime)) {
+    Reject("implausible utime", "explore pose at utime " + std::to_string(msg.utime));
+    return;
+  }
   const nav::Pose2 pose = glue::FromPoseMsg(msg);
   if (!Finite(pose)) {
     Reject("bad explore pose", "non-finite pose");
@@ -257,6 +262,10 @@ std::optional<nav::Pose2> PlaceCellsNode::Prediction() const {
 
 void PlaceCellsNode::OnFrame(const omni_frame_t& frame) {
   ++frames_;
+  if (!glue::PlausibleUtime(frame.utime)) {  // time differences below must not overflow
+    Reject("implausible utime", "frame at utime " + std::to_string(frame.utime));
+    return;
+  }
   MaybePrintStats(frame.utime);
   // Every frame is converted (a few ms), so each malformed one is counted, processed or not.
   const auto panorama = frames_to_panoramas_.Convert(frame);

@@ -97,7 +97,8 @@ int Main(int argc, char** argv) {
   std::ostringstream json;
   json << std::fixed << std::setprecision(4) << "{\n  \"log\": " << JsonString(log_path)
        << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
-       << ",\n  \"rejected\": " << log.rejected << ",\n  \"laser_slam_ms_per_scan\": " << ms_per_scan
+       << ",\n  \"rejected\": " << log.rejected << ",\n  \"log_damaged_places\": " << log.damaged_places
+       << ",\n  \"log_damaged_bytes\": " << log.damaged_bytes << ",\n  \"laser_slam_ms_per_scan\": " << ms_per_scan
        << ",\n  \"map_points\": " << run.map.size() << ",\n  \"thesis_slam_ms_per_scan\": " << thesis_run.ms_per_scan();
   std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
   std::vector<std::string> names = {"laser slam", "dead reckoning"};
@@ -256,6 +257,11 @@ int Main(int argc, char** argv) {
   }
   std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv"
             << (icp ? ", icp_slam_trajectory.csv, icp-slam/" : "") << "\n";
+  if (log.damaged_places > 0) {
+    std::cerr << "eval-slam: warning: " << log_path << " is damaged (" << log.damaged_places << " place(s), "
+              << log.damaged_bytes << " bytes skipped, see above): evaluated its intact events\n";
+    return 3;
+  }
   return 0;
 }
 

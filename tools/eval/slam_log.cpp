@@ -9,11 +9,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include <lcm/lcm-cpp.hpp>
 
 #include "importers.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/log_reader.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/odometry_t.hpp"
@@ -45,43 +45,53 @@ class VectorSink : public importers::Sink {
 }  // namespace
 
 SlamLog LoadSlamLog(const std::string& path, bool progress) {
-  lcm::LogFile file(path, "r");
-  if (!file.good()) throw std::runtime_error("cannot open LCM log " + path);
+  glue::LogReader file(path);  // throws naming the file when it cannot be opened
   SlamLog log;
   log.path = path;
-  while (const lcm::LogEvent* e = file.readNextEvent()) {
+  glue::LogEvent e;
+  while (file.Next(&e)) {
     ++log.events;
-    const std::string channel = e->channel;
-    if (channel == channels::kOdometry) {
-      odometry_t m;
-      if (m.decode(e->data, 0, static_cast<int>(e->datalen)) < 0) { ++log.rejected; continue; }
+    std::string error;
+    if (e.channel == channels::kOdometry) {
+      const auto m = glue::Decode<odometry_t>(e.data.data(), e.data.size(), &error);
+      if (!m || !glue::OdometryProblem(*m, false).empty()) { ++log.rejected; continue; }
       SlamStep step;
-      step.utime = m.utime;
-      step.odometry_delta = glue::OdometryDelta(m);
-      const nav::Pose2& d = step.odometry_delta;
-      if (!std::isfinite(d.x_m) || !std::isfinite(d.y_m) || !std::isfinite(d.theta_rad)) { ++log.rejected; continue; }
+      step.utime = m->utime;
+      step.odometry_delta = glue::OdometryDelta(*m);
       log.steps.push_back(std::move(step));
       ++log.odometry;
-    } else if (channel == channels::kLaserScan) {
-      laser_scan_t s;
-      if (s.decode(e->data, 0, static_cast<int>(e->datalen)) < 0 || s.ranges_m.empty() ||
-          !std::isfinite(s.angle_increment_rad)) { ++log.rejected; continue; }
+    } else if (e.channel == channels::kLaserScan) {
+      const auto s = glue::Decode<laser_scan_t>(e.data.data(), e.data.size(), &error);
+      // As the laser-slam process checks a scan (processes/laser_slam).
+      if (!s || s->ranges_m.empty() || !std::isfinite(s->angle_min_rad) || !std::isfinite(s->angle_increment_rad) ||
+          s->angle_increment_rad == 0 || !(s->range_min_m >= 0) || !(s->range_max_m > s->range_min_m) ||
+          !(s->range_max_m <= 10000) || !(std::abs(s->sensor_x_m) <= 10000) || !(std::abs(s->sensor_y_m) <= 10000) ||
+          !(std::abs(s->sensor_theta_rad) <= 100)) {
+        ++log.rejected;
+        continue;
+      }
       SlamStep step;
       step.is_scan = true;
-      step.utime = s.utime;
-      step.points = nav::ScanToPoints(s.ranges_m, s.angle_min_rad, s.angle_increment_rad, s.range_min_m, s.range_max_m,
-                                      nav::Pose2{s.sensor_x_m, s.sensor_y_m, s.sensor_theta_rad});
-      step.ranges_key = RangesKey(s);
-      if (log.beams == 0) log.beams = static_cast<int>(s.ranges_m.size());
+      step.utime = s->utime;
+      step.points = nav::ScanToPoints(s->ranges_m, s->angle_min_rad, s->angle_increment_rad, s->range_min_m,
+                                      s->range_max_m, nav::Pose2{s->sensor_x_m, s->sensor_y_m, s->sensor_theta_rad});
+      step.ranges_key = RangesKey(*s);
+      if (log.beams == 0) log.beams = static_cast<int>(s->ranges_m.size());
       log.steps.push_back(std::move(step));
       ++log.scans;
       if (progress && log.scans % 500 == 0) std::cerr << "eval-slam: read " << log.scans << " scans\r" << std::flush;
     }
   }
+  log.damaged_places = static_cast<int>(file.damage().size());
+  log.damaged_bytes = file.damaged_bytes();
+  for (const auto& d : file.damage()) log.damage.push_back(glue::DescribeLogDamage(path, d, file.file_size()));
+  for (const auto& d : log.damage) std::cerr << "eval-slam: warning: " << d << "\n";
   if (log.scans == 0) throw std::runtime_error(path + " holds no " + std::string(channels::kLaserScan) + " messages");
   if (progress) {
     std::cerr << "eval-slam: " << path << ": " << log.scans << " scans of " << log.beams << " beams, " << log.odometry
-              << " odometry, " << log.rejected << " undecodable or invalid, " << log.events << " events\n";
+              << " odometry, " << log.rejected << " undecodable or invalid, " << log.events << " events"
+              << (log.damaged_places > 0 ? ", " + std::to_string(log.damaged_bytes) + " damaged bytes skipped" : "")
+              << "\n";
   }
   return log;
 }

@@ -31,11 +31,17 @@ struct SlamLog {
   std::vector<SlamStep> steps;
   int64_t scans = 0, odometry = 0, rejected = 0, events = 0;
   int beams = 0;                             // beams of the first scan
+  // Damage of the log file (glue::LogReader): places, bytes skipped, one description each
+  // ("PATH: byte N: ...").
+  int damaged_places = 0;
+  uint64_t damaged_bytes = 0;
+  std::vector<std::string> damage;
 };
 
 // Reads a log made by log-import (or recorded on the bus). Undecodable or invalid messages are
-// counted in `rejected`. Throws std::runtime_error naming the file if it cannot be opened or
-// holds no scans. Progress goes to stderr when `progress`.
+// counted in `rejected`; a damaged file (truncated, corrupt) is read up to and after the damage,
+// which is described in `damage` and printed as warnings. Throws std::runtime_error naming the
+// file if it cannot be opened or holds no scans. Progress goes to stderr when `progress`.
 SlamLog LoadSlamLog(const std::string& path, bool progress = true);
 
 // Reference poses keyed by scan ranges (CARMEN) or by time (CSV).

@@ -5,6 +5,7 @@
 // frame as PNG, and for the navigation stack's outputs (run_sections.hpp): the homing
 // vectors against the true direction home (--home), the place-cell matches, the navigator's
 // progress, and with --process-logs the delivery of every message (published / recorded).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -14,7 +15,6 @@
 #include <set>
 #include <sstream>
 
-#include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -24,6 +24,7 @@
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/log_reader.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/omni_frame_t.hpp"
@@ -55,7 +56,9 @@ int Main(int argc, char** argv) {
   std::string home_text, process_logs_dir;
   glue::Flags flags("log-report LOG",
                     "Summarises an LCM log: messages per channel, and for every pose_t channel its trajectory\n"
-                    "error (ATE) against the ground truth; writes report.md, summary.json and PNG plots.");
+                    "error (ATE) against the ground truth; writes report.md, summary.json and PNG plots.\n"
+                    "A damaged log (truncated, corrupt) is reported with the byte offset of each damaged place\n"
+                    "and summarised from its intact events; the exit status is then 3.");
   flags.AddString("out", &out_dir, "output folder (default: beside the log)");
   flags.AddString("truth", &truth_channel, "ground-truth pose channel");
   flags.AddString("scan", &scan_channel, "laser channel for the map drawn from the ground truth");
@@ -93,9 +96,9 @@ int Main(int argc, char** argv) {
     }
   }
 
-  lcm::LogFile log(log_path, "r");
-  if (!log.good()) throw std::runtime_error("cannot open LCM log '" + log_path + "'");
-  const auto file_size = static_cast<int64_t>(fs::file_size(log_path));
+  // glue::LogReader reads every intact event and names the byte offset of any damage.
+  glue::LogReader log(log_path);
+  const auto file_size = static_cast<int64_t>(log.file_size());
   std::map<std::string, ChannelInfo> info;
   std::map<std::string, std::vector<nav::StampedPose>> poses;  // by channel
   std::vector<laser_scan_t> scans;
@@ -103,61 +106,73 @@ int Main(int argc, char** argv) {
   std::map<std::string, std::vector<homing_vector_t>> homing;        // by channel
   std::map<std::string, std::vector<place_cell_match_t>> matches;    // by channel
   std::map<std::string, std::vector<navigator_status_t>> statuses;   // by channel
-  int64_t good_offset = 0;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    good_offset = ftell(log.getFilePtr());
-    ChannelInfo& ci = info[ev->channel];
-    if (ci.count == 0) ci.first_us = ev->timestamp;
+  glue::LogEvent ev;
+  while (log.Next(&ev)) {
+    ChannelInfo& ci = info[ev.channel];
+    if (ci.count == 0) ci.first_us = ev.timestamp_us;
     ++ci.count;
-    ci.bytes += ev->datalen;
-    ci.last_us = ev->timestamp;
-    const auto fp = glue::PayloadFingerprint(ev->data, ev->datalen);
-    if (!fp) continue;
+    ci.bytes += static_cast<int64_t>(ev.data.size());
+    ci.last_us = ev.timestamp_us;
+    const auto fp = glue::PayloadFingerprint(ev.data.data(), ev.data.size());
+    if (!fp) {
+      ++ci.rejected;
+      continue;
+    }
     std::string error;
     if (*fp == static_cast<uint64_t>(pose_t::getHash())) {
-      if (auto p = glue::Decode<pose_t>(ev->data, ev->datalen, &error)) {
-        poses[ev->channel].push_back({p->utime, glue::FromPoseMsg(*p)});
+      const auto p = glue::Decode<pose_t>(ev.data.data(), ev.data.size(), &error);
+      const nav::Pose2 pose = p ? glue::FromPoseMsg(*p) : nav::Pose2{};
+      if (p && std::isfinite(pose.x_m) && std::isfinite(pose.y_m) && std::isfinite(pose.theta_rad)) {
+        poses[ev.channel].push_back({p->utime, pose});
       } else {
-        ++ci.rejected;
+        ++ci.rejected;  // undecodable, or a pose that is not finite (it would wreck the plot)
       }
-    } else if (*fp == static_cast<uint64_t>(laser_scan_t::getHash()) && ev->channel == scan_channel) {
-      if (auto s = glue::Decode<laser_scan_t>(ev->data, ev->datalen, &error)) {
+    } else if (*fp == static_cast<uint64_t>(laser_scan_t::getHash()) && ev.channel == scan_channel) {
+      if (auto s = glue::Decode<laser_scan_t>(ev.data.data(), ev.data.size(), &error)) {
         if (scans.size() < 5000 && ci.count % 5 == 1) scans.push_back(std::move(*s));
       } else {
         ++ci.rejected;
       }
     } else if (*fp == static_cast<uint64_t>(omni_frame_t::getHash()) && !first_frame) {
-      if (auto f = glue::Decode<omni_frame_t>(ev->data, ev->datalen, &error)) first_frame = std::move(*f);
+      if (auto f = glue::Decode<omni_frame_t>(ev.data.data(), ev.data.size(), &error)) {
+        first_frame = std::move(*f);
+      } else {
+        ++ci.rejected;
+      }
     } else if (*fp == static_cast<uint64_t>(homing_vector_t::getHash())) {
-      if (auto v = glue::Decode<homing_vector_t>(ev->data, ev->datalen, &error)) {
-        homing[ev->channel].push_back(std::move(*v));
+      if (auto v = glue::Decode<homing_vector_t>(ev.data.data(), ev.data.size(), &error)) {
+        homing[ev.channel].push_back(std::move(*v));
       } else {
         ++ci.rejected;
       }
     } else if (*fp == static_cast<uint64_t>(place_cell_match_t::getHash())) {
-      if (auto m = glue::Decode<place_cell_match_t>(ev->data, ev->datalen, &error)) {
-        matches[ev->channel].push_back(std::move(*m));
+      if (auto m = glue::Decode<place_cell_match_t>(ev.data.data(), ev.data.size(), &error)) {
+        matches[ev.channel].push_back(std::move(*m));
       } else {
         ++ci.rejected;
       }
     } else if (*fp == static_cast<uint64_t>(navigator_status_t::getHash())) {
-      if (auto st = glue::Decode<navigator_status_t>(ev->data, ev->datalen, &error)) {
-        statuses[ev->channel].push_back(std::move(*st));
+      if (auto st = glue::Decode<navigator_status_t>(ev.data.data(), ev.data.size(), &error)) {
+        statuses[ev.channel].push_back(std::move(*st));
       } else {
         ++ci.rejected;
       }
     }
   }
-  const bool truncated = good_offset < file_size;
-  if (truncated) {
-    std::cerr << "log-report: " << log_path << ": stopped at byte " << good_offset << " of " << file_size
-              << " (truncated or corrupt); reporting the valid part\n";
+  const bool damaged = log.damaged();
+  const auto good_bytes = static_cast<int64_t>(log.file_size() - log.damaged_bytes());
+  if (damaged) {
+    log.ReportDamage(std::cerr, "log-report: warning");
+    std::cerr << "log-report: " << log_path << " is damaged (" << log.damage().size() << " place(s), "
+              << log.damaged_bytes() << " of " << file_size << " bytes lost): reporting the " << log.events()
+              << " intact events\n";
   }
 
   // Trajectory errors against the ground truth.
   std::ostringstream json;
   json << std::fixed << std::setprecision(4) << "{\n  \"log\": \"" << log_path << "\",\n  \"log_bytes\": " << file_size
-       << ",\n  \"log_valid_bytes\": " << good_offset;
+       << ",\n  \"log_valid_bytes\": " << good_bytes
+       << ",\n  \"log_damaged_places\": " << log.damage().size();
   std::ostringstream table;
   table << "| channel | messages | rate (Hz) | MB |\n|---|---|---|---|\n";
   for (const auto& [ch, ci] : info) {
@@ -165,6 +180,7 @@ int Main(int argc, char** argv) {
     table << "| " << ch << " | " << ci.count << " | " << std::fixed << std::setprecision(1)
           << (span > 0 ? (ci.count - 1) / span : 0.0) << " | " << std::setprecision(2) << ci.bytes / 1e6 << " |\n";
     json << ",\n  \"messages_" << ch << "\": " << ci.count;
+    if (ci.rejected > 0) json << ",\n  \"rejected_" << ch << "\": " << ci.rejected;
   }
   std::ostringstream ate_table;
   const auto truth_it = poses.find(truth_channel);
@@ -232,7 +248,8 @@ int Main(int argc, char** argv) {
         const double r = s.ranges_m[i];
         if (!(r < s.range_max_m) || r < s.range_min_m) continue;
         const double a = s.angle_min_rad + i * s.angle_increment_rad;
-        map_points.push_back(sensor.Transform({r * std::cos(a), r * std::sin(a)}));
+        const Eigen::Vector2d p = sensor.Transform({r * std::cos(a), r * std::sin(a)});
+        if (p.allFinite()) map_points.push_back(p);
       }
     }
   }
@@ -295,14 +312,20 @@ int Main(int argc, char** argv) {
   }
 
   std::ofstream md(fs::path(out_dir) / "report.md");
-  md << "# Run report\n\nLog: `" << log_path << "` (" << file_size << " bytes" << (truncated ? ", TRUNCATED" : "")
-     << ")\n\n## Messages\n\n" << table.str();
+  md << "# Run report\n\nLog: `" << log_path << "` (" << file_size << " bytes" << (damaged ? ", DAMAGED" : "")
+     << ")\n\n";
+  if (damaged) {
+    md << "The log is damaged; the figures below are of its " << log.events() << " intact events:\n\n";
+    for (const auto& d : log.damage()) md << "- " << glue::DescribeLogDamage(log_path, d, log.file_size()) << "\n";
+    md << "\n";
+  }
+  md << "## Messages\n\n" << table.str();
   if (!ate_table.str().empty()) md << "\n## Trajectory error against " << truth_channel << "\n\n" << ate_table.str();
   if (have_plot) md << "\n![trajectories](trajectories.png)\n";
   if (first_frame) md << "\n![first omni frame](first_frame.png)\n";
   for (const auto& section : sections) md << section.markdown;
   std::cout << "log-report: " << out_dir << "/report.md\n" << table.str() << ate_table.str();
-  return truncated ? 1 : 0;
+  return damaged ? 3 : 0;
 }
 
 }  // namespace

@@ -25,3 +25,16 @@ nav::Pose2 FromPoseMsg(const pose_t& msg);
 Eigen::Matrix3d CovarianceOf(const pose_t& msg);
 
 }  // namespace snapnav::glue
+
+namespace snapnav::glue {
+
+// Increments larger than these are garbage (no robot moves a kilometre or turns a hundred
+// radians between two odometry messages); they would overflow a covariance to infinity.
+inline constexpr double kMaxOdometryStepM = 1000.0;
+inline constexpr double kMaxOdometryStepRad = 100.0;
+
+// Why an odometry message cannot be used, or "" when it can: its increment must be finite and
+// within the bounds above, and with `cumulative` its cumulative pose must be finite too.
+std::string OdometryProblem(const odometry_t& msg, bool cumulative);
+
+}  // namespace snapnav::glue

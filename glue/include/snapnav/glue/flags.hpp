@@ -30,6 +30,8 @@ class Flags {
   void AddInt(const std::string& name, int* value, const std::string& help);
   void AddDouble(const std::string& name, double* value, const std::string& help);
   void AddBool(const std::string& name, bool* value, const std::string& help);  // presence sets true
+  // May be given several times; each value is appended.
+  void AddStringList(const std::string& name, std::vector<std::string>* values, const std::string& help);
   void AddCommon(CommonFlags* common);
   // Positional arguments are accepted only if a name for them is given.
   void AllowPositional(const std::string& name, const std::string& help);

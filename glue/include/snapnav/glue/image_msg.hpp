@@ -3,7 +3,9 @@
 // (library snapnav_glue_image, so only image processes link OpenCV's codecs).
 
 #include <ostream>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -25,8 +27,17 @@ std::string FrameEncodingName(int8_t encoding);
 // std::runtime_error when the encoder fails.
 omni_frame_t ImageToFrame(const cv::Mat& image, int8_t encoding, int jpeg_quality = 90);
 
+// Frames larger than this are refused before anything is allocated for them [pixels].
+inline constexpr int64_t kMaxFramePixels = int64_t{1} << 26;  // 64 Mpx, e.g. 8192 x 8192
+
+// The size a PNG or JPEG file says it has (from its header, nothing decoded); nullopt when the
+// bytes are not a PNG (JPEG) file or the header is cut short.
+std::optional<cv::Size> CompressedImageSize(const std::vector<uint8_t>& bytes, int8_t encoding);
+
 // The frame's pixels as CV_8UC3 BGR (RGB8, colour JPEG/PNG) or CV_8UC1 (GRAY8, grey JPEG/PNG).
 // Throws std::invalid_argument when sizes, stride or encoding do not add up, or decoding fails.
+// A frame over kMaxFramePixels, or a compressed one whose header gives another size than the
+// frame's (a decompression bomb), is refused before decoding.
 cv::Mat FrameToImage(const omni_frame_t& frame);
 
 void SetMirror(const nav::MirrorModel& mirror, omni_frame_t* frame);

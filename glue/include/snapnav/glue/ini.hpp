@@ -33,6 +33,10 @@ class IniFile {
   std::vector<std::string> Keys(const std::string& section) const;
   int KeyLine(const std::string& section, const std::string& key) const;
 
+  // Replaces the value of an existing key (a command-line override; `origin` names it in
+  // errors). A key the file does not have is a ConfigError: an override cannot add options.
+  void Set(const std::string& section, const std::string& key, const std::string& value, const std::string& origin);
+
   // Getters mark the key as used; a missing key or a bad value throws ConfigError.
   std::string GetString(const std::string& section, const std::string& key) const;
   double GetDouble(const std::string& section, const std::string& key) const;
