@@ -13,6 +13,7 @@
 
 #include "homing_eval.hpp"
 #include "landmark_compare.hpp"
+#include "people_diagnosis.hpp"
 #include "snapnav/glue/landmarks.hpp"
 #include "homing_node.hpp"
 #include "scene_file.hpp"
@@ -133,6 +134,7 @@ int Main(int argc, char** argv) {
   std::string compare_scenes = "indoor13,indoor_objects11,outdoor11,featureless11,people11", counts = "3,5,20,all";
   int top_n = 0;
   bool random_headings = false, sweep = false, quick = false, no_return = false, compare = false;
+  bool people_diagnosis = false;
   int seed = 1;
   Overrides o;
   eval::ReturnOptions ret;
@@ -149,6 +151,9 @@ int Main(int argc, char** argv) {
   flags.AddBool("compare", &compare,
                 "compare HOG, vertical lines, SIFT and SURF x ALV variant x landmark count on --scenes: compare.md, "
                 "compare.csv, summary.json, vector maps");
+  flags.AddBool("people-diagnosis", &people_diagnosis,
+                "on --scene (one with people): where the people are in each grid image, the AAE with people-free "
+                "home or current views, matched landmarks on people (people.md, people_per_image.csv, summary.json)");
   flags.AddString("scenes", &compare_scenes, "--compare: scenes");
   flags.AddString("counts", &counts, "--compare: landmark counts (N or all)");
   flags.AddString("home", &home_text, "home position X,Y [m] (a grid position; default: the grid centre)");
@@ -194,7 +199,7 @@ int Main(int argc, char** argv) {
                             std::to_string(pm.width_px) + "x" + std::to_string(pm.height_px));
   }
   const nav::HogHomingConfig config = Apply(homing.homing, o);
-  if (compare || method != "hog") {
+  if (compare || people_diagnosis || method != "hog") {
     eval::LandmarkEvalSetup setup;
     setup.camera = sim.camera;
     setup.hog = config;
@@ -205,6 +210,7 @@ int Main(int argc, char** argv) {
     setup.ret = ret;
     setup.seed = static_cast<uint64_t>(seed);
     if (random_headings) throw glue::FlagError("--random-headings is for the HOG evaluation only");
+    if (people_diagnosis) return eval::RunPeopleDiagnosis(setup, scene_name, out_dir);
     if (compare) {
       eval::CompareOptions c;
       c.scenes = glue::SplitList(compare_scenes);

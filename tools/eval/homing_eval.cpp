@@ -89,8 +89,8 @@ GridDatabase RenderGrid(const nav::sim::Scene& scene, ViewRenderer& renderer, co
   db.home = db.poses[db.home_index];
   Crowd crowd(scene, options.seed);
   for (size_t i = 0; i < db.poses.size(); ++i) {
-    db.sensor.push_back(renderer.Sensor(db.poses[i], options.input, scene.people.count > 0 ? crowd.Advance(2.0)
-                                                                                            : std::vector<nav::sim::Cylinder>{}));
+    db.people.push_back(scene.people.count > 0 ? crowd.Advance(2.0) : std::vector<nav::sim::Cylinder>{});
+    db.sensor.push_back(renderer.Sensor(db.poses[i], options.input, db.people.back()));
     if (progress) progress(static_cast<int>(i) + 1, static_cast<int>(db.poses.size()));
   }
   return db;

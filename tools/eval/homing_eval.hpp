@@ -71,6 +71,7 @@ struct GridDatabase {
   int nx = 0, ny = 0;
   std::vector<nav::Pose2> poses;   // true poses, index iy * nx + ix
   std::vector<cv::Mat> sensor;     // sensor images (raw or panorama)
+  std::vector<std::vector<nav::sim::Cylinder>> people;  // the people in each image (scenes with people)
   int home_index = 0;
   nav::Pose2 home;
 };

@@ -25,25 +25,6 @@ void Progress(const std::string& what, int done, int total) {
   }
 }
 
-struct Grid {
-  nav::sim::Scene scene;
-  GridDatabase db;
-  std::vector<cv::Mat> panos;
-};
-
-Grid RenderScene(const nav::sim::Scene& scene, const LandmarkEvalSetup& setup, ViewRenderer& renderer) {
-  Grid g;
-  g.scene = scene;
-  GridOptions grid;
-  grid.seed = setup.seed;
-  grid.input = setup.input;
-  CameraPipeline pipeline;
-  pipeline.input = setup.input;
-  g.db = RenderGrid(scene, renderer, grid, [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
-  for (const auto& s : g.db.sensor) g.panos.push_back(renderer.ToPanorama(s, pipeline));
-  return g;
-}
-
 nav::LandmarkHomingConfig WithAlv(nav::LandmarkHomingConfig c, nav::AlvVariant variant, int top_n) {
   c.alv.variant = variant;
   c.alv.top_n = top_n;
@@ -86,7 +67,8 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, " << label
             << "\n";
   ViewRenderer renderer(scene, setup.camera, setup.seed);
-  const Grid g = RenderScene(scene, setup, renderer);
+  const Grid g = RenderScene(scene, setup.input, setup.seed, renderer,
+                             [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
   const auto cache = ExtractAll(g.panos, extractor);
   LandmarkMethod m(extractor, homing, setup.camera.panorama, &cache);
   const auto result = EvaluatePanoramas(g.db, g.panos, m);
@@ -157,14 +139,16 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
   for (const auto& scene_name : options.scenes) {
     const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
     ViewRenderer renderer(scene, setup.camera, setup.seed);
-    const Grid g = RenderScene(scene, setup, renderer);
+    const Grid g = RenderScene(scene, setup.input, setup.seed, renderer,
+                               [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
     // The same room without its people, for the degradation the people cause.
     std::optional<Grid> empty;
     if (scene.people.count > 0) {
       nav::sim::Scene quiet = scene;
       quiet.people.count = 0;
       ViewRenderer r2(quiet, setup.camera, setup.seed);
-      empty = RenderScene(quiet, setup, r2);
+      empty = RenderScene(quiet, setup.input, setup.seed, r2,
+                          [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
     }
     md << "## " << scene.name << " (" << scene.grid.nx << "x" << scene.grid.ny << " grid"
        << (scene.people.count > 0 ? ", " + std::to_string(scene.people.count) + " people walking" : std::string()) << ")\n\n"

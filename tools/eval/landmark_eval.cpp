@@ -54,6 +54,20 @@ std::optional<nav::HomingEstimate> LandmarkMethod::Home(const cv::Mat& panorama)
   return r->estimate;
 }
 
+Grid RenderScene(const nav::sim::Scene& scene, CameraPipeline::Input input, uint64_t seed, ViewRenderer& renderer,
+                 const std::function<void(int, int)>& progress) {
+  Grid g;
+  g.scene = scene;
+  GridOptions grid;
+  grid.seed = seed;
+  grid.input = input;
+  CameraPipeline pipeline;
+  pipeline.input = input;
+  g.db = RenderGrid(scene, renderer, grid, progress);
+  for (const auto& s : g.db.sensor) g.panos.push_back(renderer.ToPanorama(s, pipeline));
+  return g;
+}
+
 std::string LandmarkLabel(nav::LandmarkMethod method, nav::AlvVariant variant, int top_n) {
   return std::string(nav::LandmarkMethodName(method)) + " " + nav::AlvVariantName(variant) + " " +
          (top_n > 0 ? "top" + std::to_string(top_n) : std::string("all"));

@@ -49,6 +49,15 @@ class LandmarkMethod : public HomingMethod {
   int64_t matches_ = 0, estimates_ = 0;
 };
 
+// A scene's grid database and the panoramas the methods see.
+struct Grid {
+  nav::sim::Scene scene;
+  GridDatabase db;
+  std::vector<cv::Mat> panos;
+};
+Grid RenderScene(const nav::sim::Scene& scene, CameraPipeline::Input input, uint64_t seed, ViewRenderer& renderer,
+                 const std::function<void(int, int)>& progress = {});
+
 // Short label of a configuration: "sift weighted top20", "surf scale all".
 std::string LandmarkLabel(nav::LandmarkMethod method, nav::AlvVariant variant, int top_n);
 
