@@ -12,6 +12,8 @@
 #include "people_view.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
+#include "snapnav/nav/view_fusion.hpp"
+#include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
 namespace {
@@ -46,18 +48,24 @@ double Median(std::vector<double> v) {
 
 }  // namespace
 
-int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_name, const std::string& out_dir) {
+int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_name, const FrameProtocol& frames,
+                       const std::string& out_dir) {
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
   const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
   if (scene.people.count == 0) throw std::runtime_error("scene '" + scene.name + "' has no people");
   ViewRenderer renderer(scene, setup.camera, setup.seed);
-  const Grid g = RenderScene(scene, setup.input, setup.seed, renderer,
+  GridOptions grid;
+  grid.seed = setup.seed;
+  grid.input = setup.input;
+  GridOptions framed = grid;  // the people grid with its frames of a still robot, for the fused views
+  framed.frames = frames;
+  const Grid g = RenderScene(scene, framed, renderer,
                              [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
   nav::sim::Scene quiet = scene;
   quiet.people.count = 0;
   ViewRenderer r2(quiet, setup.camera, setup.seed);
-  const Grid e = RenderScene(quiet, setup.input, setup.seed, r2,
+  const Grid e = RenderScene(quiet, grid, r2,
                              [&](int d, int t) { Progress("rendering " + scene.name + " without people", d, t); });
 
   // 1. Where the people are in each grid image.
@@ -220,6 +228,53 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
               << Fixed(aae[2]) << " / " << Fixed(aae[3]) << " deg\n";
   }
   md << "\n" << md_on.str();
+
+  // 3. The home view over the frames of a still robot, and what fusing them leaves.
+  {
+    const int h = g.db.home_index;
+    std::vector<cv::Mat> strip;
+    md << "\n## The home view over " << g.frames[h].size() << " frames " << frames.home_interval_s
+       << " s apart (fused views)\n\n![home frames](home_frames.png)\n\nFrom the top: each frame, their per-pixel "
+          "median, the room without people.\n\n";
+    for (const auto& f : g.frames[h]) strip.push_back(f);
+    strip.push_back(nav::MedianImage(g.frames[h]));
+    strip.push_back(e.panos[e.db.home_index]);
+    cv::Mat all_rows;
+    cv::vconcat(strip, all_rows);
+    plot::SavePng(all_rows, (out / "home_frames.png").string());
+    // Landmarks of the fused home: how many, and how many the people-free home has at the same place.
+    md << "| method | home landmarks, frame 0 | persistent | median panorama | empty room | frame 0 on people | "
+          "persistent on people (in any frame) | median on people (in any frame) |\n|---|---|---|---|---|---|---|---|\n";
+    for (const auto method : {nav::LandmarkMethod::kVline, nav::LandmarkMethod::kSift, nav::LandmarkMethod::kSurf}) {
+      nav::LandmarkExtractorConfig extractor = setup.extractor;
+      extractor.method = method;
+      std::vector<nav::LandmarkSet> sets;
+      for (const auto& f : g.frames[h]) sets.push_back(nav::ExtractLandmarks(f, extractor));
+      const auto persistent = nav::PersistentLandmarks(sets, setup.fusion.persistence);
+      const auto median = nav::ExtractLandmarks(nav::MedianImage(g.frames[h]), extractor);
+      const auto quiet_set = nav::ExtractLandmarks(e.panos[e.db.home_index], extractor);
+      // The people of each home frame, as the grid rendered them (frame 0) and walked on (a copy of its crowd).
+      auto on_any = [&](const nav::LandmarkSet& set) {
+        int n = 0;
+        for (const auto& l : set.landmarks) {
+          bool hit = false;
+          for (const auto& people : g.frame_people[h]) hit = hit || pv.PersonAt(g.db.home, people, l.x_px, l.y_px) >= 0;
+          n += hit;
+        }
+        return n;
+      };
+      int on0 = 0;
+      for (const auto& l : sets[0].landmarks) on0 += pv.PersonAt(g.db.home, g.frame_people[h][0], l.x_px, l.y_px) >= 0;
+      md << "| " << nav::LandmarkMethodName(method) << " | " << sets[0].size() << " | " << persistent.size() << " | "
+         << median.size() << " | " << quiet_set.size() << " | " << on0 << " | " << on_any(persistent) << " | "
+         << on_any(median) << " |\n";
+    }
+    md << "\n| frame | people occluded share | nearest person [m] |\n|---|---|---|\n";
+    for (size_t k = 0; k < g.frame_people[h].size(); ++k) {
+      const auto m = pv.Measure(g.db.home, g.frame_people[h][k]);
+      md << "| " << k << " | " << Fixed(m.occluded_fraction, 3) << " | " << Fixed(m.nearest_surface_m, 2) << " |\n";
+    }
+  }
   std::ofstream(out / "people.md") << md.str();
   std::ofstream json(out / "summary.json");
   json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"grid_images\": " << g.db.poses.size()

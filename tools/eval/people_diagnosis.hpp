@@ -10,6 +10,8 @@
 
 namespace snapnav::eval {
 
-int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_name, const std::string& out_dir);
+// `frames`: the frames of each view for the section on fused views.
+int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_name, const FrameProtocol& frames,
+                       const std::string& out_dir);
 
 }  // namespace snapnav::eval
