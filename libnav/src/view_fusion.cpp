@@ -82,7 +82,8 @@ LandmarkSet PersistentLandmarks(const std::vector<LandmarkSet>& frames, const Pe
       track_norm.push_back(norm[j]);
     }
   }
-  const int needed = std::max(1, static_cast<int>(std::ceil(options.min_fraction * frames.size() - 1e-9)));
+  // Found again at least once: in two frames, and in min_fraction of them.
+  const int needed = std::max(2, static_cast<int>(std::ceil(options.min_fraction * frames.size() - 1e-9)));
   LandmarkSet out;
   out.method = first.method;
   out.width_px = first.width_px;

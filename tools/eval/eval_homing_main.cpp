@@ -138,6 +138,7 @@ int Main(int argc, char** argv) {
   int home_frames = -1, current_frames = -1, return_stride = 1;
   double home_interval_s = -1, current_interval_s = -1;
   std::string fusion;
+  double min_fraction = -1;
   eval::FrameProtocol fused{9, 1.0, 3, 0.5};
   int seed = 1;
   Overrides o;
@@ -166,6 +167,7 @@ int Main(int argc, char** argv) {
                "frames fused into each current view (the robot pauses); default: [view_fusion] current_frames");
   flags.AddDouble("current-interval-s", &current_interval_s, "time between current frames [s]; default: [view_fusion]");
   flags.AddString("fusion", &fusion, "persistent | median: how landmark methods fuse frames (default: [view_fusion] fusion)");
+  flags.AddDouble("min-fraction", &min_fraction, "override: [view_fusion] min_fraction of the persistent fusion");
   flags.AddInt("fusion-home-frames", &fused.home_frames,
                "--compare (scenes with people) and --people-diagnosis: home frames of the fused rows; 1: none");
   flags.AddDouble("fusion-home-interval-s", &fused.home_interval_s, "... the time between them [s]");
@@ -234,6 +236,7 @@ int Main(int argc, char** argv) {
     setup.frames.current_frames = current_frames >= 0 ? current_frames : homing.fusion.current_frames;
     setup.frames.home_interval_s = home_interval_s >= 0 ? home_interval_s : homing.fusion.home_interval_s;
     setup.frames.current_interval_s = current_interval_s >= 0 ? current_interval_s : homing.fusion.current_interval_s;
+    if (min_fraction >= 0) setup.fusion.persistence.min_fraction = min_fraction;
     if (!fusion.empty()) {
       const auto f = nav::ParseViewFusion(fusion);
       if (!f) throw glue::FlagError("--fusion must be persistent or median, not '" + fusion + "'");

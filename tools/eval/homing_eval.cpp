@@ -289,7 +289,11 @@ cv::Mat DrawVectorMap(const GridDatabase& db, const GridResult& result, const st
   auto px = [&](double x, double y) {
     return cv::Point(static_cast<int>(20 + (x - xmin) * scale), static_cast<int>(top + size - 20 - (y - ymin) * scale));
   };
-  cv::putText(img, title, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  // The title at 0.6, smaller when it would not fit.
+  int baseline = 0;
+  const double title_width = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, 0.6, 1, &baseline).width;
+  const double title_scale = std::min(0.6, 0.6 * (size - 24) / std::max(1.0, title_width));
+  cv::putText(img, title, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, title_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   if (paths) {
     for (const auto& run : paths->runs) {
       const cv::Scalar c = run.success ? cv::Scalar(200, 200, 200) : cv::Scalar(160, 160, 255);

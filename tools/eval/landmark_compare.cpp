@@ -55,7 +55,8 @@ struct Row {
   double aae_without_people = kNaN;  // the same scene with its people removed
   std::string Frames() const { return std::to_string(home_frames) + "/" + std::to_string(current_frames); }
   std::string Label() const {
-    return method + " " + alv + " " + n + (fusion == "none" ? std::string() : ", " + fusion + " " + Frames());
+    return (method == "hog" ? method : method + " " + alv + " " + n) +
+           (fusion == "none" ? std::string() : ", " + fusion + " " + Frames());
   }
 };
 
@@ -108,6 +109,20 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   std::cerr << "eval-homing: AAE " << Fixed(result.aae_deg) << " deg (median " << Fixed(result.median_deg) << ", "
             << result.failures << " without an answer), " << Fixed(cache.mean_landmarks, 1) << " landmarks and "
             << Fixed(mean_matches, 1) << " matches per view, " << Fixed(ms) << " ms per frame\n";
+  // A scene with people: the same room without them (single frames: its frames are all alike).
+  double aae_empty = kNaN;
+  if (scene.people.count > 0) {
+    nav::sim::Scene quiet = scene;
+    quiet.people.count = 0;
+    ViewRenderer r2(quiet, setup.camera, setup.seed);
+    const Grid e = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
+                               [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
+    const auto empty_cache = ExtractAll(e.panos, extractor);
+    LandmarkMethod me(extractor, homing, setup.camera.panorama, &empty_cache);
+    aae_empty = EvaluatePanoramas(e.db, e.panos, me).aae_deg;
+    std::cerr << "eval-homing: without the people: AAE " << Fixed(aae_empty) << " deg (degradation "
+              << Fixed(result.aae_deg - aae_empty) << " deg)\n";
+  }
   ReturnResult returns;
   if (!no_return) {
     CameraPipeline pipeline;
@@ -141,18 +156,22 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
        << ",\n  \"compass_mean_error_deg\": " << Fixed(result.compass_mean_deg, 4)
        << ",\n  \"mean_landmarks_per_view\": " << Fixed(cache.mean_landmarks, 2)
        << ",\n  \"mean_matches\": " << Fixed(mean_matches, 2) << ",\n  \"ms_per_frame\": " << Fixed(ms, 3);
+  if (!std::isnan(aae_empty)) {
+    json << ",\n  \"average_angular_error_without_people_deg\": " << Fixed(aae_empty, 4)
+         << ",\n  \"degradation_deg\": " << Fixed(result.aae_deg - aae_empty, 4);
+  }
   if (!no_return) {
     json << ",\n  \"return_ratio\": " << Fixed(returns.ratio, 4) << ",\n  \"return_starts\": " << returns.starts
          << ",\n  \"return_successes\": " << returns.successes;
   }
   json << ",\n  \"figures\": [\"vector_map.png\"]\n}\n";
   std::ofstream(out / "report.md") << "# Homing evaluation: " << scene.name << ", " << label << "\n\n"
-                                   << "| AAE [deg] | median | max | without answer | return ratio | landmarks/view | matches | ms/frame |\n"
-                                   << "|---|---|---|---|---|---|---|---|\n| " << Fixed(result.aae_deg) << " | "
+                                   << "| AAE [deg] | median | max | without answer | return ratio | landmarks/view | matches | ms/frame | AAE without people |\n"
+                                   << "|---|---|---|---|---|---|---|---|---|\n| " << Fixed(result.aae_deg) << " | "
                                    << Fixed(result.median_deg) << " | " << Fixed(result.max_deg) << " | "
                                    << result.failures << " | " << (no_return ? "-" : Fixed(returns.ratio, 3)) << " | "
                                    << Fixed(cache.mean_landmarks, 1) << " | " << Fixed(mean_matches, 1) << " | "
-                                   << Fixed(ms) << " |\n\n![vector map](vector_map.png)\n";
+                                   << Fixed(ms) << " | " << OrDash(aae_empty, 2) << " |\n\n![vector map](vector_map.png)\n";
   std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
   if (!no_return) std::cout << "return_ratio " << Fixed(returns.ratio, 3) << "\n";
   return 0;
@@ -172,7 +191,9 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
      << "AAE over each scene's grid (home at the centre, all views at heading 0, the rotation estimated from the\n"
      << "matches), return ratio of closed-loop runs (step " << setup.ret.step_m << " m, people walking "
      << setup.ret.people_dt_s << " s per step around the robot) for each method and ALV at its best landmark count"
-     << (options.return_best_only ? " (here: only for each method's best row)" : "") << ",\n"
+     << (options.return_best_only ? " (here: only for each method's best row)" : "")
+     << (setup.ret.start_stride > 1 ? " (a sample: every " + std::to_string(setup.ret.start_stride) + "th start)" : "")
+     << ",\n"
      << "and milliseconds per frame (extraction + matching + ALV, one core; fused rows: per fused view).\n"
      << "Vertical lines have no keypoint scale: their scale ALV equals the unit ALV and is not listed.\n"
      << "scale is the thesis' scale-compensated ALV (4.2.3); scale+consensus is snapnav's: the mean of the\n"
@@ -245,7 +266,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       emit(r);
       groups.push_back({"hog", {r.aae, kNaN, kNaN, kNaN}});
       vector_map(res, "hog", r.aae, options.returns ? &ret : nullptr, "vector_map_" + scene.name + "_hog.png");
-      std::optional<Row> best_fused;
+      // HOG fuses by the median panorama: one row per frame protocol, each with its return runs.
       for (const auto& f : fusions) {
         if (f.mode != nav::ViewFusion::kMedian) continue;
         HogMethod fm(setup.hog, setup.camera.panorama, true);
@@ -259,23 +280,15 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
         q.failures = fr.failures;
         q.ms = fr.method_calls ? fr.seconds_in_method * 1000 / fr.method_calls : kNaN;
         q.ret = kNaN;
-        if (!best_fused || q.aae < best_fused->aae) best_fused = q;
-        emit(q);
-      }
-      if (best_fused && options.returns) {
-        HogMethod fm(setup.hog, setup.camera.panorama, true);
-        const auto fr = EvaluateFrames(g.db, g.Frames(best_fused->home_frames, best_fused->current_frames), fm);
-        const auto fret = EvaluateReturn(
-            g.db, fm, renderer, pipeline,
-            WithFrames(setup.ret, fp, best_fused->home_frames, best_fused->current_frames, setup.seed),
-            [](int d, int t) { Progress("return runs hog fused", d, t); }, &g.frames);
-        for (auto& x : rows) {
-          if (x.scene == scene.name && x.method == "hog" && x.fusion == "median" &&
-              x.current_frames == best_fused->current_frames) {
-            x.ret = fret.ratio;
-          }
+        ReturnResult fret;
+        if (options.returns) {
+          fret = EvaluateReturn(g.db, fm, renderer, pipeline, WithFrames(setup.ret, fp, f.home, f.current, setup.seed),
+                                [&](int d, int t) { Progress("return runs " + q.Label(), d, t); }, &g.frames);
+          q.ret = fret.ratio;
         }
-        vector_map(fr, best_fused->Label(), best_fused->aae, &fret, "vector_map_" + scene.name + "_hog_fused.png");
+        emit(q);
+        vector_map(fr, q.Label(), q.aae, options.returns ? &fret : nullptr,
+                   "vector_map_" + scene.name + "_hog_" + (f.current > 1 ? "fused" : "fused_home") + ".png");
       }
     }
     for (const auto method : methods) {
@@ -297,7 +310,8 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
         FrameFusion fusion;
         int home = 1, current = 1;
       };
-      Best best_single, best_fused;
+      Best best_single;
+      std::map<int, Best> best_fused;  // by current frames: the home fused alone, and the current views too
       std::vector<std::pair<size_t, nav::LandmarkHomingConfig>> returns_wanted;  // row, config (single frames)
       for (const auto& alv : kAlvRows) {
         const auto variant = alv.variant;
@@ -360,7 +374,8 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
           r.ms = (f.mode == nav::ViewFusion::kPersistent ? cache.ms_per_panorama() * f.current : 0) + method_ms;
           r.matches = m.estimates() ? static_cast<double>(m.matches()) / m.estimates() : 0;
           emit(r);
-          if (r.aae < best_fused.aae) best_fused = Best{r.aae, rows.size() - 1, res, best_homing, fusion, f.home, f.current};
+          auto& bf = best_fused[f.current];
+          if (r.aae < bf.aae) bf = Best{r.aae, rows.size() - 1, res, best_homing, fusion, f.home, f.current};
         }
       }
       if (options.return_best_only) returns_wanted.push_back({best_single.row, best_single.homing});
@@ -379,18 +394,17 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       groups.push_back(group);
       vector_map(best_single.result, rows[best_single.row].Label(), best_single.aae,
                  options.returns ? &best_single_return : nullptr, "vector_map_" + scene.name + "_" + mname + ".png");
-      if (fused) {
+      for (const auto& [current, bf] : best_fused) {
         ReturnResult fret;
         if (options.returns) {
-          LandmarkMethod live(extractor, best_fused.homing, setup.camera.panorama, nullptr, best_fused.fusion);
-          fret = EvaluateReturn(g.db, live, renderer, pipeline,
-                                WithFrames(setup.ret, fp, best_fused.home, best_fused.current, setup.seed),
-                                [&](int d, int t) { Progress("return runs " + rows[best_fused.row].Label(), d, t); },
+          LandmarkMethod live(extractor, bf.homing, setup.camera.panorama, nullptr, bf.fusion);
+          fret = EvaluateReturn(g.db, live, renderer, pipeline, WithFrames(setup.ret, fp, bf.home, bf.current, setup.seed),
+                                [&](int d, int t) { Progress("return runs " + rows[bf.row].Label(), d, t); },
                                 &g.frames);
-          rows[best_fused.row].ret = fret.ratio;
+          rows[bf.row].ret = fret.ratio;
         }
-        vector_map(best_fused.result, rows[best_fused.row].Label(), best_fused.aae, options.returns ? &fret : nullptr,
-                   "vector_map_" + scene.name + "_" + mname + "_fused.png");
+        vector_map(bf.result, rows[bf.row].Label(), bf.aae, options.returns ? &fret : nullptr,
+                   "vector_map_" + scene.name + "_" + mname + "_" + (current > 1 ? "fused" : "fused_home") + ".png");
       }
     }
     // This scene's tables (after the return runs).
@@ -437,9 +451,11 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
 
   // Summary: the best landmark configuration per scene (single frames, and fused), weighted vs unit with all matches.
   std::map<std::string, const Row*> best_per_scene, best_fused_per_scene;
-  std::map<std::pair<std::string, std::string>, const Row*> best_single_method, best_fused_method;
+  std::map<std::pair<std::string, std::string>, const Row*> best_single_method, best_home_method, best_fused_method;
   for (const auto& r : rows) {
-    auto& bm = (r.fusion == "none" ? best_single_method : best_fused_method)[{r.scene, r.method}];
+    auto& bm = (r.fusion == "none" ? best_single_method
+                : r.current_frames == 1 ? best_home_method
+                                        : best_fused_method)[{r.scene, r.method}];
     if (!bm || r.aae < bm->aae) bm = &r;
     if (r.method == "hog") continue;
     auto& b = (r.fusion == "none" ? best_per_scene : best_fused_per_scene)[r.scene];
@@ -451,16 +467,20 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     md << "| " << scene << " | " << r->Label() << " | " << Fixed(r->aae) << " | " << OrDash(r->ret, 3) << " | "
        << OrDash(r->aae_without_people, 2) << " | " << OrDash(r->aae - r->aae_without_people, 2) << " |\n";
   }
-  if (!best_fused_method.empty()) {
-    md << "\nEach method's best configuration, single frames against fused views:\n\n"
-       << "| scene | method | best single-frame | AAE | return | best fused | AAE | return | AAE without people | "
-          "degradation, single / fused |\n|---|---|---|---|---|---|---|---|---|---|\n";
-    for (const auto& [key, f] : best_fused_method) {
-      const Row* s1 = best_single_method[key];
-      md << "| " << key.first << " | " << key.second << " | " << s1->Label() << " | " << Fixed(s1->aae) << " | "
-         << OrDash(s1->ret, 3) << " | " << f->Label() << " | " << Fixed(f->aae) << " | " << OrDash(f->ret, 3) << " | "
-         << OrDash(f->aae_without_people, 2) << " | " << OrDash(s1->aae - s1->aae_without_people, 2) << " / "
-         << OrDash(f->aae - f->aae_without_people, 2) << " |\n";
+  if (!best_home_method.empty() || !best_fused_method.empty()) {
+    md << "\nEach method's best configuration: single frames (the thesis' protocol), the home fused, the home and the "
+          "current views fused (AAE [deg] / return ratio; degradation against the room without people):\n\n"
+       << "| scene | method | best single-frame | AAE / return | best, home fused | AAE / return | best, home and "
+          "current fused | AAE / return | AAE without people | degradation: single / home / both |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& [key, s1] : best_single_method) {
+      if (!best_home_method.count(key) && !best_fused_method.count(key)) continue;
+      const Row* h = best_home_method.count(key) ? best_home_method[key] : nullptr;
+      const Row* f = best_fused_method.count(key) ? best_fused_method[key] : nullptr;
+      auto cell = [](const Row* r) { return r ? r->Label() + " | " + Fixed(r->aae) + " / " + OrDash(r->ret, 3) : std::string("- | -"); };
+      auto deg = [](const Row* r) { return r ? OrDash(r->aae - r->aae_without_people, 2) : std::string("-"); };
+      md << "| " << key.first << " | " << key.second << " | " << cell(s1) << " | " << cell(h) << " | " << cell(f)
+         << " | " << OrDash(s1->aae_without_people, 2) << " | " << deg(s1) << " / " << deg(h) << " / " << deg(f) << " |\n";
     }
   }
   md << "\nWeighted against unit ALV with all matches (thesis 4.3.2):\n\n| scene | method | unit AAE | weighted AAE |\n"

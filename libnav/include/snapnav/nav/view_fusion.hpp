@@ -22,7 +22,7 @@ std::optional<ViewFusion> ParseViewFusion(const std::string& name);
 const char* ViewFusionName(ViewFusion fusion);  // "persistent", "median"
 
 struct PersistenceOptions {
-  double min_fraction = 0.6;     // a landmark is kept when found in at least this share of the frames
+  double min_fraction = 0.6;     // a landmark is kept when found in at least this share of the frames (and two)
   double max_shift_px = 3;       // an observation of the same landmark: within this many columns (wrapping) ...
   double max_row_shift_px = 3;   // ... and rows (vertical lines: rows are not compared, a line's middle moves
                                  // when a person hides part of it)
@@ -31,7 +31,7 @@ struct PersistenceOptions {
 };
 
 // The landmarks of `frames` (one still view, same method and panorama size) found in at least
-// min_fraction of them. Observations are chained into tracks frame by frame: each landmark joins
+// min_fraction of them, and in two at least (found again). Observations are chained into tracks frame by frame: each landmark joins
 // the unclaimed track of nearest descriptor within the position gate, or starts a new one. A
 // kept track is represented by its first observation. `seen` (if given) receives the number of
 // frames each kept landmark was found in. One frame is returned unchanged; no frames, or sets
