@@ -258,29 +258,36 @@ struct Consensus {
   Eigen::Vector2d direction = Eigen::Vector2d::Zero();  // unit (zero: none)
   int inliers = 0;
   double coherence = 0;  // sum over inliers of cos(angle to the consensus)
+  std::vector<int> members;  // indices of the inliers
 };
 
-Consensus ScaleConsensus(const std::vector<double>& bh, const std::vector<double>& bc, const std::vector<double>& k,
-                         double rotation, double window, bool home_minus_current) {
-  const size_t n = bh.size();
-  std::vector<double> dir(n);
-  std::vector<char> valid(n, 0);
-  for (size_t i = 0; i < n; ++i) {
+// Direction each landmark alone gives (NaN where its vector vanishes).
+std::vector<double> LandmarkDirections(const std::vector<double>& bh, const std::vector<double>& bc,
+                                       const std::vector<double>& k, double rotation, bool home_minus_current) {
+  std::vector<double> dir(bh.size(), std::numeric_limits<double>::quiet_NaN());
+  for (size_t i = 0; i < bh.size(); ++i) {
     Eigen::Vector2d v = k[i] * Eigen::Vector2d(std::cos(bc[i] + rotation), std::sin(bc[i] + rotation)) -
                         Eigen::Vector2d(std::cos(bh[i]), std::sin(bh[i]));
     if (home_minus_current) v = -v;
     if (v.norm() < 1e-9) continue;
     dir[i] = std::atan2(v.y(), v.x());
-    valid[i] = 1;
   }
+  return dir;
+}
+
+Consensus ScaleConsensus(const std::vector<double>& bh, const std::vector<double>& bc, const std::vector<double>& k,
+                         double rotation, double window, bool home_minus_current) {
+  const size_t n = bh.size();
+  const std::vector<double> dir = LandmarkDirections(bh, bc, k, rotation, home_minus_current);
   Consensus best;
+  size_t best_c = n;
   // The mode: the landmark direction with the most others within the window (ties: the tighter).
   for (size_t c = 0; c < n; ++c) {
-    if (!valid[c]) continue;
+    if (std::isnan(dir[c])) continue;
     Eigen::Vector2d sum = Eigen::Vector2d::Zero();
     int count = 0;
     for (size_t i = 0; i < n; ++i) {
-      if (valid[i] && std::abs(WrapAngle(dir[i] - dir[c])) <= window) {
+      if (!std::isnan(dir[i]) && std::abs(WrapAngle(dir[i] - dir[c])) <= window) {
         sum += Eigen::Vector2d(std::cos(dir[i]), std::sin(dir[i]));
         ++count;
       }
@@ -289,6 +296,12 @@ Consensus ScaleConsensus(const std::vector<double>& bh, const std::vector<double
       best.inliers = count;
       best.coherence = sum.norm();
       best.direction = sum.normalized();
+      best_c = c;
+    }
+  }
+  if (best_c < n) {
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isnan(dir[i]) && std::abs(WrapAngle(dir[i] - dir[best_c])) <= window) best.members.push_back(static_cast<int>(i));
     }
   }
   return best;
@@ -299,19 +312,25 @@ Consensus ScaleConsensus(const std::vector<double>& bh, const std::vector<double
 std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const LandmarkSet& current,
                                                 const std::vector<LandmarkMatch>& all_matches, double rotation_rad,
                                                 const PanoramaModel& panorama, const LandmarkAlvOptions& options,
-                                                bool refine_rotation) {
+                                                bool refine_rotation, std::vector<int>* used) {
   options.Validate();
-  std::vector<LandmarkMatch> matches = all_matches;
-  for (const auto& m : matches) {
+  if (used) used->clear();
+  for (const auto& m : all_matches) {
     if (m.home < 0 || m.home >= home.size() || m.current < 0 || m.current >= current.size()) {
       throw std::invalid_argument("landmark alv: a match refers to a landmark outside its set");
     }
   }
-  if (options.top_n > 0 && static_cast<int>(matches.size()) > options.top_n) {
-    std::partial_sort(matches.begin(), matches.begin() + options.top_n, matches.end(),
-                      [](const LandmarkMatch& a, const LandmarkMatch& b) { return a.distance < b.distance; });
-    matches.resize(options.top_n);
+  // The matches that count: all, or the top_n of smallest descriptor distance (indices into all_matches).
+  std::vector<int> index(all_matches.size());
+  std::iota(index.begin(), index.end(), 0);
+  if (options.top_n > 0 && static_cast<int>(index.size()) > options.top_n) {
+    std::partial_sort(index.begin(), index.begin() + options.top_n, index.end(),
+                      [&](int a, int b) { return all_matches[a].distance < all_matches[b].distance; });
+    index.resize(options.top_n);
   }
+  std::vector<LandmarkMatch> matches;
+  matches.reserve(index.size());
+  for (int i : index) matches.push_back(all_matches[i]);
   if (static_cast<int>(matches.size()) < options.min_landmarks) return std::nullopt;
 
   std::vector<double> weights(matches.size(), 1.0);
@@ -346,9 +365,9 @@ std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const L
       for (int s = -steps; s <= steps; ++s) {
         if (s == 0) continue;
         const double r = rotation_rad + s * kStep;
-        const Consensus c = ScaleConsensus(bh, bc, k, r, options.consensus_window_rad, hmc);
+        Consensus c = ScaleConsensus(bh, bc, k, r, options.consensus_window_rad, hmc);
         if (c.inliers > best.inliers || (c.inliers == best.inliers && c.coherence > best.coherence)) {
-          best = c;
+          best = std::move(c);
           rotation = r;
         }
       }
@@ -359,6 +378,9 @@ std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const L
     e.direction_rad = WrapAngle(std::atan2(best.direction.y(), best.direction.x()) - rotation);
     e.magnitude = best.coherence / static_cast<double>(matches.size());
     e.bins_used = best.inliers;
+    if (used) {
+      for (int m : best.members) used->push_back(index[m]);
+    }
     return e;
   }
   Eigen::Vector2d home_alv = Eigen::Vector2d::Zero(), cur_alv = Eigen::Vector2d::Zero();
@@ -388,6 +410,11 @@ std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const L
   e.direction_rad = WrapAngle(std::atan2(diff.y(), diff.x()) - rotation_rad);
   e.magnitude = diff.norm();
   e.bins_used = static_cast<int>(matches.size());
+  if (used) {
+    for (size_t i = 0; i < matches.size(); ++i) {
+      if (weights[i] > 0) used->push_back(index[i]);
+    }
+  }
   return e;
 }
 
@@ -465,9 +492,11 @@ std::optional<LandmarkHoming> LandmarkHomer::Home(const LandmarkSet& current,
     }
   }
   const bool refine = !known_rotation_rad && config_.rotation == RotationSource::kMatches;
-  auto estimate = LandmarkAlvHoming(*home_, current, matches, *rotation, panorama_, config_.alv, refine);
+  std::vector<int> used;
+  auto estimate = LandmarkAlvHoming(*home_, current, matches, *rotation, panorama_, config_.alv, refine, &used);
   if (!estimate) return std::nullopt;
-  return LandmarkHoming{*estimate, static_cast<int>(matches.size())};
+  const int count = static_cast<int>(matches.size());
+  return LandmarkHoming{*estimate, count, std::move(matches), std::move(used)};
 }
 
 }  // namespace snapnav::nav

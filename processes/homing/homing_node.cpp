@@ -128,6 +128,18 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.keypoint_homing = glue::ReadLandmarkHoming(ini, nav::LandmarkMethod::kSift);
   c.vline_homing = glue::ReadLandmarkHoming(ini, nav::LandmarkMethod::kVline);
 
+  auto& f = c.fusion;
+  f.home_frames = ini.GetInt("view_fusion", "home_frames");
+  f.home_interval_s = ini.GetDouble("view_fusion", "home_interval_s");
+  f.current_frames = ini.GetInt("view_fusion", "current_frames");
+  f.current_interval_s = ini.GetDouble("view_fusion", "current_interval_s");
+  f.mode = ReadChoice<nav::ViewFusion>(ini, "view_fusion", "fusion",
+                                       {{"persistent", nav::ViewFusion::kPersistent}, {"median", nav::ViewFusion::kMedian}});
+  f.persistence.min_fraction = ini.GetDouble("view_fusion", "min_fraction");
+  f.persistence.max_shift_px = ini.GetDouble("view_fusion", "max_shift_px");
+  f.persistence.max_row_shift_px = ini.GetDouble("view_fusion", "max_row_shift_px");
+  f.persistence.max_descriptor_distance_frac = ini.GetDouble("view_fusion", "max_descriptor_distance_frac");
+
   ini.CheckAllUsed();
   c.Validate(ini.origin());
   return c;
@@ -138,8 +150,18 @@ void HomingConfig::Validate(const std::string& origin) const {
     panorama.Validate();
     mirror.Validate();
     homing.Validate();
+    fusion.persistence.Validate();
   } catch (const std::invalid_argument& e) {
     throw glue::ConfigError(origin + ": " + e.what());
+  }
+  if (fusion.home_frames < 1 || fusion.current_frames < 1 || !(fusion.home_interval_s > 0) ||
+      !(fusion.current_interval_s > 0)) {
+    throw glue::ConfigError(origin + ": [view_fusion] home_frames and current_frames must be >= 1, the intervals > 0");
+  }
+  if (input == HomingInput::kLandmarks && fusion.mode == nav::ViewFusion::kMedian &&
+      (fusion.home_frames > 1 || fusion.current_frames > 1)) {
+    throw glue::ConfigError(origin + ": [view_fusion] fusion = median needs the frames; landmark sets (input = "
+                            "landmarks) are fused by persistence (fusion = persistent)");
   }
   CheckBand(homing.hog, panorama, "hog", origin);
   if (homing.use_compass) CheckBand(homing.compass_hog, panorama, "compass", origin);
@@ -206,6 +228,12 @@ void HomingConfig::Print(std::ostream& out) const {
       << "\nrotation_refine_deg = " << a.rotation_refine_rad / kDeg
       << "\nrotation = " << (keypoint_homing.rotation == nav::RotationSource::kMatches ? "matches" : "none")
       << "\nrotation_window_deg = " << keypoint_homing.rotation_window_rad / kDeg << "\n";
+  out << "[view_fusion]\nhome_frames = " << fusion.home_frames << "\nhome_interval_s = " << fusion.home_interval_s
+      << "\ncurrent_frames = " << fusion.current_frames << "\ncurrent_interval_s = " << fusion.current_interval_s
+      << "\nfusion = " << nav::ViewFusionName(fusion.mode)
+      << "\nmin_fraction = " << fusion.persistence.min_fraction << "\nmax_shift_px = " << fusion.persistence.max_shift_px
+      << "\nmax_row_shift_px = " << fusion.persistence.max_row_shift_px
+      << "\nmax_descriptor_distance_frac = " << fusion.persistence.max_descriptor_distance_frac << "\n";
 }
 
 cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& config) {
@@ -241,7 +269,14 @@ cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& con
 }
 
 HomingNode::HomingNode(glue::Bus& bus, const HomingConfig& config)
-    : bus_(bus), config_(config), homer_(config.homing, config.panorama), frames_to_panoramas_(config.panorama, config.mirror) {
+    : bus_(bus),
+      config_(config),
+      homer_(config.homing, config.panorama),
+      frames_to_panoramas_(config.panorama, config.mirror),
+      home_frames_(config.fusion.home_frames, config.fusion.home_interval_s),
+      current_frames_(config.fusion.current_frames, config.fusion.current_interval_s),
+      home_sets_(config.fusion.home_frames, config.fusion.home_interval_s),
+      current_sets_(config.fusion.current_frames, config.fusion.current_interval_s) {
   if (config_.input == HomingInput::kLandmarks) {
     bus_.Subscribe(config_.landmarks_channel, &HomingNode::OnLandmarks, this);
     bus_.Subscribe(config_.home_landmarks_channel, &HomingNode::OnHomeLandmarks, this);
@@ -261,7 +296,9 @@ int64_t HomingNode::rejected_total() const {
 void HomingNode::Report(std::ostream& out) const {
   out << "homing: frames " << frames_ << ", before any home " << before_home_ << ", homes set " << homes_set_
       << ", vectors published " << published() << " (valid " << published_valid_ << ", no estimate "
-      << published_invalid_ << "), unwrapper builds " << frames_to_panoramas_.unwrapper_builds() << ", rejected " << rejected_total() << "\n";
+      << published_invalid_ << "), unwrapper builds " << frames_to_panoramas_.unwrapper_builds() << ", rejected " << rejected_total();
+  if (config_.fusion.current_frames > 1) out << ", between fused frames " << between_fused_frames_;
+  out << "\n";
   for (const auto& [reason, count] : rejected_) out << "homing:   rejected (" << reason << "): " << count << "\n";
 }
 
@@ -292,12 +329,22 @@ void HomingNode::OnFrame(const omni_frame_t& frame) {
         ++before_home_;
         return;
       }
-      SetHome(*panorama);  // this frame is the home: no vector for it
-      std::cerr << "homing: home set from the first frame (" << bus_.current().channel << ", utime " << frame.utime
-                << ")\n";
+      // The first home_frames frames (home_interval_s apart) are the home: no vectors for them.
+      home_frames_.Offer(frame.utime, *panorama);
+      if (!home_frames_.full()) {
+        ++before_home_;
+        return;
+      }
+      SetHome(nav::MedianImage(home_frames_.items()));
+      std::cerr << "homing: home set from the first " << home_frames_.items().size() << " frame(s) ("
+                << bus_.current().channel << ", utime " << frame.utime << ")\n";
       return;
     }
-    estimate = homer_.Home(*panorama);
+    if (!current_frames_.Offer(frame.utime, *panorama)) {
+      ++between_fused_frames_;
+      return;
+    }
+    estimate = homer_.Home(current_frames_.items().size() > 1 ? nav::MedianImage(current_frames_.items()) : *panorama);
   } catch (const std::exception& e) {
     ++rejected_["homing error"];
     throw std::runtime_error(std::string("homing: ") + e.what());  // the bus counts it as a handler error
@@ -334,12 +381,15 @@ void HomingNode::OnHomeSnapshot(const omni_frame_t& frame) {
   const auto panorama = ToPanorama(frame);
   if (!panorama) return;
   try {
-    SetHome(*panorama);
+    // The home is the median of the last home_frames snapshots (home_interval_s apart).
+    if (!home_frames_.Offer(frame.utime, *panorama)) return;
+    SetHome(home_frames_.items().size() > 1 ? nav::MedianImage(home_frames_.items()) : *panorama);
   } catch (const std::exception& e) {
     ++rejected_["homing error"];
     throw std::runtime_error(std::string("home snapshot: ") + e.what());
   }
-  std::cerr << "homing: home set from " << bus_.current().channel << " (utime " << frame.utime << ")\n";
+  std::cerr << "homing: home set from " << bus_.current().channel << " (utime " << frame.utime << ", "
+            << home_frames_.items().size() << " frame(s))\n";
 }
 
 std::optional<nav::LandmarkSet> HomingNode::ToLandmarks(const landmark_set_t& msg) {
@@ -360,11 +410,17 @@ void HomingNode::OnLandmarks(const landmark_set_t& msg) {
       ++before_home_;
       return;
     }
-    landmark_homer_.emplace(config_.landmark_homing(set->method), config_.panorama);
-    landmark_homer_->SetHome(std::move(*set));
-    ++homes_set_;
-    std::cerr << "homing: home set from the first landmark set (" << bus_.current().channel << ", utime " << msg.utime
-              << ", " << landmark_homer_->home().size() << " landmarks)\n";
+    // The first home_frames sets (home_interval_s apart) are the home: no vectors for them.
+    if (!home_sets_.items().empty() && home_sets_.items().front().method != set->method) home_sets_.Clear();
+    home_sets_.Offer(msg.utime, std::move(*set));
+    if (!home_sets_.full()) {
+      ++before_home_;
+      return;
+    }
+    SetHomeLandmarks(Fuse(home_sets_.items()));
+    std::cerr << "homing: home set from the first " << home_sets_.items().size() << " landmark set(s) ("
+              << bus_.current().channel << ", utime " << msg.utime << ", " << landmark_homer_->home().size()
+              << " landmarks)\n";
     return;
   }
   if (set->method != landmark_homer_->home().method) {
@@ -373,9 +429,14 @@ void HomingNode::OnLandmarks(const landmark_set_t& msg) {
                nav::LandmarkMethodName(landmark_homer_->home().method));
     return;
   }
+  if (!current_sets_.items().empty() && current_sets_.items().front().method != set->method) current_sets_.Clear();
+  if (!current_sets_.Offer(msg.utime, std::move(*set))) {
+    ++between_fused_frames_;
+    return;
+  }
   std::optional<nav::LandmarkHoming> result;
   try {
-    result = landmark_homer_->Home(*set);
+    result = landmark_homer_->Home(Fuse(current_sets_.items()));
   } catch (const std::exception& e) {
     ++rejected_["homing error"];
     throw std::runtime_error(std::string("homing: ") + e.what());
@@ -387,12 +448,30 @@ void HomingNode::OnLandmarks(const landmark_set_t& msg) {
 void HomingNode::OnHomeLandmarks(const landmark_set_t& msg) {
   auto set = ToLandmarks(msg);
   if (!set) return;
-  landmark_homer_.emplace(config_.landmark_homing(set->method), config_.panorama);
-  landmark_homer_->SetHome(std::move(*set));
-  ++homes_set_;
+  // The home is fused from the last home_frames sets (home_interval_s apart) of one method.
+  if (!home_sets_.items().empty() && home_sets_.items().front().method != set->method) home_sets_.Clear();
+  if (!home_sets_.Offer(msg.utime, std::move(*set))) return;
+  try {
+    SetHomeLandmarks(Fuse(home_sets_.items()));
+  } catch (const std::exception& e) {
+    ++rejected_["homing error"];
+    throw std::runtime_error(std::string("home landmarks: ") + e.what());
+  }
   std::cerr << "homing: home set from " << bus_.current().channel << " (utime " << msg.utime << ", "
-            << landmark_homer_->home().size() << " " << nav::LandmarkMethodName(landmark_homer_->home().method)
-            << " landmarks)\n";
+            << home_sets_.items().size() << " set(s), " << landmark_homer_->home().size() << " "
+            << nav::LandmarkMethodName(landmark_homer_->home().method) << " landmarks)\n";
+}
+
+nav::LandmarkSet HomingNode::Fuse(const std::vector<nav::LandmarkSet>& sets) const {
+  return sets.size() == 1 ? sets.front() : nav::PersistentLandmarks(sets, config_.fusion.persistence);
+}
+
+void HomingNode::SetHomeLandmarks(nav::LandmarkSet set) {
+  const auto method = set.method;
+  landmark_homer_.emplace(config_.landmark_homing(method), config_.panorama);
+  landmark_homer_->SetHome(std::move(set));
+  current_sets_.Clear();
+  ++homes_set_;
 }
 
 }  // namespace snapnav::processes

@@ -4,11 +4,14 @@
 // sets (from the landmarks process: vertical lines, SIFT, SURF) are matched with a home set and
 // homed by the landmark ALV. Each input yields one homing_vector_t once a home is set.
 
+#include <cmath>
 #include <cstdint>
 #include <iosfwd>
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <opencv2/core.hpp>
 
@@ -20,12 +23,30 @@
 #include "snapnav/nav/landmarks.hpp"
 #include "snapnav/nav/omni_geometry.hpp"
 #include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/view_fusion.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::processes {
 
 enum class HomingInput { kRaw, kPanorama, kLandmarks };  // which channel the input comes from
 enum class HomeSource { kMessage, kImage, kFirst };  // how the home snapshot is set at first
+
+// Several frames of one view fused into one ([view_fusion]; snapnav's improvement for people
+// walking through the views). A frame is taken when at least the interval has passed since the
+// last one taken; the last N taken are fused, and a gap of more than N intervals starts afresh.
+// The home from home_frames frames / sets (home = first: the first ones, no vectors until it is
+// complete; home = message: the last ones on the home channel); each current view from the last
+// current_frames (a robot that pauses to look).
+struct ViewFusionConfig {
+  int home_frames = 1;
+  double home_interval_s = 1.0;
+  int current_frames = 1;
+  double current_interval_s = 0.5;
+  // Landmark sets are fused by persistence; frames (HOG) by their median panorama. `median`
+  // for landmark methods (landmarks of the median panorama) needs the frames: eval-homing only.
+  nav::ViewFusion mode = nav::ViewFusion::kPersistent;
+  nav::PersistenceOptions persistence;
+};
 
 struct HomingConfig {
   std::string omni_channel;           // omni_frame_t in (input = raw)
@@ -43,6 +64,7 @@ struct HomingConfig {
   nav::HogHomingConfig homing;
   // Landmark homing ([matching] for SIFT and SURF, [vline_matching] for vertical lines, [landmark_alv]).
   nav::LandmarkHomingConfig keypoint_homing, vline_homing;
+  ViewFusionConfig fusion;
   const nav::LandmarkHomingConfig& landmark_homing(nav::LandmarkMethod m) const {
     return m == nav::LandmarkMethod::kVline ? vline_homing : keypoint_homing;
   }
@@ -53,13 +75,46 @@ struct HomingConfig {
   }
 
   // Reads [channels], [homing], [panorama], [mirror], [hog], [compass], [alv], [preprocess],
-  // [matching], [vline_matching] and [landmark_alv];
+  // [matching], [vline_matching], [landmark_alv] and [view_fusion];
   // every key is required, unknown keys and invalid values are glue::ConfigError.
   static HomingConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
   // Throws glue::ConfigError (naming `origin`) when the options do not fit together.
   void Validate(const std::string& origin) const;
   // The effective configuration, as an INI file FromIni reads back (channels with their prefix).
   void Print(std::ostream& out) const;
+};
+
+// Frames (or landmark sets) of one still view, for [view_fusion]: an item is taken when at
+// least `interval_s` has passed since the last one taken (every item when n = 1); the last n
+// taken are kept; a gap of more than n intervals, or time running backwards, starts afresh.
+template <class T>
+class FrameBuffer {
+ public:
+  FrameBuffer(int n, double interval_s) : n_(n), interval_us_(static_cast<int64_t>(std::llround(interval_s * 1e6))) {}
+  // Whether `item` was taken.
+  bool Offer(int64_t utime, T item) {
+    if (!items_.empty()) {
+      const int64_t dt = utime - last_utime_;
+      if (dt < 0 || dt > interval_us_ * n_) {
+        items_.clear();
+      } else if (n_ > 1 && dt < interval_us_) {
+        return false;
+      }
+    }
+    items_.push_back(std::move(item));
+    if (static_cast<int>(items_.size()) > n_) items_.erase(items_.begin());
+    last_utime_ = utime;
+    return true;
+  }
+  bool full() const { return static_cast<int>(items_.size()) >= n_; }
+  const std::vector<T>& items() const { return items_; }
+  void Clear() { items_.clear(); }
+
+ private:
+  int n_;
+  int64_t interval_us_;
+  int64_t last_utime_ = 0;
+  std::vector<T> items_;
 };
 
 // The image file `path` as a panorama of config.panorama (a raw image is unwrapped with
@@ -77,9 +132,13 @@ class HomingNode {
   int64_t frames() const { return frames_; }            // decoded frames / landmark sets on the input channel
   int64_t before_home() const { return before_home_; }  // frames that arrived before any home
   int64_t homes_set() const { return homes_set_; }
+  // Landmarks of the home set (input = landmarks; 0 without one).
+  int home_landmarks() const { return landmark_homer_ && landmark_homer_->has_home() ? landmark_homer_->home().size() : 0; }
   int64_t published() const { return published_valid_ + published_invalid_; }
   int64_t published_valid() const { return published_valid_; }
   int64_t published_invalid() const { return published_invalid_; }  // no estimate (valid = false)
+  // Input frames not taken into the fused current view (closer than current_interval_s to the last one).
+  int64_t between_fused_frames() const { return between_fused_frames_; }
   int64_t unwrapper_builds() const { return frames_to_panoramas_.unwrapper_builds(); }    // once per mirror calibration / size
   // Frames (input and home snapshots) skipped, by reason ("wrong size", "undecodable image", ...).
   const std::map<std::string, int64_t>& rejected() const { return rejected_; }
@@ -100,6 +159,9 @@ class HomingNode {
   std::optional<cv::Mat> ToPanorama(const omni_frame_t& frame);
   void Reject(const std::string& reason, const std::string& detail);
   void SetHome(const cv::Mat& panorama);
+  // The fused landmark set of a buffer (persistence).
+  nav::LandmarkSet Fuse(const std::vector<nav::LandmarkSet>& sets) const;
+  void SetHomeLandmarks(nav::LandmarkSet set);
 
   glue::Bus& bus_;
   HomingConfig config_;
@@ -107,7 +169,11 @@ class HomingNode {
   std::optional<nav::LandmarkHomer> landmark_homer_;  // made for the home set's method
   glue::FramePanoramas frames_to_panoramas_;
   int64_t frames_ = 0, before_home_ = 0, homes_set_ = 0;
-  int64_t published_valid_ = 0, published_invalid_ = 0;
+  int64_t published_valid_ = 0, published_invalid_ = 0, between_fused_frames_ = 0;
+  // [view_fusion]: the frames of the home and current views (HOG: median panorama; landmark
+  // sets: persistent landmarks).
+  FrameBuffer<cv::Mat> home_frames_, current_frames_;
+  FrameBuffer<nav::LandmarkSet> home_sets_, current_sets_;
   std::map<std::string, int64_t> rejected_;
 };
 

@@ -428,7 +428,7 @@ TEST(HomingConfig, EveryShippedKeyIsRequired) {
       ++keys;
     }
   }
-  EXPECT_EQ(keys, 63);
+  EXPECT_EQ(keys, 72);
 }
 
 TEST(HomingConfig, BadValuesAndUnknownKeysAreErrors) {
@@ -585,6 +585,96 @@ TEST(LandmarksConfig, ShippedConfigLoadsAndBadValuesAreErrors) {
                glue::ConfigError);
   EXPECT_THROW(LandmarksConfig::FromIni(glue::IniFile::Parse(text + "[sift]\nsigmaa = 2\n", "t.ini"), ""),
                glue::ConfigError);
+}
+
+// [view_fusion] with frames (HOG): home = first takes the first home_frames frames that are
+// home_interval_s apart (no vectors for them, frames in between are skipped), then every frame
+// gets a vector; with current_frames > 1 only frames current_interval_s apart do.
+TEST(HomingNode, HomeFusedFromFramesTakenAnIntervalApart) {
+  Lab lab;
+  glue::Bus bus("memq://");
+  HomingNode node(bus, Config("F1_", {{"homing", "input", "panorama"},
+                                      {"homing", "home", "first"},
+                                      {"view_fusion", "home_frames", "3"},
+                                      {"view_fusion", "home_interval_s", "1.0"},
+                                      {"view_fusion", "current_frames", "2"},
+                                      {"view_fusion", "current_interval_s", "0.5"}}));
+  std::vector<homing_vector_t> got;
+  bus.Subscribe<homing_vector_t>("F1_HOMING_VECTOR", [&](const homing_vector_t& v) { got.push_back(v); });
+  // Home frames at 0, 0.5 (too soon), 1.0 and 2.0 s: the home is complete with the third taken.
+  for (const int64_t t : {0, 500000, 1000000, 2000000}) bus.Publish("F1_OMNI_PANORAMA", lab.Panorama({0, 0, 0}, t));
+  HandleAll(bus);
+  EXPECT_TRUE(node.has_home());
+  EXPECT_EQ(node.homes_set(), 1);
+  EXPECT_EQ(node.before_home(), 3);
+  EXPECT_TRUE(got.empty());
+  // Current frames at 3.0, 3.2 (too soon), 3.5 and 4.0 s: three vectors, the last two from two frames.
+  const nav::Pose2 away{0.6, 0.2, 0.3};
+  for (const int64_t t : {3000000, 3200000, 3500000, 4000000}) bus.Publish("F1_OMNI_PANORAMA", lab.Panorama(away, t));
+  HandleAll(bus);
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_EQ(node.between_fused_frames(), 1);
+  EXPECT_EQ(got[0].utime, 3000000);
+  EXPECT_EQ(got[2].utime, 4000000);
+  for (const auto& v : got) {
+    ASSERT_TRUE(v.valid);
+    EXPECT_LT(DirectionError(v, away), kSixtyDeg);
+  }
+  EXPECT_EQ(node.rejected_total(), 0);
+}
+
+// [view_fusion] with landmark sets: the home is fused from the last home_frames sets on the home
+// channel, keeping the landmarks found again at the same place; one that moves between the sets
+// (a walking person) is dropped, and a gap of more than home_frames intervals starts a new home.
+TEST(HomingNode, HomeLandmarksKeepWhatPersists) {
+  glue::Bus bus("memq://");
+  HomingNode node(bus, Config("F2_", {{"homing", "input", "landmarks"},
+                                      {"channels", "landmarks", "LANDMARKS_SIFT"},
+                                      {"view_fusion", "home_frames", "3"},
+                                      {"view_fusion", "home_interval_s", "1.0"},
+                                      {"view_fusion", "min_fraction", "0.6"}}));
+  const nav::PanoramaModel pm = Config("", {}).panorama;
+  cv::RNG rng(5);
+  cv::Mat static_desc(6, 128, CV_32F), moving_desc(1, 128, CV_32F);
+  rng.fill(static_desc, cv::RNG::UNIFORM, 0.0f, 100.0f);
+  rng.fill(moving_desc, cv::RNG::UNIFORM, 0.0f, 100.0f);
+  auto set_at = [&](double moving_column) {
+    nav::LandmarkSet s;
+    s.method = nav::LandmarkMethod::kSift;
+    s.width_px = pm.width_px;
+    s.height_px = pm.height_px;
+    for (int i = 0; i < 6; ++i) s.landmarks.push_back({60.0f + 100 * i, 50.0f, 1.0f, 8.0f, 0.0f});
+    s.landmarks.push_back({static_cast<float>(moving_column), 40.0f, 1.0f, 8.0f, 0.0f});
+    cv::vconcat(static_desc, moving_desc, s.descriptors);
+    return s;
+  };
+  const int64_t s1 = 1000000;
+  bus.Publish("F2_HOME_LANDMARKS", glue::LandmarkSetToMsg(set_at(30), pm, 0, "test"));
+  HandleAll(bus);
+  EXPECT_EQ(node.home_landmarks(), 7);  // one set: taken as it is
+  bus.Publish("F2_HOME_LANDMARKS", glue::LandmarkSetToMsg(set_at(90), pm, s1, "test"));
+  bus.Publish("F2_HOME_LANDMARKS", glue::LandmarkSetToMsg(set_at(150), pm, 2 * s1, "test"));
+  HandleAll(bus);
+  EXPECT_EQ(node.homes_set(), 3);
+  EXPECT_EQ(node.home_landmarks(), 6);  // the moving one is in one set of three: dropped
+  // Ten seconds later: a new home, from its first set alone.
+  bus.Publish("F2_HOME_LANDMARKS", glue::LandmarkSetToMsg(set_at(400), pm, 12 * s1, "test"));
+  HandleAll(bus);
+  EXPECT_EQ(node.home_landmarks(), 7);
+  EXPECT_EQ(node.rejected_total(), 0);
+}
+
+// fusion = median needs the frames: with landmark sets it is a config error, as are zero frames.
+TEST(HomingConfig, ViewFusionValuesAreChecked) {
+  EXPECT_THROW(Config("", {{"homing", "input", "landmarks"},
+                           {"view_fusion", "fusion", "median"},
+                           {"view_fusion", "home_frames", "5"}}),
+               glue::ConfigError);
+  EXPECT_NO_THROW(Config("", {{"homing", "input", "raw"}, {"view_fusion", "fusion", "median"}, {"view_fusion", "home_frames", "5"}}));
+  EXPECT_THROW(Config("", {{"view_fusion", "current_frames", "0"}}), glue::ConfigError);
+  EXPECT_THROW(Config("", {{"view_fusion", "home_interval_s", "0"}}), glue::ConfigError);
+  EXPECT_THROW(Config("", {{"view_fusion", "min_fraction", "1.5"}}), glue::ConfigError);
+  EXPECT_THROW(Config("", {{"view_fusion", "fusion", "mean"}}), glue::ConfigError);
 }
 
 }  // namespace

@@ -167,6 +167,42 @@ TEST(RouteDriver, ReachesEveryWaypoint) {
   for (double d : min_d) EXPECT_LT(d, 0.1);
 }
 
+// People walk around the robot: none comes closer than its radius plus the robot's, none stands
+// frozen against it (the simulator once stopped them for good), and one the robot is teleported
+// onto walks off it.
+TEST(People, WalkAroundTheRobotAndNeverStandOnIt) {
+  Scene scene = RoomWithPost({-4, -4});
+  scene.people.count = 6;
+  scene.people.textures = {1};
+  scene.people.area_min = {-2, -2};
+  scene.people.area_max = {2, 2};
+  DriveOptions drive;
+  World world(scene, drive, LaserOptions{}, 4);
+  world.SetTruePose(Pose2{0, 0, 0});
+  const double clearance = scene.people.radius_m + drive.robot_radius_m;
+  std::vector<double> walked(6, 0.0);
+  std::vector<Eigen::Vector2d> last;
+  for (const auto& p : world.people()) last.push_back(p.center);
+  double nearest = 1e9;
+  for (int i = 0; i < 1200; ++i) {  // 120 s
+    world.Step(0, 0, 0.1);
+    for (size_t k = 0; k < 6; ++k) {
+      const Eigen::Vector2d c = world.people()[k].center;
+      nearest = std::min(nearest, c.norm());
+      walked[k] += (c - last[k]).norm();
+      last[k] = c;
+    }
+  }
+  EXPECT_GT(nearest, clearance - 1e-9);
+  EXPECT_LT(nearest, clearance + 0.2);  // they do pass close by
+  for (double w : walked) EXPECT_GT(w, 0.9 * scene.people.speed_mps * 120);  // nobody stands still
+  // Teleported onto a person: the person steps off within a second.
+  const Eigen::Vector2d someone = world.people()[0].center;
+  world.SetTruePose(Pose2{someone.x(), someone.y(), 0});
+  for (int i = 0; i < 10; ++i) world.Step(0, 0, 0.1);
+  for (const auto& p : world.people()) EXPECT_GT((p.center - someone).norm(), clearance - 1e-9);
+}
+
 TEST(Scene, BadElementsAreRejected) {
   Scene s = RoomWithPost({0, 0});
   s.walls.push_back({{0, 0}, {0, 0}, 2, 0, 0, 0});

@@ -13,6 +13,7 @@
 
 #include "homing_eval.hpp"
 #include "landmark_compare.hpp"
+#include "people_diagnosis.hpp"
 #include "snapnav/glue/landmarks.hpp"
 #include "homing_node.hpp"
 #include "scene_file.hpp"
@@ -133,6 +134,12 @@ int Main(int argc, char** argv) {
   std::string compare_scenes = "indoor13,indoor_objects11,outdoor11,featureless11,people11", counts = "3,5,20,all";
   int top_n = 0;
   bool random_headings = false, sweep = false, quick = false, no_return = false, compare = false;
+  bool people_diagnosis = false, return_best_only = false;
+  int home_frames = -1, current_frames = -1, return_stride = 1;
+  double home_interval_s = -1, current_interval_s = -1;
+  std::string fusion;
+  double min_fraction = -1;
+  eval::FrameProtocol fused{9, 1.0, 3, 0.5};
   int seed = 1;
   Overrides o;
   eval::ReturnOptions ret;
@@ -149,7 +156,25 @@ int Main(int argc, char** argv) {
   flags.AddBool("compare", &compare,
                 "compare HOG, vertical lines, SIFT and SURF x ALV variant x landmark count on --scenes: compare.md, "
                 "compare.csv, summary.json, vector maps");
+  flags.AddBool("people-diagnosis", &people_diagnosis,
+                "on --scene (one with people): where the people are in each grid image, the AAE with people-free "
+                "home or current views, matched landmarks on people (people.md, people_per_image.csv, summary.json)");
   flags.AddString("scenes", &compare_scenes, "--compare: scenes");
+  flags.AddInt("home-frames", &home_frames,
+               "frames fused into the home view (the robot stands, people walk); default: [view_fusion] home_frames");
+  flags.AddDouble("home-interval-s", &home_interval_s, "time between home frames [s]; default: [view_fusion]");
+  flags.AddInt("current-frames", &current_frames,
+               "frames fused into each current view (the robot pauses); default: [view_fusion] current_frames");
+  flags.AddDouble("current-interval-s", &current_interval_s, "time between current frames [s]; default: [view_fusion]");
+  flags.AddString("fusion", &fusion, "persistent | median: how landmark methods fuse frames (default: [view_fusion] fusion)");
+  flags.AddDouble("min-fraction", &min_fraction, "override: [view_fusion] min_fraction of the persistent fusion");
+  flags.AddInt("fusion-home-frames", &fused.home_frames,
+               "--compare (scenes with people) and --people-diagnosis: home frames of the fused rows; 1: none");
+  flags.AddDouble("fusion-home-interval-s", &fused.home_interval_s, "... the time between them [s]");
+  flags.AddInt("fusion-current-frames", &fused.current_frames, "... current frames of the fused rows; 1: none");
+  flags.AddDouble("fusion-current-interval-s", &fused.current_interval_s, "... the time between them [s]");
+  flags.AddBool("return-best-only", &return_best_only, "--compare: return runs only for each method's best rows");
+  flags.AddInt("return-stride", &return_stride, "return runs from every n-th start only (a stated sample)");
   flags.AddString("counts", &counts, "--compare: landmark counts (N or all)");
   flags.AddString("home", &home_text, "home position X,Y [m] (a grid position; default: the grid centre)");
   flags.AddString("config", &config_path, "homing config (its [hog], [compass], [alv], [preprocess])");
@@ -194,7 +219,7 @@ int Main(int argc, char** argv) {
                             std::to_string(pm.width_px) + "x" + std::to_string(pm.height_px));
   }
   const nav::HogHomingConfig config = Apply(homing.homing, o);
-  if (compare || method != "hog") {
+  if (compare || people_diagnosis || method != "hog") {
     eval::LandmarkEvalSetup setup;
     setup.camera = sim.camera;
     setup.hog = config;
@@ -203,8 +228,29 @@ int Main(int argc, char** argv) {
     setup.vline_homing = homing.vline_homing;
     setup.input = input == "raw" ? CameraPipeline::Input::kRaw : CameraPipeline::Input::kPanorama;
     setup.ret = ret;
+    setup.ret.start_stride = return_stride;
     setup.seed = static_cast<uint64_t>(seed);
+    setup.fusion.mode = homing.fusion.mode;
+    setup.fusion.persistence = homing.fusion.persistence;
+    setup.frames.home_frames = home_frames >= 0 ? home_frames : homing.fusion.home_frames;
+    setup.frames.current_frames = current_frames >= 0 ? current_frames : homing.fusion.current_frames;
+    setup.frames.home_interval_s = home_interval_s >= 0 ? home_interval_s : homing.fusion.home_interval_s;
+    setup.frames.current_interval_s = current_interval_s >= 0 ? current_interval_s : homing.fusion.current_interval_s;
+    if (min_fraction >= 0) setup.fusion.persistence.min_fraction = min_fraction;
+    if (!fusion.empty()) {
+      const auto f = nav::ParseViewFusion(fusion);
+      if (!f) throw glue::FlagError("--fusion must be persistent or median, not '" + fusion + "'");
+      setup.fusion.mode = *f;
+    }
+    try {
+      setup.frames.Validate();
+      fused.Validate();
+    } catch (const std::invalid_argument& e) {
+      throw glue::FlagError(std::string("--home-frames, --current-frames, --fusion-*: ") + e.what());
+    }
+    if (return_stride < 1) throw glue::FlagError("--return-stride must be >= 1");
     if (random_headings) throw glue::FlagError("--random-headings is for the HOG evaluation only");
+    if (people_diagnosis) return eval::RunPeopleDiagnosis(setup, scene_name, fused, out_dir);
     if (compare) {
       eval::CompareOptions c;
       c.scenes = glue::SplitList(compare_scenes);
@@ -212,6 +258,8 @@ int Main(int argc, char** argv) {
       for (const auto& n : glue::SplitList(counts)) c.top_n.push_back(n == "all" ? 0 : std::stoi(n));
       if (c.scenes.empty() || c.top_n.empty()) throw glue::FlagError("--scenes and --counts must not be empty");
       c.returns = !no_return;
+      c.return_best_only = return_best_only;
+      c.fused = fused;
       return eval::RunCompare(setup, c, out_dir);
     }
     return eval::RunLandmarkEval(setup, scene_name, *nav::ParseLandmarkMethod(method), *nav::ParseAlvVariant(alv), top_n,

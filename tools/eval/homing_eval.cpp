@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "snapnav/nav/sim/world.hpp"
+#include "snapnav/nav/view_fusion.hpp"
 
 namespace snapnav::eval {
 
@@ -16,12 +17,15 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 using Clock = std::chrono::steady_clock;
 
-// People of the scene (if any) walking between images: one world steps them.
+// People of the scene (if any) walking between images: one world steps them around the robot,
+// which stands where the camera is (they walk around it, never through it).
 class Crowd {
  public:
   Crowd(const nav::sim::Scene& scene, uint64_t seed) : world_(scene, {}, {}, seed) {}
-  const std::vector<nav::sim::Cylinder>& Advance(double dt_s) {
-    const int steps = std::max(1, static_cast<int>(dt_s / 0.1));
+  // People after dt_s of walking (0.1 s steps) with the robot standing at `robot`.
+  const std::vector<nav::sim::Cylinder>& Advance(double dt_s, const nav::Pose2& robot) {
+    world_.SetTruePose(robot);
+    const int steps = std::max(1, static_cast<int>(std::lround(dt_s / 0.1)));
     for (int i = 0; i < steps; ++i) world_.Step(0, 0, 0.1);
     return world_.people();
   }
@@ -33,7 +37,8 @@ class Crowd {
 }  // namespace
 
 ViewRenderer::ViewRenderer(const nav::sim::Scene& scene, const nav::sim::OmniCameraOptions& camera, uint64_t seed)
-    : camera_(camera),
+    : scene_(&scene),
+      camera_(camera),
       renderer_(scene, camera),
       unwrapper_(camera.mirror, camera.panorama, cv::Size(camera.omni_width_px, camera.omni_height_px)),
       rng_(seed) {}
@@ -87,18 +92,55 @@ GridDatabase RenderGrid(const nav::sim::Scene& scene, ViewRenderer& renderer, co
   }
   db.poses[db.home_index].theta_rad = 0;
   db.home = db.poses[db.home_index];
+  options.frames.Validate();
+  const bool people = scene.people.count > 0;
   Crowd crowd(scene, options.seed);
   for (size_t i = 0; i < db.poses.size(); ++i) {
-    db.sensor.push_back(renderer.Sensor(db.poses[i], options.input, scene.people.count > 0 ? crowd.Advance(2.0)
-                                                                                            : std::vector<nav::sim::Cylinder>{}));
+    db.people.push_back(people ? crowd.Advance(2.0, db.poses[i]) : std::vector<nav::sim::Cylinder>{});
+    db.sensor.push_back(renderer.Sensor(db.poses[i], options.input, db.people.back()));
+    const bool at_home = static_cast<int>(i) == db.home_index;
+    const int frames = at_home ? options.frames.home_frames : options.frames.current_frames;
+    const double interval = at_home ? options.frames.home_interval_s : options.frames.current_interval_s;
+    db.more_sensor.emplace_back();
+    db.more_people.emplace_back();
+    Crowd still = crowd;  // the robot stays; the main crowd goes on as without these frames
+    for (int k = 1; k < frames; ++k) {
+      db.more_people.back().push_back(people ? still.Advance(interval, db.poses[i]) : db.people.back());
+      db.more_sensor.back().push_back(renderer.Sensor(db.poses[i], options.input, db.more_people.back().back()));
+    }
     if (progress) progress(static_cast<int>(i) + 1, static_cast<int>(db.poses.size()));
   }
   return db;
 }
 
+void FrameProtocol::Validate() const {
+  if (home_frames < 1 || current_frames < 1 || !(home_interval_s > 0) || !(current_interval_s > 0)) {
+    throw std::invalid_argument("frames: home_frames and current_frames must be >= 1, the intervals > 0");
+  }
+}
+
+void HogMethod::SetHomeFrames(const std::vector<cv::Mat>& frames) {
+  SetHome(median_frames_ && frames.size() > 1 ? nav::MedianImage(frames) : frames.front());
+}
+
+std::optional<nav::HomingEstimate> HogMethod::HomeFrames(const std::vector<cv::Mat>& frames) {
+  return Home(median_frames_ && frames.size() > 1 ? nav::MedianImage(frames) : frames.front());
+}
+
 GridResult EvaluatePanoramas(const GridDatabase& db, const std::vector<cv::Mat>& panoramas, HomingMethod& method) {
+  std::vector<std::vector<cv::Mat>> frames;
+  frames.reserve(panoramas.size());
+  for (const auto& p : panoramas) frames.push_back({p});
+  return EvaluateFrames(db, frames, method);
+}
+
+GridResult EvaluateFrames(const GridDatabase& db, const std::vector<std::vector<cv::Mat>>& frames, HomingMethod& method) {
+  if (frames.size() != db.poses.size()) throw std::invalid_argument("homing evaluation: one frame list per grid position");
+  for (const auto& f : frames) {
+    if (f.empty()) throw std::invalid_argument("homing evaluation: a grid position without frames");
+  }
   GridResult r;
-  method.SetHome(panoramas[db.home_index]);
+  method.SetHomeFrames(frames[db.home_index]);
   const Eigen::Vector2d home(db.home.x_m, db.home.y_m);
   std::vector<double> errors, compass;
   for (size_t i = 0; i < db.poses.size(); ++i) {
@@ -110,7 +152,7 @@ GridResult EvaluatePanoramas(const GridDatabase& db, const std::vector<cv::Mat>&
       continue;
     }
     const auto t0 = Clock::now();
-    const auto e = method.Home(panoramas[i]);
+    const auto e = method.HomeFrames(frames[i]);
     r.seconds_in_method += std::chrono::duration<double>(Clock::now() - t0).count();
     ++r.method_calls;
     const double truth = std::atan2(home.y() - pose.y_m, home.x() - pose.x_m);
@@ -148,24 +190,49 @@ GridResult EvaluatePanoramas(const GridDatabase& db, const std::vector<cv::Mat>&
 
 ReturnResult EvaluateReturn(const GridDatabase& db, HomingMethod& method, ViewRenderer& renderer,
                             const CameraPipeline& pipeline, const ReturnOptions& options,
-                            const std::function<void(int, int)>& progress) {
+                            const std::function<void(int, int)>& progress,
+                            const std::vector<std::vector<cv::Mat>>* panorama_frames) {
+  options.frames.Validate();
+  if (options.start_stride < 1) throw std::invalid_argument("return runs: start_stride must be >= 1");
   ReturnResult result;
-  method.SetHome(renderer.ToPanorama(db.sensor[db.home_index], pipeline));
+  const nav::sim::Scene& scene = renderer.scene();
+  const bool people = scene.people.count > 0;
+  // The home view as the grid evaluation has it: its first home_frames frames.
+  auto db_frames = [&](size_t i, int n) {
+    if (panorama_frames) {
+      const auto& all = (*panorama_frames)[i];
+      return std::vector<cv::Mat>(all.begin(), all.begin() + std::clamp<int>(n, 1, static_cast<int>(all.size())));
+    }
+    std::vector<cv::Mat> f{renderer.ToPanorama(db.sensor[i], pipeline)};
+    for (int k = 1; k < n && i < db.more_sensor.size() && k - 1 < static_cast<int>(db.more_sensor[i].size()); ++k) {
+      f.push_back(renderer.ToPanorama(db.more_sensor[i][k - 1], pipeline));
+    }
+    return f;
+  };
+  method.SetHomeFrames(db_frames(db.home_index, options.frames.home_frames));
   const Eigen::Vector2d home(db.home.x_m, db.home.y_m);
   double path_ratio_sum = 0;
   std::vector<size_t> starts;
+  int eligible = 0;
   for (size_t i = 0; i < db.poses.size(); ++i) {
-    if ((Eigen::Vector2d(db.poses[i].x_m, db.poses[i].y_m) - home).norm() > options.success_radius_m + 1e-9) starts.push_back(i);
+    if ((Eigen::Vector2d(db.poses[i].x_m, db.poses[i].y_m) - home).norm() > options.success_radius_m + 1e-9) {
+      if (eligible++ % options.start_stride == 0) starts.push_back(i);
+    }
   }
   for (size_t k = 0; k < starts.size(); ++k) {
     nav::Pose2 pose = db.poses[starts[k]];
     ReturnRun run;
     const double straight = (Eigen::Vector2d(pose.x_m, pose.y_m) - home).norm();
     run.path.push_back({pose.x_m, pose.y_m});
-    // The first view is the database image; later views are rendered at the actual pose.
-    cv::Mat panorama = renderer.ToPanorama(db.sensor[starts[k]], pipeline);
+    // The crowd of this run walks around the robot; the first view is the database's.
+    std::optional<Crowd> crowd;
+    if (people) {
+      crowd.emplace(scene, options.seed * 1000003 + starts[k]);
+      crowd->Advance(options.people_warm_up_s, pose);
+    }
+    std::vector<cv::Mat> frames = db_frames(starts[k], options.frames.current_frames);
     while (run.path_length_m + options.step_m <= options.max_path_factor * straight + 1e-9) {
-      const auto e = method.Home(panorama);
+      const auto e = method.HomeFrames(frames);
       if (!e) break;
       pose.theta_rad = nav::WrapAngle(pose.theta_rad + e->direction_rad);  // turn towards home, then step
       pose.x_m += options.step_m * std::cos(pose.theta_rad);
@@ -176,7 +243,14 @@ ReturnResult EvaluateReturn(const GridDatabase& db, HomingMethod& method, ViewRe
         run.success = true;
         break;
       }
-      panorama = renderer.ToPanorama(renderer.Sensor(pose, pipeline.input, {}), pipeline);
+      frames.clear();
+      std::vector<nav::sim::Cylinder> walkers;
+      if (crowd) walkers = crowd->Advance(options.people_dt_s, pose);
+      frames.push_back(renderer.ToPanorama(renderer.Sensor(pose, pipeline.input, walkers), pipeline));
+      for (int f = 1; f < options.frames.current_frames; ++f) {
+        if (crowd) walkers = crowd->Advance(options.frames.current_interval_s, pose);
+        frames.push_back(renderer.ToPanorama(renderer.Sensor(pose, pipeline.input, walkers), pipeline));
+      }
     }
     if (run.success) {
       ++result.successes;
@@ -215,7 +289,11 @@ cv::Mat DrawVectorMap(const GridDatabase& db, const GridResult& result, const st
   auto px = [&](double x, double y) {
     return cv::Point(static_cast<int>(20 + (x - xmin) * scale), static_cast<int>(top + size - 20 - (y - ymin) * scale));
   };
-  cv::putText(img, title, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  // The title at 0.6, smaller when it would not fit.
+  int baseline = 0;
+  const double title_width = cv::getTextSize(title, cv::FONT_HERSHEY_SIMPLEX, 0.6, 1, &baseline).width;
+  const double title_scale = std::min(0.6, 0.6 * (size - 24) / std::max(1.0, title_width));
+  cv::putText(img, title, {12, 30}, cv::FONT_HERSHEY_SIMPLEX, title_scale, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   if (paths) {
     for (const auto& run : paths->runs) {
       const cv::Scalar c = run.success ? cv::Scalar(200, 200, 200) : cv::Scalar(160, 160, 255);

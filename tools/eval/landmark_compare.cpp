@@ -25,25 +25,6 @@ void Progress(const std::string& what, int done, int total) {
   }
 }
 
-struct Grid {
-  nav::sim::Scene scene;
-  GridDatabase db;
-  std::vector<cv::Mat> panos;
-};
-
-Grid RenderScene(const nav::sim::Scene& scene, const LandmarkEvalSetup& setup, ViewRenderer& renderer) {
-  Grid g;
-  g.scene = scene;
-  GridOptions grid;
-  grid.seed = setup.seed;
-  grid.input = setup.input;
-  CameraPipeline pipeline;
-  pipeline.input = setup.input;
-  g.db = RenderGrid(scene, renderer, grid, [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
-  for (const auto& s : g.db.sensor) g.panos.push_back(renderer.ToPanorama(s, pipeline));
-  return g;
-}
-
 nav::LandmarkHomingConfig WithAlv(nav::LandmarkHomingConfig c, nav::AlvVariant variant, int top_n) {
   c.alv.variant = variant;
   c.alv.top_n = top_n;
@@ -67,10 +48,40 @@ std::string OrDash(double v, int digits) { return std::isnan(v) ? "-" : Fixed(v,
 // One row of the comparison.
 struct Row {
   std::string scene, method, alv, n;
+  std::string fusion = "none";          // none | persistent | median
+  int home_frames = 1, current_frames = 1;
   double aae = kNaN, median = kNaN, ret = kNaN, ms = kNaN, landmarks = kNaN, matches = kNaN;
   int failures = 0, positions = 0;
   double aae_without_people = kNaN;  // the same scene with its people removed
+  std::string Frames() const { return std::to_string(home_frames) + "/" + std::to_string(current_frames); }
+  std::string Label() const {
+    return (method == "hog" ? method : method + " " + alv + " " + n) +
+           (fusion == "none" ? std::string() : ", " + fusion + " " + Frames());
+  }
 };
+
+GridOptions MakeGridOptions(const LandmarkEvalSetup& setup, const FrameProtocol& frames) {
+  GridOptions grid;
+  grid.seed = setup.seed;
+  grid.input = setup.input;
+  grid.frames = frames;
+  return grid;
+}
+
+// The frames the return runs use: home_frames of the home, current_frames per step.
+ReturnOptions WithFrames(ReturnOptions r, const FrameProtocol& protocol, int home_frames, int current_frames,
+                         uint64_t seed) {
+  r.frames = protocol;
+  r.frames.home_frames = home_frames;
+  r.frames.current_frames = current_frames;
+  r.seed = seed;
+  return r;
+}
+
+std::string FusionText(const std::string& fusion, const FrameProtocol& f) {
+  if (!f.fused()) return "";
+  return ", " + fusion + " " + std::to_string(f.home_frames) + "/" + std::to_string(f.current_frames) + " frames";
+}
 
 }  // namespace
 
@@ -82,25 +93,45 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   nav::LandmarkExtractorConfig extractor = setup.extractor;
   extractor.method = method;
   const auto homing = WithAlv(setup.homing(method), variant, top_n);
-  const std::string label = LandmarkLabel(method, variant, top_n);
+  const std::string label = LandmarkLabel(method, variant, top_n) +
+                            FusionText(nav::ViewFusionName(setup.fusion.mode), setup.frames);
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, " << label
             << "\n";
   ViewRenderer renderer(scene, setup.camera, setup.seed);
-  const Grid g = RenderScene(scene, setup, renderer);
-  const auto cache = ExtractAll(g.panos, extractor);
-  LandmarkMethod m(extractor, homing, setup.camera.panorama, &cache);
-  const auto result = EvaluatePanoramas(g.db, g.panos, m);
-  const double ms = cache.ms_per_panorama() + (result.method_calls ? result.seconds_in_method * 1000 / result.method_calls : 0);
+  const Grid g = RenderScene(scene, MakeGridOptions(setup, setup.frames), renderer,
+                             [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
+  const auto cache = ExtractAll(g.AllPanoramas(), extractor);
+  LandmarkMethod m(extractor, homing, setup.camera.panorama, &cache, setup.fusion);
+  const auto result = EvaluateFrames(g.db, g.Frames(setup.frames.home_frames, setup.frames.current_frames), m);
+  const double ms = cache.ms_per_panorama() * setup.frames.current_frames +
+                    (result.method_calls ? result.seconds_in_method * 1000 / result.method_calls : 0);
   const double mean_matches = m.estimates() ? static_cast<double>(m.matches()) / m.estimates() : 0;
   std::cerr << "eval-homing: AAE " << Fixed(result.aae_deg) << " deg (median " << Fixed(result.median_deg) << ", "
             << result.failures << " without an answer), " << Fixed(cache.mean_landmarks, 1) << " landmarks and "
             << Fixed(mean_matches, 1) << " matches per view, " << Fixed(ms) << " ms per frame\n";
+  // A scene with people: the same room without them (single frames: its frames are all alike).
+  double aae_empty = kNaN;
+  if (scene.people.count > 0) {
+    nav::sim::Scene quiet = scene;
+    quiet.people.count = 0;
+    ViewRenderer r2(quiet, setup.camera, setup.seed);
+    const Grid e = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
+                               [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
+    const auto empty_cache = ExtractAll(e.panos, extractor);
+    LandmarkMethod me(extractor, homing, setup.camera.panorama, &empty_cache);
+    aae_empty = EvaluatePanoramas(e.db, e.panos, me).aae_deg;
+    std::cerr << "eval-homing: without the people: AAE " << Fixed(aae_empty) << " deg (degradation "
+              << Fixed(result.aae_deg - aae_empty) << " deg)\n";
+  }
   ReturnResult returns;
   if (!no_return) {
     CameraPipeline pipeline;
     pipeline.input = setup.input;
-    LandmarkMethod live(extractor, homing, setup.camera.panorama);
-    returns = EvaluateReturn(g.db, live, renderer, pipeline, setup.ret, [](int d, int t) { Progress("return runs", d, t); });
+    LandmarkMethod live(extractor, homing, setup.camera.panorama, nullptr, setup.fusion);
+    returns = EvaluateReturn(g.db, live, renderer, pipeline,
+                             WithFrames(setup.ret, setup.frames, setup.frames.home_frames, setup.frames.current_frames,
+                                        setup.seed),
+                             [](int d, int t) { Progress("return runs", d, t); }, &g.frames);
     std::cerr << "eval-homing: return ratio " << Fixed(returns.ratio, 3) << " (" << returns.successes << "/"
               << returns.starts << ")\n";
   }
@@ -112,7 +143,12 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   std::ofstream json(out / "summary.json");
   json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"method\": "
        << JsonString(nav::LandmarkMethodName(method)) << ",\n  \"alv\": " << JsonString(nav::AlvVariantName(variant))
-       << ",\n  \"landmarks\": " << JsonString(NText(top_n)) << ",\n  \"grid_positions\": " << result.positions
+       << ",\n  \"landmarks\": " << JsonString(NText(top_n))
+       << ",\n  \"fusion\": " << JsonString(setup.frames.fused() ? nav::ViewFusionName(setup.fusion.mode) : "none")
+       << ",\n  \"home_frames\": " << setup.frames.home_frames << ",\n  \"home_interval_s\": " << setup.frames.home_interval_s
+       << ",\n  \"current_frames\": " << setup.frames.current_frames
+       << ",\n  \"current_interval_s\": " << setup.frames.current_interval_s
+       << ",\n  \"grid_positions\": " << result.positions
        << ",\n  \"average_angular_error_deg\": " << Fixed(result.aae_deg, 4)
        << ",\n  \"median_angular_error_deg\": " << Fixed(result.median_deg, 4)
        << ",\n  \"max_angular_error_deg\": " << Fixed(result.max_deg, 4)
@@ -120,18 +156,22 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
        << ",\n  \"compass_mean_error_deg\": " << Fixed(result.compass_mean_deg, 4)
        << ",\n  \"mean_landmarks_per_view\": " << Fixed(cache.mean_landmarks, 2)
        << ",\n  \"mean_matches\": " << Fixed(mean_matches, 2) << ",\n  \"ms_per_frame\": " << Fixed(ms, 3);
+  if (!std::isnan(aae_empty)) {
+    json << ",\n  \"average_angular_error_without_people_deg\": " << Fixed(aae_empty, 4)
+         << ",\n  \"degradation_deg\": " << Fixed(result.aae_deg - aae_empty, 4);
+  }
   if (!no_return) {
     json << ",\n  \"return_ratio\": " << Fixed(returns.ratio, 4) << ",\n  \"return_starts\": " << returns.starts
          << ",\n  \"return_successes\": " << returns.successes;
   }
   json << ",\n  \"figures\": [\"vector_map.png\"]\n}\n";
   std::ofstream(out / "report.md") << "# Homing evaluation: " << scene.name << ", " << label << "\n\n"
-                                   << "| AAE [deg] | median | max | without answer | return ratio | landmarks/view | matches | ms/frame |\n"
-                                   << "|---|---|---|---|---|---|---|---|\n| " << Fixed(result.aae_deg) << " | "
+                                   << "| AAE [deg] | median | max | without answer | return ratio | landmarks/view | matches | ms/frame | AAE without people |\n"
+                                   << "|---|---|---|---|---|---|---|---|---|\n| " << Fixed(result.aae_deg) << " | "
                                    << Fixed(result.median_deg) << " | " << Fixed(result.max_deg) << " | "
                                    << result.failures << " | " << (no_return ? "-" : Fixed(returns.ratio, 3)) << " | "
                                    << Fixed(cache.mean_landmarks, 1) << " | " << Fixed(mean_matches, 1) << " | "
-                                   << Fixed(ms) << " |\n\n![vector map](vector_map.png)\n";
+                                   << Fixed(ms) << " | " << OrDash(aae_empty, 2) << " |\n\n![vector map](vector_map.png)\n";
   std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
   if (!no_return) std::cout << "return_ratio " << Fixed(returns.ratio, 3) << "\n";
   return 0;
@@ -149,37 +189,64 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
   std::ostringstream md;
   md << "# Homing with feature landmarks: HOG, vertical lines, SIFT, SURF (thesis 4.1-4.3)\n\n"
      << "AAE over each scene's grid (home at the centre, all views at heading 0, the rotation estimated from the\n"
-     << "matches), return ratio of closed-loop runs (step " << setup.ret.step_m << " m) for each method and ALV at\n"
-     << "its best landmark count, and milliseconds per frame (extraction + matching + ALV, one core).\n"
+     << "matches), return ratio of closed-loop runs (step " << setup.ret.step_m << " m, people walking "
+     << setup.ret.people_dt_s << " s per step around the robot) for each method and ALV at its best landmark count"
+     << (options.return_best_only ? " (here: only for each method's best row)" : "")
+     << (setup.ret.start_stride > 1 ? " (a sample: every " + std::to_string(setup.ret.start_stride) + "th start)" : "")
+     << ",\n"
+     << "and milliseconds per frame (extraction + matching + ALV, one core; fused rows: per fused view).\n"
      << "Vertical lines have no keypoint scale: their scale ALV equals the unit ALV and is not listed.\n"
      << "scale is the thesis' scale-compensated ALV (4.2.3); scale+consensus is snapnav's: the mean of the\n"
      << "per-landmark directions that agree with their mode, with the rotation refined to the best agreement.\n\n";
+  const FrameProtocol& fp = options.fused;
+  fp.Validate();
   for (const auto& scene_name : options.scenes) {
     const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
+    const bool people = scene.people.count > 0;
+    const bool fused = people && fp.fused();
     ViewRenderer renderer(scene, setup.camera, setup.seed);
-    const Grid g = RenderScene(scene, setup, renderer);
+    const Grid g = RenderScene(scene, MakeGridOptions(setup, fused ? fp : FrameProtocol{}), renderer,
+                               [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
     // The same room without its people, for the degradation the people cause.
     std::optional<Grid> empty;
-    if (scene.people.count > 0) {
+    if (people) {
       nav::sim::Scene quiet = scene;
       quiet.people.count = 0;
       ViewRenderer r2(quiet, setup.camera, setup.seed);
-      empty = RenderScene(quiet, setup, r2);
+      empty = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
+                          [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
     }
+    const std::string header =
+        std::string("| method | ALV | landmarks |") + (fused ? " fusion | frames home/current |" : "") +
+        " AAE [deg] | median | no answer | return ratio | ms/frame | landmarks/view | matches |" +
+        (empty ? " AAE without people | degradation |" : "") + "\n|---|---|---|" + (fused ? "---|---|" : "") +
+        "---|---|---|---|---|---|---|" + (empty ? "---|---|" : "") + "\n";
     md << "## " << scene.name << " (" << scene.grid.nx << "x" << scene.grid.ny << " grid"
-       << (scene.people.count > 0 ? ", " + std::to_string(scene.people.count) + " people walking" : std::string()) << ")\n\n"
-       << "| method | ALV | landmarks | AAE [deg] | median | no answer | return ratio | ms/frame | landmarks/view | matches |"
-       << (empty ? " AAE without people |" : "") << "\n|---|---|---|---|---|---|---|---|---|---|" << (empty ? "---|" : "")
-       << "\n";
-    auto emit = [&](const Row& r) {
-      md << "| " << r.method << " | " << r.alv << " | " << r.n << " | " << Fixed(r.aae) << " | " << Fixed(r.median)
-         << " | " << r.failures << " | " << OrDash(r.ret, 3) << " | " << OrDash(r.ms, 2) << " | "
-         << OrDash(r.landmarks, 1) << " | " << OrDash(r.matches, 1) << " |"
-         << (empty ? " " + OrDash(r.aae_without_people, 2) + " |" : "") << "\n";
-      rows.push_back(r);
+       << (people ? ", " + std::to_string(scene.people.count) + " people walking" : std::string()) << ")\n\n";
+    auto emit = [&](const Row& r) { rows.push_back(r); };
+    auto vector_map = [&](const GridResult& res, const std::string& label, double aae, const ReturnResult* ret,
+                          const std::string& name) {
+      plot::SavePng(DrawVectorMap(g.db, res,
+                                  scene.name + " " + label + ": AAE " + Fixed(aae, 1) + " deg" +
+                                      (ret ? ", return " + Fixed(ret->ratio, 2) : std::string()),
+                                  ret),
+                    (out / name).string());
+      figures.push_back(name);
     };
+    // The fused configurations: the home view alone, and the home and current views.
+    struct Fusion {
+      nav::ViewFusion mode;
+      int home, current;
+    };
+    std::vector<Fusion> fusions;
+    if (fused) {
+      for (const auto mode : {nav::ViewFusion::kPersistent, nav::ViewFusion::kMedian}) {
+        if (fp.home_frames > 1) fusions.push_back({mode, fp.home_frames, 1});
+        if (fp.current_frames > 1) fusions.push_back({mode, fp.home_frames, fp.current_frames});
+      }
+    }
     std::vector<plot::BarGroup> groups;
-    // HOG (chapter 3) with the homing config.
+    // HOG (chapter 3) with the homing config; fused by the median panorama.
     {
       HogMethod hog(setup.hog, setup.camera.panorama);
       const auto res = EvaluatePanoramas(g.db, g.panos, hog);
@@ -192,31 +259,60 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       if (empty) r.aae_without_people = EvaluatePanoramas(empty->db, empty->panos, hog).aae_deg;
       ReturnResult ret;
       if (options.returns) {
-        ret = EvaluateReturn(g.db, hog, renderer, pipeline, setup.ret, [](int d, int t) { Progress("return runs hog", d, t); });
+        ret = EvaluateReturn(g.db, hog, renderer, pipeline, WithFrames(setup.ret, fp, 1, 1, setup.seed),
+                             [](int d, int t) { Progress("return runs hog", d, t); }, &g.frames);
         r.ret = ret.ratio;
       }
       emit(r);
       groups.push_back({"hog", {r.aae, kNaN, kNaN, kNaN}});
-      plot::SavePng(DrawVectorMap(g.db, res, scene.name + " hog: AAE " + Fixed(r.aae, 1) + " deg" +
-                                                 (options.returns ? ", return " + Fixed(r.ret, 2) : std::string()),
-                                  options.returns ? &ret : nullptr),
-                    (out / ("vector_map_" + scene.name + "_hog.png")).string());
-      figures.push_back("vector_map_" + scene.name + "_hog.png");
+      vector_map(res, "hog", r.aae, options.returns ? &ret : nullptr, "vector_map_" + scene.name + "_hog.png");
+      // HOG fuses by the median panorama: one row per frame protocol, each with its return runs.
+      for (const auto& f : fusions) {
+        if (f.mode != nav::ViewFusion::kMedian) continue;
+        HogMethod fm(setup.hog, setup.camera.panorama, true);
+        const auto fr = EvaluateFrames(g.db, g.Frames(f.home, f.current), fm);
+        Row q = r;
+        q.fusion = "median";
+        q.home_frames = f.home;
+        q.current_frames = f.current;
+        q.aae = fr.aae_deg;
+        q.median = fr.median_deg;
+        q.failures = fr.failures;
+        q.ms = fr.method_calls ? fr.seconds_in_method * 1000 / fr.method_calls : kNaN;
+        q.ret = kNaN;
+        ReturnResult fret;
+        if (options.returns) {
+          fret = EvaluateReturn(g.db, fm, renderer, pipeline, WithFrames(setup.ret, fp, f.home, f.current, setup.seed),
+                                [&](int d, int t) { Progress("return runs " + q.Label(), d, t); }, &g.frames);
+          q.ret = fret.ratio;
+        }
+        emit(q);
+        vector_map(fr, q.Label(), q.aae, options.returns ? &fret : nullptr,
+                   "vector_map_" + scene.name + "_hog_" + (f.current > 1 ? "fused" : "fused_home") + ".png");
+      }
     }
     for (const auto method : methods) {
       nav::LandmarkExtractorConfig extractor = setup.extractor;
       extractor.method = method;
       const std::string mname = nav::LandmarkMethodName(method);
-      const auto cache = ExtractAll(g.panos, extractor);
+      const auto cache = ExtractAll(g.AllPanoramas(), extractor);
       std::optional<LandmarkCache> empty_cache;
       if (empty) empty_cache = ExtractAll(empty->panos, extractor);
       std::cerr << "eval-homing: " << scene.name << " " << mname << ": " << Fixed(cache.mean_landmarks, 1)
                 << " landmarks per view, " << Fixed(cache.ms_per_panorama()) << " ms extraction\n";
       plot::BarGroup group{mname, {}};
-      double best_method_aae = 1e9;
-      GridResult best_method_result;
-      std::string best_method_label;
-      ReturnResult best_method_return;
+      // Per ALV: the rows at each count, the best count; the method's best single-frame and fused rows.
+      struct Best {
+        double aae = 1e9;
+        size_t row = 0;
+        GridResult result;
+        nav::LandmarkHomingConfig homing;
+        FrameFusion fusion;
+        int home = 1, current = 1;
+      };
+      Best best_single;
+      std::map<int, Best> best_fused;  // by current frames: the home fused alone, and the current views too
+      std::vector<std::pair<size_t, nav::LandmarkHomingConfig>> returns_wanted;  // row, config (single frames)
       for (const auto& alv : kAlvRows) {
         const auto variant = alv.variant;
         if (method == nav::LandmarkMethod::kVline && variant == nav::AlvVariant::kScale) {
@@ -247,33 +343,99 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
           vrows.push_back(r);
           vresults.push_back(res);
         }
-        ReturnResult ret;
-        if (options.returns) {
-          auto homing = WithAlv(setup.homing(method), variant, options.top_n[best]);
-          homing.alv.consensus = alv.consensus;
-          LandmarkMethod live(extractor, homing, setup.camera.panorama);
-          ret = EvaluateReturn(g.db, live, renderer, pipeline, setup.ret, [&](int d, int t) {
-            Progress("return runs " + mname + " " + alv.label, d, t);
-          });
-          vrows[best].ret = ret.ratio;
+        auto best_homing = WithAlv(setup.homing(method), variant, options.top_n[best]);
+        best_homing.alv.consensus = alv.consensus;
+        for (size_t k = 0; k < vrows.size(); ++k) {
+          emit(vrows[k]);
+          if (static_cast<int>(k) == best) {
+            if (!options.return_best_only) returns_wanted.push_back({rows.size() - 1, best_homing});
+            if (vrows[k].aae < best_single.aae) {
+              best_single = Best{vrows[k].aae, rows.size() - 1, vresults[k], best_homing, {}, 1, 1};
+            }
+          }
         }
-        for (const auto& r : vrows) emit(r);
         group.values.push_back(vrows[best].aae);
-        if (vrows[best].aae < best_method_aae) {
-          best_method_aae = vrows[best].aae;
-          best_method_result = vresults[best];
-          best_method_label = mname + " " + alv.label + " " + NText(options.top_n[best]);
-          best_method_return = ret;
+        // Fused views, at the variant's best count.
+        for (const auto& f : fusions) {
+          FrameFusion fusion = setup.fusion;
+          fusion.mode = f.mode;
+          LandmarkMethod m(extractor, best_homing, setup.camera.panorama, &cache, fusion);
+          const auto res = EvaluateFrames(g.db, g.Frames(f.home, f.current), m);
+          Row r = vrows[best];
+          r.fusion = nav::ViewFusionName(f.mode);
+          r.home_frames = f.home;
+          r.current_frames = f.current;
+          r.aae = res.aae_deg;
+          r.median = res.median_deg;
+          r.failures = res.failures;
+          r.ret = kNaN;
+          // Extraction of every frame (persistent) or of the median panorama, matching and ALV.
+          const double method_ms = res.method_calls ? res.seconds_in_method * 1000 / res.method_calls : 0;
+          r.ms = (f.mode == nav::ViewFusion::kPersistent ? cache.ms_per_panorama() * f.current : 0) + method_ms;
+          r.matches = m.estimates() ? static_cast<double>(m.matches()) / m.estimates() : 0;
+          emit(r);
+          auto& bf = best_fused[f.current];
+          if (r.aae < bf.aae) bf = Best{r.aae, rows.size() - 1, res, best_homing, fusion, f.home, f.current};
+        }
+      }
+      if (options.return_best_only) returns_wanted.push_back({best_single.row, best_single.homing});
+      ReturnResult best_single_return;
+      if (options.returns) {
+        for (const auto& [row, homing] : returns_wanted) {
+          LandmarkMethod live(extractor, homing, setup.camera.panorama);
+          const auto ret = EvaluateReturn(g.db, live, renderer, pipeline,
+                                          WithFrames(setup.ret, fp, 1, 1, setup.seed),
+                                          [&](int d, int t) { Progress("return runs " + rows[row].Label(), d, t); },
+                                          &g.frames);
+          rows[row].ret = ret.ratio;
+          if (row == best_single.row) best_single_return = ret;
         }
       }
       groups.push_back(group);
-      const std::string name = "vector_map_" + scene.name + "_" + mname + ".png";
-      plot::SavePng(DrawVectorMap(g.db, best_method_result,
-                                  scene.name + " " + best_method_label + ": AAE " + Fixed(best_method_aae, 1) + " deg" +
-                                      (options.returns ? ", return " + Fixed(best_method_return.ratio, 2) : std::string()),
-                                  options.returns ? &best_method_return : nullptr),
-                    (out / name).string());
-      figures.push_back(name);
+      vector_map(best_single.result, rows[best_single.row].Label(), best_single.aae,
+                 options.returns ? &best_single_return : nullptr, "vector_map_" + scene.name + "_" + mname + ".png");
+      for (const auto& [current, bf] : best_fused) {
+        ReturnResult fret;
+        if (options.returns) {
+          LandmarkMethod live(extractor, bf.homing, setup.camera.panorama, nullptr, bf.fusion);
+          fret = EvaluateReturn(g.db, live, renderer, pipeline, WithFrames(setup.ret, fp, bf.home, bf.current, setup.seed),
+                                [&](int d, int t) { Progress("return runs " + rows[bf.row].Label(), d, t); },
+                                &g.frames);
+          rows[bf.row].ret = fret.ratio;
+        }
+        vector_map(bf.result, rows[bf.row].Label(), bf.aae, options.returns ? &fret : nullptr,
+                   "vector_map_" + scene.name + "_" + mname + "_" + (current > 1 ? "fused" : "fused_home") + ".png");
+      }
+    }
+    // This scene's tables (after the return runs).
+    {
+      std::ostringstream single, fused_rows;
+      for (const auto& r : rows) {
+        if (r.scene != scene.name) continue;
+        std::ostream& o = r.fusion == "none" ? static_cast<std::ostream&>(single) : fused_rows;
+        o << "| " << r.method << " | " << r.alv << " | " << r.n << " |"
+          << (fused ? " " + r.fusion + " | " + r.Frames() + " |" : std::string()) << " " << Fixed(r.aae) << " | "
+          << Fixed(r.median) << " | " << r.failures << " | " << OrDash(r.ret, 3) << " | " << OrDash(r.ms, 2) << " | "
+          << OrDash(r.landmarks, 1) << " | " << OrDash(r.matches, 1) << " |"
+          << (empty ? " " + OrDash(r.aae_without_people, 2) + " | " + OrDash(r.aae - r.aae_without_people, 2) + " |"
+                    : std::string())
+          << "\n";
+      }
+      if (fused) md << "### Single frames (the thesis' protocol)\n\n";
+      md << header << single.str();
+      if (fused) {
+        md << "\n### Fused views (snapnav): the robot stands still while the people walk\n\n"
+           << "The home view from " << fp.home_frames << " frames " << Fixed(fp.home_interval_s, 1)
+           << " s apart (frames home/current " << fp.home_frames << "/1); also each current view from "
+           << fp.current_frames << " frames " << Fixed(fp.current_interval_s, 1) << " s apart (" << fp.home_frames
+           << "/" << fp.current_frames << ", a robot that pauses to look; the return runs pause so at every step). "
+           << "persistent: the landmarks found again at the same place in at least "
+           << Fixed(setup.fusion.persistence.min_fraction * 100, 0)
+           << "% of the frames; median: landmarks of the per-pixel median panorama (HOG: its median panorama). "
+              "Each ALV at its best count above. The room without people gives identical frames, so its AAE is the "
+              "single-frame one.\n\n"
+           << header << fused_rows.str();
+      }
     }
     plot::Axes axes;
     axes.title = "AAE by method and ALV, best landmark count (" + scene.name + ")";
@@ -287,59 +449,88 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     md << "\n![AAE by method](" << chart << ")\n\n";
   }
 
-  // Summary: the best landmark configuration per scene, weighted vs unit with all matches.
-  std::map<std::string, const Row*> best_per_scene;
+  // Summary: the best landmark configuration per scene (single frames, and fused), weighted vs unit with all matches.
+  std::map<std::string, const Row*> best_per_scene, best_fused_per_scene;
+  std::map<std::pair<std::string, std::string>, const Row*> best_single_method, best_home_method, best_fused_method;
   for (const auto& r : rows) {
+    auto& bm = (r.fusion == "none" ? best_single_method
+                : r.current_frames == 1 ? best_home_method
+                                        : best_fused_method)[{r.scene, r.method}];
+    if (!bm || r.aae < bm->aae) bm = &r;
     if (r.method == "hog") continue;
-    auto& b = best_per_scene[r.scene];
+    auto& b = (r.fusion == "none" ? best_per_scene : best_fused_per_scene)[r.scene];
     if (!b || r.aae < b->aae) b = &r;
   }
-  md << "## Summary\n\n| scene | best landmark configuration | AAE [deg] | return ratio | AAE without people |\n"
-     << "|---|---|---|---|---|\n";
+  md << "## Summary\n\n| scene | best landmark configuration, single frames | AAE [deg] | return ratio | AAE without "
+        "people | degradation |\n|---|---|---|---|---|---|\n";
   for (const auto& [scene, r] : best_per_scene) {
-    md << "| " << scene << " | " << r->method << " " << r->alv << " " << r->n << " | " << Fixed(r->aae) << " | "
-       << OrDash(r->ret, 3) << " | " << OrDash(r->aae_without_people, 2) << " |\n";
+    md << "| " << scene << " | " << r->Label() << " | " << Fixed(r->aae) << " | " << OrDash(r->ret, 3) << " | "
+       << OrDash(r->aae_without_people, 2) << " | " << OrDash(r->aae - r->aae_without_people, 2) << " |\n";
+  }
+  if (!best_home_method.empty() || !best_fused_method.empty()) {
+    md << "\nEach method's best configuration: single frames (the thesis' protocol), the home fused, the home and the "
+          "current views fused (AAE [deg] / return ratio; degradation against the room without people):\n\n"
+       << "| scene | method | best single-frame | AAE / return | best, home fused | AAE / return | best, home and "
+          "current fused | AAE / return | AAE without people | degradation: single / home / both |\n"
+       << "|---|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& [key, s1] : best_single_method) {
+      if (!best_home_method.count(key) && !best_fused_method.count(key)) continue;
+      const Row* h = best_home_method.count(key) ? best_home_method[key] : nullptr;
+      const Row* f = best_fused_method.count(key) ? best_fused_method[key] : nullptr;
+      auto cell = [](const Row* r) { return r ? r->Label() + " | " + Fixed(r->aae) + " / " + OrDash(r->ret, 3) : std::string("- | -"); };
+      auto deg = [](const Row* r) { return r ? OrDash(r->aae - r->aae_without_people, 2) : std::string("-"); };
+      md << "| " << key.first << " | " << key.second << " | " << cell(s1) << " | " << cell(h) << " | " << cell(f)
+         << " | " << OrDash(s1->aae_without_people, 2) << " | " << deg(s1) << " / " << deg(h) << " / " << deg(f) << " |\n";
+    }
   }
   md << "\nWeighted against unit ALV with all matches (thesis 4.3.2):\n\n| scene | method | unit AAE | weighted AAE |\n"
      << "|---|---|---|---|\n";
   for (const auto& u : rows) {
-    if (u.alv != "unit" || u.n != "all") continue;
+    if (u.alv != "unit" || u.n != "all" || u.fusion != "none") continue;
     for (const auto& w : rows) {
-      if (w.scene == u.scene && w.method == u.method && w.alv == "weighted" && w.n == "all") {
+      if (w.scene == u.scene && w.method == u.method && w.alv == "weighted" && w.n == "all" && w.fusion == "none") {
         md << "| " << u.scene << " | " << u.method << " | " << Fixed(u.aae) << " | " << Fixed(w.aae) << " |\n";
       }
     }
   }
   std::ofstream(out / "compare.md") << md.str();
   std::ofstream csv(out / "compare.csv");
-  csv << "scene,method,alv,landmarks,aae_deg,median_deg,no_answer,positions,return_ratio,ms_per_frame,landmarks_per_view,"
-         "matches,aae_without_people_deg\n";
+  csv << "scene,method,alv,landmarks,fusion,home_frames,current_frames,aae_deg,median_deg,no_answer,positions,"
+         "return_ratio,ms_per_frame,landmarks_per_view,matches,aae_without_people_deg\n";
   for (const auto& r : rows) {
-    csv << r.scene << "," << r.method << "," << r.alv << "," << r.n << "," << Fixed(r.aae, 3) << "," << Fixed(r.median, 3)
-        << "," << r.failures << "," << r.positions << "," << OrDash(r.ret, 4) << "," << OrDash(r.ms, 3) << ","
-        << OrDash(r.landmarks, 2) << "," << OrDash(r.matches, 2) << "," << OrDash(r.aae_without_people, 3) << "\n";
+    csv << r.scene << "," << r.method << "," << r.alv << "," << r.n << "," << r.fusion << "," << r.home_frames << ","
+        << r.current_frames << "," << Fixed(r.aae, 3) << "," << Fixed(r.median, 3) << "," << r.failures << ","
+        << r.positions << "," << OrDash(r.ret, 4) << "," << OrDash(r.ms, 3) << "," << OrDash(r.landmarks, 2) << ","
+        << OrDash(r.matches, 2) << "," << OrDash(r.aae_without_people, 3) << "\n";
   }
   auto num = [](double v) { return std::isnan(v) ? std::string("null") : Fixed(v, 4); };
+  auto row_json = [&](const Row& r) {
+    std::ostringstream j;
+    j << "{\"scene\": " << JsonString(r.scene) << ", \"method\": " << JsonString(r.method)
+      << ", \"alv\": " << JsonString(r.alv) << ", \"landmarks\": " << JsonString(r.n)
+      << ", \"fusion\": " << JsonString(r.fusion) << ", \"home_frames\": " << r.home_frames
+      << ", \"current_frames\": " << r.current_frames << ", \"aae_deg\": " << num(r.aae)
+      << ", \"median_deg\": " << num(r.median) << ", \"no_answer\": " << r.failures
+      << ", \"return_ratio\": " << num(r.ret) << ", \"ms_per_frame\": " << num(r.ms)
+      << ", \"landmarks_per_view\": " << num(r.landmarks) << ", \"matches\": " << num(r.matches)
+      << ", \"aae_without_people_deg\": " << num(r.aae_without_people) << "}";
+    return j.str();
+  };
   std::ofstream json(out / "summary.json");
-  json << "{\n  \"best_per_scene\": {";
-  bool first = true;
-  for (const auto& [scene, r] : best_per_scene) {
-    json << (first ? "\n" : ",\n") << "    " << JsonString(scene) << ": {\"method\": " << JsonString(r->method)
-         << ", \"alv\": " << JsonString(r->alv) << ", \"landmarks\": " << JsonString(r->n)
-         << ", \"aae_deg\": " << num(r->aae) << ", \"return_ratio\": " << num(r->ret)
-         << ", \"aae_without_people_deg\": " << num(r->aae_without_people) << "}";
-    first = false;
-  }
-  json << "\n  },\n  \"rows\": [";
-  for (size_t i = 0; i < rows.size(); ++i) {
-    const auto& r = rows[i];
-    json << (i ? ",\n" : "\n") << "    {\"scene\": " << JsonString(r.scene) << ", \"method\": " << JsonString(r.method)
-         << ", \"alv\": " << JsonString(r.alv) << ", \"landmarks\": " << JsonString(r.n) << ", \"aae_deg\": " << num(r.aae)
-         << ", \"median_deg\": " << num(r.median) << ", \"no_answer\": " << r.failures
-         << ", \"return_ratio\": " << num(r.ret) << ", \"ms_per_frame\": " << num(r.ms)
-         << ", \"landmarks_per_view\": " << num(r.landmarks) << ", \"matches\": " << num(r.matches)
-         << ", \"aae_without_people_deg\": " << num(r.aae_without_people) << "}";
-  }
+  auto best_map = [&](const char* key, const std::map<std::string, const Row*>& m) {
+    json << "  \"" << key << "\": {";
+    bool first = true;
+    for (const auto& [scene, r] : m) {
+      json << (first ? "\n" : ",\n") << "    " << JsonString(scene) << ": " << row_json(*r);
+      first = false;
+    }
+    json << "\n  },\n";
+  };
+  json << "{\n";
+  best_map("best_per_scene", best_per_scene);
+  best_map("best_fused_per_scene", best_fused_per_scene);
+  json << "  \"rows\": [";
+  for (size_t i = 0; i < rows.size(); ++i) json << (i ? ",\n" : "\n") << "    " << row_json(rows[i]);
   json << "\n  ],\n  \"figures\": [";
   for (size_t i = 0; i < figures.size(); ++i) json << (i ? ", " : "") << JsonString(figures[i]);
   json << "]\n}\n";

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "homing_eval.hpp"
+#include "landmark_eval.hpp"
 #include "snapnav/nav/hog_homing.hpp"
 #include "snapnav/nav/landmark_extractor.hpp"
 #include "snapnav/nav/landmarks.hpp"
@@ -22,6 +23,10 @@ struct LandmarkEvalSetup {
   CameraPipeline::Input input = CameraPipeline::Input::kRaw;
   ReturnOptions ret;
   uint64_t seed = 1;
+  // Several frames per view (homing.ini [view_fusion]): landmark methods fuse them with `fusion`,
+  // HOG by the median panorama. 1 and 1: the thesis' single snapshots.
+  FrameFusion fusion;
+  FrameProtocol frames;
   const nav::LandmarkHomingConfig& homing(nav::LandmarkMethod m) const {
     return m == nav::LandmarkMethod::kVline ? vline_homing : keypoint_homing;
   }
@@ -36,6 +41,11 @@ struct CompareOptions {
   std::vector<std::string> scenes;     // default: the thesis scenes
   std::vector<int> top_n = {3, 5, 20, 0};
   bool returns = true;                 // return ratio of each method x variant at its best count
+  bool return_best_only = false;       // only of each method's best row (and best fused row)
+  // Scenes with people: also each method x ALV (at its best count) with the home view fused from
+  // fused.home_frames frames, and with the current views fused from fused.current_frames too
+  // (people walking between them), persistent and median. Both 1: no fused rows.
+  FrameProtocol fused{9, 1.0, 3, 0.5};
 };
 // The comparison table over scenes x methods x ALV variants x landmark counts.
 int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, const std::string& out_dir);

@@ -1,5 +1,6 @@
 #include "landmark_eval.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace snapnav::eval {
@@ -23,9 +24,11 @@ LandmarkCache ExtractAll(const std::vector<cv::Mat>& panoramas, const nav::Landm
 }
 
 LandmarkMethod::LandmarkMethod(const nav::LandmarkExtractorConfig& extractor, const nav::LandmarkHomingConfig& homing,
-                               const nav::PanoramaModel& panorama, const LandmarkCache* cache)
-    : extractor_(extractor), homer_(homing, panorama), cache_(cache) {
+                               const nav::PanoramaModel& panorama, const LandmarkCache* cache,
+                               const FrameFusion& fusion)
+    : extractor_(extractor), fusion_(fusion), homer_(homing, panorama), cache_(cache) {
   extractor_.Validate();
+  fusion_.persistence.Validate();
 }
 
 std::string LandmarkMethod::name() const {
@@ -46,12 +49,71 @@ const nav::LandmarkSet& LandmarkMethod::Landmarks(const cv::Mat& panorama) {
 
 void LandmarkMethod::SetHome(const cv::Mat& panorama) { homer_.SetHome(Landmarks(panorama)); }
 
-std::optional<nav::HomingEstimate> LandmarkMethod::Home(const cv::Mat& panorama) {
-  const auto r = homer_.Home(Landmarks(panorama));
+std::optional<nav::HomingEstimate> LandmarkMethod::Home(const cv::Mat& panorama) { return HomeSet(Landmarks(panorama)); }
+
+std::optional<nav::HomingEstimate> LandmarkMethod::HomeSet(const nav::LandmarkSet& set) {
+  const auto r = homer_.Home(set);
   if (!r) return std::nullopt;
   matches_ += r->matches;
   ++estimates_;
   return r->estimate;
+}
+
+nav::LandmarkSet LandmarkMethod::Fused(const std::vector<cv::Mat>& frames) {
+  if (frames.size() == 1) return Landmarks(frames.front());
+  if (fusion_.mode == nav::ViewFusion::kMedian) {
+    const auto t0 = Clock::now();
+    nav::LandmarkSet set = nav::ExtractLandmarks(nav::MedianImage(frames), extractor_);
+    extract_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
+    ++extracted_;
+    return set;
+  }
+  std::vector<nav::LandmarkSet> sets;
+  for (const auto& f : frames) sets.push_back(Landmarks(f));
+  return nav::PersistentLandmarks(sets, fusion_.persistence);
+}
+
+void LandmarkMethod::SetHomeFrames(const std::vector<cv::Mat>& frames) {
+  if (frames.size() == 1) return SetHome(frames.front());
+  homer_.SetHome(Fused(frames));
+}
+
+std::optional<nav::HomingEstimate> LandmarkMethod::HomeFrames(const std::vector<cv::Mat>& frames) {
+  if (frames.size() == 1) return Home(frames.front());
+  return HomeSet(Fused(frames));
+}
+
+Grid RenderScene(const nav::sim::Scene& scene, const GridOptions& options, ViewRenderer& renderer,
+                 const std::function<void(int, int)>& progress) {
+  Grid g;
+  g.scene = scene;
+  CameraPipeline pipeline;
+  pipeline.input = options.input;
+  g.db = RenderGrid(scene, renderer, options, progress);
+  for (size_t i = 0; i < g.db.sensor.size(); ++i) {
+    g.panos.push_back(renderer.ToPanorama(g.db.sensor[i], pipeline));
+    g.frames.push_back({g.panos.back()});
+    g.frame_people.push_back({g.db.people[i]});
+    for (const auto& p : g.db.more_people[i]) g.frame_people.back().push_back(p);
+    for (const auto& s : g.db.more_sensor[i]) g.frames.back().push_back(renderer.ToPanorama(s, pipeline));
+    g.db.more_sensor[i].clear();
+  }
+  return g;
+}
+
+std::vector<std::vector<cv::Mat>> Grid::Frames(int n_home, int n_current) const {
+  std::vector<std::vector<cv::Mat>> out;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const int n = static_cast<int>(i) == db.home_index ? n_home : n_current;
+    out.emplace_back(frames[i].begin(), frames[i].begin() + std::clamp<int>(n, 1, static_cast<int>(frames[i].size())));
+  }
+  return out;
+}
+
+std::vector<cv::Mat> Grid::AllPanoramas() const {
+  std::vector<cv::Mat> all;
+  for (const auto& f : frames) all.insert(all.end(), f.begin(), f.end());
+  return all;
 }
 
 std::string LandmarkLabel(nav::LandmarkMethod method, nav::AlvVariant variant, int top_n) {

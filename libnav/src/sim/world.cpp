@@ -33,9 +33,15 @@ World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& 
   odom_at_last_take_ = odom_pose_;
   const PeopleSpec& p = scene.people;
   std::uniform_real_distribution<double> ux(p.area_min.x(), p.area_max.x()), uy(p.area_min.y(), p.area_max.y());
+  const Eigen::Vector2d robot = true_pose_.Transform({0, 0});
+  const double clearance = p.radius_m + drive_.robot_radius_m;
   for (int i = 0; i < p.count; ++i) {
     Cylinder c;
-    c.center = {ux(rng_), uy(rng_)};
+    // Not on the robot (a few tries; an area smaller than the robot keeps the last draw).
+    for (int attempt = 0; attempt < 20; ++attempt) {
+      c.center = {ux(rng_), uy(rng_)};
+      if ((c.center - robot).norm() > clearance) break;
+    }
     c.radius_m = p.radius_m;
     c.height_m = p.height_m;
     c.texture = p.textures[i % p.textures.size()];
@@ -47,16 +53,36 @@ World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& 
 void World::MovePeople(double dt_s) {
   const PeopleSpec& p = scene_.people;
   std::uniform_real_distribution<double> ux(p.area_min.x(), p.area_max.x()), uy(p.area_min.y(), p.area_max.y());
+  // People do not walk through the robot: one whose way crosses it walks around it, along the
+  // circle at radius + robot radius, on the side of its goal; one who finds itself on the robot
+  // (a teleported robot) steps away from it; a goal on the robot is replaced.
+  const Eigen::Vector2d robot = true_pose_.Transform({0, 0});
+  const double clearance = p.radius_m + drive_.robot_radius_m;
+  const double step = p.speed_mps * dt_s;
   for (size_t i = 0; i < people_.size(); ++i) {
-    Eigen::Vector2d to_goal = people_goals_[i] - people_[i].center;
-    const double step = p.speed_mps * dt_s;
-    if (to_goal.norm() <= step) {
-      people_[i].center = people_goals_[i];
+    Eigen::Vector2d& center = people_[i].center;
+    for (int attempt = 0; attempt < 20 && (people_goals_[i] - robot).norm() <= clearance; ++attempt) {
       people_goals_[i] = {ux(rng_), uy(rng_)};
+    }
+    const Eigen::Vector2d to_goal = people_goals_[i] - center;
+    const Eigen::Vector2d from_robot = center - robot;
+    const double r = from_robot.norm();
+    if (r <= clearance) {
+      center += (r > 1e-9 ? from_robot / r : Eigen::Vector2d(1, 0)) * step;
+      continue;
+    }
+    if (to_goal.norm() <= step) {
+      center = people_goals_[i];
+      people_goals_[i] = {ux(rng_), uy(rng_)};
+      continue;
+    }
+    const Eigen::Vector2d next = center + to_goal.normalized() * step;
+    if ((next - robot).norm() > clearance) {
+      center = next;
     } else {
-      const Eigen::Vector2d next = people_[i].center + to_goal.normalized() * step;
-      // People do not walk through the robot.
-      if ((next - true_pose_.Transform({0, 0})).norm() > p.radius_m + drive_.robot_radius_m) people_[i].center = next;
+      Eigen::Vector2d tangent(-from_robot.y() / r, from_robot.x() / r);
+      if (tangent.dot(to_goal) < 0) tangent = -tangent;
+      center += tangent * step;  // moves away from the robot: sqrt(r^2 + step^2) > r
     }
   }
 }

@@ -104,11 +104,12 @@ struct LandmarkAlvOptions {
 // The homing direction from matched landmarks, the current view turned by `rotation_rad`
 // relative to home (refined by the consensus when `refine_rotation`). nullopt when fewer than
 // min_landmarks matches remain or the ALV difference vanishes. HomingEstimate::bins_used counts
-// the landmarks used.
+// the landmarks used; `used` (if given) receives the indices into `matches` of those landmarks
+// (the top-N selection, or the consensus' inliers).
 std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const LandmarkSet& current,
                                                 const std::vector<LandmarkMatch>& matches, double rotation_rad,
                                                 const PanoramaModel& panorama, const LandmarkAlvOptions& options,
-                                                bool refine_rotation = false);
+                                                bool refine_rotation = false, std::vector<int>* used = nullptr);
 
 enum class RotationSource { kMatches, kNone };  // kNone: views share a heading (aligned database)
 std::optional<RotationSource> ParseRotationSource(const std::string& name);
@@ -124,6 +125,8 @@ struct LandmarkHomingConfig {
 struct LandmarkHoming {
   HomingEstimate estimate;
   int matches = 0;  // matches after the descriptor checks
+  std::vector<LandmarkMatch> matched;  // those matches
+  std::vector<int> used;               // indices into `matched` of the landmarks the estimate used
 };
 class LandmarkHomer {
  public:
