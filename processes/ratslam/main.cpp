@@ -31,6 +31,10 @@ int Main(int argc, char** argv) {
   std::cerr << "ratslam: frames from " << config.input_channel() << ", odometry from " << config.odometry_channel
             << ", poses on " << config.pose_channel << ", experience map on " << config.experience_map_channel << " ("
             << bus.url() << ")\n";
+  if (bus.url().rfind("file://", 0) == 0) {
+    std::cerr << "ratslam: reading a log: LCM cannot publish on a file:// URL, so every pose and map counts as\n"
+                 "ratslam: a failed publish (internal error); record the outputs with lcm-logger on a live bus\n";
+  }
   bus.Run();
   node.Report(std::cerr);
   bus.ReportStats(std::cerr);

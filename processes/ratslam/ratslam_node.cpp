@@ -289,6 +289,7 @@ void RatSlamNode::PublishExperienceMap(int64_t utime) {
 }
 
 void RatSlamNode::AfterMessage(int64_t utime) {
+  if (!first_utime_) first_utime_ = utime;
   const double map_us = config_.experience_map_interval_s * 1e6;
   if (map_us > 0 && slam_ && (!last_map_utime_ || utime - *last_map_utime_ >= map_us || utime < *last_map_utime_)) {
     last_map_utime_ = utime;
@@ -303,7 +304,7 @@ void RatSlamNode::AfterMessage(int64_t utime) {
 
 void RatSlamNode::PrintStats(std::ostream& out, int64_t utime) const {
   const nav::Pose2 p = slam_->pose();
-  out << "ratslam: t " << utime * 1e-6 << " s: " << processed_ << " frames, " << slam_->templates() << " templates, "
+  out << "ratslam: t+" << (utime - first_utime_.value_or(utime)) * 1e-6 << " s: " << processed_ << " frames, " << slam_->templates() << " templates, "
       << slam_->experience_map().experiences().size() << " experiences, " << slam_->loop_closures()
       << " loop closures, pose (" << p.x_m << ", " << p.y_m << ") m; " << mean_image_ms() << " ms per frame, "
       << mean_odometry_ms() << " ms per odometry\n";

@@ -106,7 +106,7 @@ class RatSlamNode {
   glue::FramePanoramas frames_to_panoramas_;
   std::optional<nav::RatSlam> slam_;
   bool odometry_seen_ = false;
-  std::optional<int64_t> last_map_utime_, last_stats_utime_;
+  std::optional<int64_t> last_map_utime_, last_stats_utime_, first_utime_;
   int64_t frames_ = 0, processed_ = 0, odometry_ = 0, steps_ = 0;
   int64_t poses_published_ = 0, maps_published_ = 0, internal_errors_ = 0;
   double image_ms_ = 0, odometry_ms_ = 0;

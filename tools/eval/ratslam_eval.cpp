@@ -384,10 +384,16 @@ cv::Mat DrawExperienceMap(const RatSlamEvaluation& e, const std::string& title) 
     }
   }
   for (const auto& n : nodes) cv::circle(img, px(n), 2, blue, cv::FILLED, cv::LINE_AA);
+  // Loop closures join experiences made on different passes at the same place: the links are short,
+  // so their ends are ringed.
+  for (const auto& l : e.links) {
+    if (!l.loop_closure) continue;
+    for (const int end : {l.from, l.to}) cv::circle(img, px(nodes[static_cast<size_t>(end)]), 5, red, 1, cv::LINE_AA);
+  }
   // Legend, scale bar and title.
   int y = top + 18;
   for (const auto& [name, colour] : std::vector<std::pair<std::string, cv::Scalar>>{
-           {"ground truth", green}, {"dead reckoning", grey}, {"experiences + links", blue}, {"loop-closure links", red}}) {
+           {"ground truth", green}, {"dead reckoning", grey}, {"experiences + links", blue}, {"loop closures (ringed)", red}}) {
     cv::line(img, cv::Point(width - 200, y - 4), cv::Point(width - 175, y - 4), colour, 2, cv::LINE_AA);
     cv::putText(img, name, cv::Point(width - 168, y), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(40, 40, 40), 1,
                 cv::LINE_AA);

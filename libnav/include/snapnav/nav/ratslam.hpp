@@ -91,7 +91,7 @@ struct LocalViewOptions {
   bool vt_shift_subcolumn = true;
   // A view matches its best template when their mean absolute difference is at most this
   // [intensity, 0-1]; otherwise it becomes a new template.
-  double vt_match_threshold = 0.06;
+  double vt_match_threshold = 0.04;
   double vt_normalisation = 0;  // > 0: scale the template to this mean, clipped to [0, 1] [intensity]; 0: off
   int vt_patch_normalise = 2;   // > 0: patch normalisation over (2n+1)^2 template cells [cells]; 0: off
   double vt_min_patch_normalisation_std = 0;  // flatter patches become 0.5 [intensity]
@@ -158,9 +158,9 @@ struct PoseCellOptions {
   int pc_w_i_dim = 5;               // local inhibition: weight cube side [cells, odd]
   double pc_w_i_var = 2;            // ... its Gaussian's spread [cells]
   double pc_global_inhib = 0.00002; // subtracted from every cell each step, floor 0 [activity]
-  double pc_cell_x_size_m = 0.25;   // size of one pose cell in x and y [m]
+  double pc_cell_x_size_m = 0.5;    // size of one pose cell in x and y [m]
   int pc_cells_to_avg = 3;          // the best estimate averages +- this many cells around the maximum [cells]
-  double pc_vt_inject_energy = 0.15;  // energy a familiar view injects: pc_vt_inject_energy/30 * (30 - e^(1.2 decay)) [activity]
+  double pc_vt_inject_energy = 0.015; // energy a familiar view injects: pc_vt_inject_energy/30 * (30 - e^(1.2 decay)) [activity]
   double vt_active_decay = 1.0;     // decay added each view the template stays active, and its floor [1]
   double pc_vt_restore = 0.05;      // decay removed from every template each view [1]
   int pc_vt_skip_recent = 10;       // the newest templates inject nothing (OpenRatSLAM: 10, fixed) [count]
@@ -170,8 +170,9 @@ struct PoseCellOptions {
   // snapnav: the pose cells step once this much odometry time has accumulated, with the increments
   // composed (0: on every odometry message, as OpenRatSLAM). A step shifts the packet by a fraction
   // of a cell and the attractor pulls part of it back, so a fast odometry source (50 Hz, millimetres
-  // per message) makes the packet lag its motion; stepping at the frame rate keeps it in pace [s].
-  double pc_update_interval_s = 0.1;
+  // per message) makes the packet lag its motion (about 25 % at 1 cm per step and 0.5 m cells);
+  // stepping less often shortens the lag but makes each injection count more [s].
+  double pc_update_interval_s = 0;
   void Validate() const;  // throws std::invalid_argument
 };
 
