@@ -54,8 +54,8 @@
 // a * width / 2 pi. relative_rad below is that turn (the current heading minus the heading at which
 // the matched template was learnt).
 //
-// Pure algorithm: no I/O, no clock, no randomness; the same inputs give the same outputs. No heap
-// allocation per odometry step; a view allocates only when it becomes a new template.
+// Pure algorithm: no I/O, no clock, no randomness; the same inputs give the same outputs. Buffers
+// are allocated once: a step allocates only when the map grows (a new template, experience or link).
 
 #include <cstdint>
 #include <optional>
