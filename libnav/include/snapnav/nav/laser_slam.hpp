@@ -166,6 +166,23 @@ class LaserSlam {
   Eigen::Matrix3d covariance_;
   PointGridMap map_;
   int64_t scans_ = 0;
+
+  // ---- For filters built on this one (nav::FusedSlam: a visual pose measurement in the same EKF).
+ public:
+  // EKF update with a direct pose measurement z of covariance r (EkfPoseUpdate).
+  void UpdatePose(const Pose2& z, const Eigen::Matrix3d& r);
+  // Replaces the pose and its covariance (relocalisation); the map stays as it is.
+  void ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
+  // Map protection: with add_points false no scan point joins the map; with min_fit > 0 a scan
+  // whose ICP fit (LaserSlamUpdate::fit) is below min_fit adds none either (the first scan, which
+  // builds the map, always does). Defaults: true, 0 (every scan maps, as before).
+  void SetMapping(bool add_points, double min_fit = 0);
+  bool adding_points() const { return add_points_; }
+
+ private:
+  bool MayAddPoints(const LaserSlamUpdate& u) const;
+  bool add_points_ = true;
+  double min_add_fit_ = 0;
 };
 
 }  // namespace snapnav::nav
