@@ -100,7 +100,8 @@ void World::Step(double linear_mps, double angular_radps, double dt_s) {
   const double w_true = w + (v != 0 || w != 0 ? drive_.angular_noise_radps * n01(rng_) : 0.0);
   const double dtheta_true = w_true * dt_s + drive_.heading_drift_deg_per_m * M_PI / 180.0 * std::abs(d_true);
   const Pose2 candidate = true_pose_.Compose({d_true, 0, dtheta_true});
-  const double clearance = ClearanceAt(scene_, people_, candidate.Transform({0, 0}), drive_.obstacle_min_height_m);
+  const double clearance = ClearanceAt(scene_, drive_.people_block_robot ? people_ : std::vector<Cylinder>{},
+                                       candidate.Transform({0, 0}), drive_.obstacle_min_height_m);
   if (clearance > drive_.robot_radius_m) {
     true_pose_ = candidate;
     distance_m_ += std::abs(d_true);

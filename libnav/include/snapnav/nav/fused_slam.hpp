@@ -17,23 +17,39 @@
 //      utime (with their motion noise added to its covariance), as nav::PoseTracker does;
 //   3. gate: innovation y = z - x (angle wrapped), S = P + R, d2 = y^T S^-1 y; d2 <= gate_chi2
 //      (chi-square, 3 degrees of freedom; 11.34 is the 99 % point) -> EKF update (accepted);
-//   4. otherwise rejected. Rejected measurements build a second hypothesis: the first starts
-//      it (its pose and covariance); each later rejected one is carried there by odometry like
-//      the filter, and if it agrees with the hypothesis (d2 <= agree_chi2) it is fused into it
-//      and the count of agreeing rejections grows, else it starts a new hypothesis (count 1).
-//      An accepted measurement clears the hypothesis. After relocalize_after agreeing rejected
-//      measurements the filter relocalises: its pose becomes the hypothesis' and its covariance
-//      the hypothesis' widened to at least relocalize_sigma_*; the map stays (it is in the
-//      world frame). A kidnapped robot (the laser pose consistently wrong) thus recovers after
-//      relocalize_after visual measurements.
+//   4. otherwise rejected. The rejected measurements of the last relocalize_window_s are kept,
+//      carried forward by odometry like the filter. When a rejected measurement agrees with at
+//      least relocalize_after - 1 of them (pairwise d2 <= agree_chi2) and their fused pose still
+//      fails the gate against the filter, the filter relocalises: its pose becomes that fused
+//      pose and its covariance theirs widened to at least relocalize_sigma_*; the map stays (it
+//      is in the world frame). Outliers in between (aliasing, occlusion) do not break the
+//      evidence, and they rarely agree with each other once carried by odometry. A kidnapped
+//      robot (the laser pose consistently wrong) thus recovers after relocalize_after visual
+//      measurements; so does a filter the laser led astray.
+//      No relocalisation either when the last scan fits the map clearly worse at the new pose
+//      than at the filter's (relocalize_max_fit_loss): aliasing that moves with the robot (the
+//      views a metre behind along a straight wall look alike) agrees with itself too.
 // Map protection: while the filter suspects it is lost (at least suspect_after consecutive
 // rejected visual measurements) scans do not add points to the map, nor does a scan whose ICP
 // fit is below map_min_fit.
+//
+// Map uncertainty (map_cell_m > 0): a scan matched to the map measures the pose relative to the
+// map, and the map is only as certain as the poses it was built from. Every map_cell_m cell the
+// scan points reach gets, when first mapped, the filter's covariance then; a later scan's
+// measurement covariance R is ICP's plus the mean recorded covariance of the cells its points fall
+// in (LaserSlam::SetMeasurementInflation), and the scan does not make the filter more certain than
+// that (the variances after the update are at least the smaller of the prediction's and the
+// map's). So while the robot explores (a corridor whose axis the laser cannot see, heading drift
+// building up) the filter keeps the uncertainty it really has and the visual measurements weigh
+// in; back in a part mapped with a certain pose, the laser dominates again. map_cell_m = 0: the
+// laser measurement as LaserSlam makes it (the ICP covariance, far too certain for fusion).
 
 #include <cstdint>
 #include <deque>
 #include <optional>
+#include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -47,12 +63,24 @@ struct FusedSlamOptions {
   double gate_chi2 = 11.34;           // Mahalanobis distance^2 gate of a visual measurement (3 dof; 99 %)
   double agree_chi2 = 11.34;          // rejected measurements agree with each other below this (3 dof)
   int relocalize_after = 5;           // relocalise after this many agreeing rejected measurements; 0: never
-  double relocalize_sigma_xy_m = 0.3; // after relocalising the position std. dev. is at least this [m]
-  double relocalize_sigma_theta_rad = 0.15;  // ... and the heading's [rad]
+  double relocalize_sigma_xy_m = 0.2; // after relocalising the position std. dev. is at least this [m]
+  double relocalize_sigma_theta_rad = 0.087;  // ... and the heading's [rad] (5 deg)
   double min_fix_sigma_xy_m = 0.05;   // floor of a visual measurement's position std. dev. [m]
   double min_fix_sigma_theta_rad = 0.03;  // floor of its heading std. dev. [rad]
   double max_fix_age_s = 2.0;         // older than this before the latest odometry: stale [s]
+  double relocalize_window_s = 10.0;  // rejected measurements are evidence for this long [s]
+  // No relocalisation when the last scan fits the map worse at the new pose than at the filter's
+  // by more than this (fraction of the points within 2 laser.point_sigma_m of the map, among those
+  // near mapped parts at both poses; not judged when either pose sees less than 30 % mapped
+  // parts). 1: never refuse.
+  double relocalize_max_fit_loss = 0.2;
   int suspect_after = 1;              // this many consecutive rejections: no points join the map; 0: never
+  double map_cell_m = 1.0;            // map uncertainty cells [m]; 0: off (see above)
+  // Added to every scan measurement's covariance (ICP's own is far too certain for fusion): the
+  // error of one scan against the map [m, rad]. With the map uncertainty it is also the growth of
+  // the map's uncertainty from one part of the map to the next while exploring.
+  double laser_sigma_xy_m = 0.01;
+  double laser_sigma_theta_rad = 0.005;
   // A scan with an ICP fit below this adds no points [0-1]; 0: off. Off by default: where the
   // map has nothing yet (just relocalised into an unexplored part) every fit is poor, and the map
   // could never grow there.
@@ -63,7 +91,7 @@ struct FusedSlamOptions {
 enum class VisualOutcome {
   kAccepted,     // passed the gate: EKF update
   kRejected,     // beyond the gate (kept as evidence for a relocalisation)
-  kRelocalized,  // the relocalize_after-th agreeing rejection: the filter jumped to the hypothesis
+  kRelocalized,  // rejected, and with it relocalize_after agree: the filter jumped to their fused pose
   kStale,        // older than max_fix_age_s
 };
 const char* VisualOutcomeName(VisualOutcome outcome);  // "accepted", "rejected", "relocalized", "stale"
@@ -71,7 +99,7 @@ const char* VisualOutcomeName(VisualOutcome outcome);  // "accepted", "rejected"
 struct VisualUpdate {
   VisualOutcome outcome = VisualOutcome::kStale;
   double mahalanobis2 = 0;       // d2 against the filter (0 when stale)
-  int agreeing_rejections = 0;   // of the hypothesis after this measurement (0 after accepting)
+  int agreeing_rejections = 0;   // recent rejected measurements agreeing with this one, itself included
   Pose2 measurement;             // carried forward to the latest odometry
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
 };
@@ -107,13 +135,18 @@ class FusedSlam {
   int64_t accepted() const { return accepted_; }
   int64_t rejected() const { return rejected_; }          // relocalising ones included
   int64_t relocalizations() const { return relocalizations_; }
+  int64_t refused_relocalizations() const { return refused_relocalizations_; }  // by the scan fit
   int64_t stale() const { return stale_; }
   int consecutive_rejections() const { return consecutive_rejections_; }
+  // Of the latest rejected measurement (0 once a measurement is accepted or after relocalising).
   int agreeing_rejections() const { return hypothesis_ ? hypothesis_count_ : 0; }
   bool suspect() const;             // the map is protected: consecutive rejections >= suspect_after
   int64_t unmapped_scans() const { return unmapped_scans_; }  // scans that added no points by protection
-  // The relocalisation hypothesis (pose, covariance), if rejected measurements started one.
+  // The fused pose (and covariance) of the latest rejected measurement and those agreeing with it;
+  // none once a measurement is accepted or after relocalising.
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> hypothesis() const;
+  // The recorded covariance of the map cell holding p (map_cell_m > 0), if it was mapped.
+  std::optional<Eigen::Matrix3d> MapCovarianceAt(const Eigen::Vector2d& p) const;
 
  private:
   struct Hypothesis {
@@ -122,16 +155,34 @@ class FusedSlam {
   };
   // z, r carried from utime to the latest odometry; false when older than the history.
   bool CarryForward(int64_t utime, Pose2* z, Eigen::Matrix3d* r) const;
+  uint64_t CellKey(const Eigen::Vector2d& p) const;
+  // Fraction of the last scan's sample within 2 point_sigma_m of the map at `pose`, among the points near mapped parts
+  // (`judged`: their share of the sample).
+  double ScanFit(const Pose2& pose, double* judged) const;
+  // Mean recorded covariance over a sample of the points at `pose`; false when none is recorded.
+  bool MapCovariance(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, Eigen::Matrix3d* out) const;
+  // Cells the points reach at `pose` that have no record get `covariance`.
+  void RecordMapCovariance(const Pose2& pose, const std::vector<Eigen::Vector2d>& points,
+                           const Eigen::Matrix3d& covariance);
 
   FusedSlamOptions options_;
   LaserSlam laser_;
   std::deque<std::pair<int64_t, Pose2>> history_;  // odometry increments (end utime, delta), oldest first
   int64_t utime_ = 0;
   bool have_time_ = false;
+  std::unordered_map<uint64_t, Eigen::Matrix3d> map_covariance_;  // map cell -> covariance when first mapped
+  struct Rejected {
+    int64_t utime;
+    Pose2 pose;
+    Eigen::Matrix3d covariance;
+  };
+  std::deque<Rejected> rejected_window_;  // recent rejected measurements, carried forward by odometry
   std::optional<Hypothesis> hypothesis_;
   int hypothesis_count_ = 0;
   int consecutive_rejections_ = 0;
   int64_t accepted_ = 0, rejected_ = 0, relocalizations_ = 0, stale_ = 0, unmapped_scans_ = 0;
+  int64_t refused_relocalizations_ = 0;
+  std::vector<Eigen::Vector2d> last_points_;  // a sample of the last scan (robot frame)
 };
 
 }  // namespace snapnav::nav

@@ -21,6 +21,10 @@ struct DriveOptions {
   double odometry_angular_noise_frac = 0.01;  // wheel odometry: std. dev. per step, fraction of the turn
   double robot_radius_m = 0.2;           // for collisions
   double obstacle_min_height_m = 0.05;   // lower things are driven over
+  // People block the robot (and it them). false: they occlude the camera and the laser but the
+  // robot drives on (a robot without obstacle avoidance and people who wait for it deadlock);
+  // they still do not walk into it.
+  bool people_block_robot = true;
   void Validate() const;
 };
 
