@@ -11,16 +11,13 @@
 
 #include <opencv2/core.hpp>
 
-#include "fused_slam_node.hpp"
-#include "laser_slam_node.hpp"
+#include "compare_config.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "slam_compare.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/ini.hpp"
-#include "snapnav/glue/place_cells.hpp"
 
 namespace {
 
@@ -43,13 +40,10 @@ std::string JsonValue(double v) {
 
 int Main(int argc, char** argv) {
   std::string scene_name, scenes, out_dir, log_path, reference_path, kidnap_to_text;
-  std::string sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini";
-  std::string fused_config_path = SNAPNAV_CONFIG_DIR "/fused_slam.ini";
-  std::string laser_config_path = SNAPNAV_CONFIG_DIR "/laser_slam.ini";
-  std::string places_config_path = SNAPNAV_CONFIG_DIR "/placecells.ini";
+  eval::CompareConfigPaths paths;
   int laps = 0, seed = -1, explore_seed = 101, threads = 1;
   double duration_s = -1, kidnap_at_s = 0, kidnap_run_s = kKidnapRunS;
-  bool no_kidnap_run = false, no_ratslam = false;
+  bool no_kidnap_run = false, with_kidnap_run = false, no_ratslam = false;
   eval::CompareOptions o;
   glue::Flags flags(
       "eval-compare",
@@ -77,6 +71,7 @@ int Main(int argc, char** argv) {
   flags.AddString("kidnap-to", &kidnap_to_text, "where to: x_m,y_m,theta_deg (default 29,5,-90: the corridor's right wing)");
   flags.AddDouble("kidnap-run-s", &kidnap_run_s, "simulated seconds of the standard kidnapped run");
   flags.AddBool("no-kidnap-run", &no_kidnap_run, "standard set: leave out the kidnapped corridor run");
+  flags.AddBool("with-kidnap-run", &with_kidnap_run, "with --scene/--scenes: add the standard kidnapped corridor run");
   flags.AddInt("seed", &seed, "seed of the evaluated runs (default: the sim config's)");
   flags.AddInt("explore-seed", &explore_seed, "seed of the exploration run that builds the place-cell memory");
   flags.AddDouble("cell-spacing-m", &o.cell_spacing_m, "a place cell every this much travel of the exploration [m]");
@@ -88,10 +83,10 @@ int Main(int argc, char** argv) {
   flags.AddDouble("rpe-delta-m", &o.rpe_delta_m, "travelled distance of the relative pose error [m]");
   flags.AddDouble("recovery-error-m", &o.recovery_error_m, "kidnapping: recovered when the fused error stays below this [m]");
   flags.AddDouble("recovery-hold-s", &o.recovery_hold_s, "... for this long [s]");
-  flags.AddString("sim-config", &sim_config_path, "simulator config (robot noise, laser, camera, rates, seed)");
-  flags.AddString("fused-config", &fused_config_path, "fused-slam config ([laser_slam], [fused_slam])");
-  flags.AddString("laser-config", &laser_config_path, "laser-slam config of laser-only SLAM ([laser_slam])");
-  flags.AddString("placecells-config", &places_config_path, "place-cell config (view, localizer, vocabulary)");
+  flags.AddString("sim-config", &paths.sim, "simulator config (robot noise, laser, camera, rates, seed)");
+  flags.AddString("fused-config", &paths.fused, "fused-slam config ([laser_slam], [fused_slam])");
+  flags.AddString("laser-config", &paths.laser, "laser-slam config of laser-only SLAM ([laser_slam])");
+  flags.AddString("placecells-config", &paths.placecells, "place-cell config (view, localizer, vocabulary)");
   flags.AddString("log", &log_path, "also run dead reckoning and laser SLAM on this LCM log (made by ./snapnav import)");
   flags.AddString("reference", &reference_path, "reference of --log: CSV utime,x,y,theta or a CARMEN corrected log");
   flags.AddInt("threads", &threads, "OpenCV threads (SIFT is parallel); 1: one core");
@@ -116,17 +111,9 @@ int Main(int argc, char** argv) {
     }
   }
 
-  const auto sim_config = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
-  o.camera = sim_config.camera;
-  o.effects = sim_config.effects;
   o.explore_seed = static_cast<uint64_t>(explore_seed);
   o.run_ratslam = !no_ratslam;
-  const auto places = glue::IniFile::Load(places_config_path);
-  o.view = glue::ReadPlaceViewOptions(places);
-  o.localizer = glue::ReadLocalizerOptions(places);
-  o.vocabulary = glue::ReadVocabularyOptions(places);
-  o.laser = processes::LaserSlamConfig::FromIni(glue::IniFile::Load(laser_config_path), "").options;
-  o.fused = processes::FusedSlamConfig::FromIni(glue::IniFile::Load(fused_config_path), "").options;
+  const processes::SimConfig sim_config = eval::LoadCompareConfigs(paths, &o);
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -152,35 +139,26 @@ int Main(int argc, char** argv) {
     for (const auto& s : glue::SplitList(scenes)) runs.push_back(make_run(s, fs::path(s).stem().string()));
   } else {
     for (const char* s : {"indoor13", "people11", "corridor"}) runs.push_back(make_run(s, s));
-    if (!no_kidnap_run) {
-      eval::CompareRunOptions k = make_run("corridor", "corridor_kidnap");
-      k.sim.laps = 0;
-      k.sim.duration_s = kidnap_run_s;
-      k.sim.kidnap = {kKidnapAtS, kidnap_to};
-      runs.push_back(k);
-    }
+    with_kidnap_run = !no_kidnap_run;
   }
-  if (runs.empty()) throw glue::FlagError("--scenes must name at least one scene");
   if (kidnap_at_s > 0) {
     for (auto& r : runs) {
       r.sim.kidnap = {kidnap_at_s, kidnap_to};
       r.name += "_kidnap";
     }
   }
+  if (with_kidnap_run) {
+    eval::CompareRunOptions k = make_run("corridor", "corridor_kidnap");
+    k.sim.laps = 0;
+    k.sim.duration_s = kidnap_run_s;
+    k.sim.kidnap = {kKidnapAtS, kidnap_to};
+    runs.push_back(k);
+  }
+  if (runs.empty()) throw glue::FlagError("--scenes must name at least one scene");
 
   std::ostringstream effective;
-  effective << "sim config " << sim_config_path << ", fused config " << fused_config_path << ", laser config "
-            << laser_config_path << ", place-cell config " << places_config_path << "\n"
-            << "visual fixes " << o.visual_rate_hz << " Hz (" << (o.visual_prediction ? "fused pose as prediction" : "global")
-            << "), RatSLAM frames " << o.ratslam_rate_hz << " Hz ("
-            << (eval::RatSlamAvailable() ? (o.run_ratslam ? "on" : "off") : "not in this build") << "), cells every "
-            << o.cell_spacing_m << " m (explore seed " << o.explore_seed << "), RPE per " << o.rpe_delta_m
-            << " m, recovery under " << o.recovery_error_m << " m for " << o.recovery_hold_s << " s, threads " << threads
-            << "\n[fused_slam] gate_chi2 " << o.fused.gate_chi2 << ", agree_chi2 " << o.fused.agree_chi2
-            << ", relocalize_after " << o.fused.relocalize_after << ", relocalize sigma " << o.fused.relocalize_sigma_xy_m
-            << " m / " << o.fused.relocalize_sigma_theta_rad << " rad, fix sigma floor " << o.fused.min_fix_sigma_xy_m
-            << " m / " << o.fused.min_fix_sigma_theta_rad << " rad, suspect_after " << o.fused.suspect_after
-            << ", map_cell_m " << o.fused.map_cell_m << ", map_min_fit " << o.fused.map_min_fit << "\n";
+  eval::PrintCompareOptions(effective, paths, o);
+  effective << "threads " << threads << "\n";
   for (const auto& r : runs) {
     effective << "run " << r.name << ": scene " << r.sim.scene << ", seed " << r.sim.seed << ", "
               << (r.sim.laps > 0 ? std::to_string(r.sim.laps) + " laps" : eval::Fixed(r.sim.duration_s, 0) + " s");

@@ -43,6 +43,7 @@ class RatSlamRunner {
   void Frame(const cv::Mat& gray) { slam_.OnImage(gray); }
   nav::Pose2 pose() const { return slam_.pose(); }
   int64_t loop_closures() const { return static_cast<int64_t>(slam_.loop_closures()); }
+  int64_t experiences() const { return static_cast<int64_t>(slam_.experience_map().experiences().size()); }
 
  private:
   nav::RatSlam slam_;
@@ -52,6 +53,7 @@ class RatSlamRunner {
   void Frame(const cv::Mat&) {}
   nav::Pose2 pose() const { return {}; }
   int64_t loop_closures() const { return 0; }
+  int64_t experiences() const { return 0; }
 #endif
 };
 
@@ -372,6 +374,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     ratslam_result.ms_max_update = ratslam_max_ms;
     ratslam_result.ms_per_frame = out.scans ? (ratslam_frame_ms + ratslam_odometry_ms) / static_cast<double>(out.scans) : 0;
     out.ratslam_loop_closures = ratslam->loop_closures();
+    out.ratslam_experiences = ratslam->experiences();
   } else {
     ratslam_result.note = options.run_ratslam ? "not in this build (RatSLAM, branch ratslam, not merged yet)"
                                               : "not run (--no-ratslam)";
@@ -488,6 +491,7 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
   k.push_back({"kidnap_first_under_bound_s", run.kidnapped ? run.first_under_s : kNaN});
   k.push_back({"kidnap_recovery_bound_m", run.recovery_error_m});
   k.push_back({"ratslam_loop_closures", RatSlamAvailable() ? static_cast<double>(run.ratslam_loop_closures) : kNaN});
+  k.push_back({"ratslam_experiences", RatSlamAvailable() ? static_cast<double>(run.ratslam_experiences) : kNaN});
   k.push_back({"wall_s", run.seconds});
   return k;
 }
