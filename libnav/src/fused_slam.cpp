@@ -60,6 +60,9 @@ void FusedSlamOptions::Validate() const {
   Require(suspect_after >= 0, "suspect_after must be >= 0 (0: never)");
   Require(map_min_fit >= 0 && map_min_fit <= 1, "map_min_fit must be in [0, 1]");
   Require(map_cell_m >= 0 && std::isfinite(map_cell_m), "map_cell_m must be >= 0 (0: off)");
+  Require(map_drift_xy_m >= 0 && map_drift_theta_rad >= 0 && std::isfinite(map_drift_xy_m) &&
+              std::isfinite(map_drift_theta_rad),
+          "map drift must be >= 0");
   Require(laser_sigma_xy_m >= 0 && laser_sigma_theta_rad >= 0 && std::isfinite(laser_sigma_xy_m) &&
               std::isfinite(laser_sigma_theta_rad),
           "laser sigmas must be >= 0");
@@ -77,6 +80,7 @@ FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start, const 
 
 void FusedSlam::Predict(int64_t utime, const Pose2& delta) {
   laser_.Predict(delta);  // throws on a non-finite increment before anything changes
+  travelled_since_scan_m_ += std::hypot(delta.x_m, delta.y_m);
   if (hypothesis_) PredictWithOdometry(options_.laser.motion, delta, &hypothesis_->pose, &hypothesis_->covariance);
   for (auto& e : rejected_window_) PredictWithOdometry(options_.laser.motion, delta, &e.pose, &e.covariance);
   if (!have_time_ || utime > utime_) utime_ = utime;
@@ -186,7 +190,15 @@ LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
   // A scan kept out of the map (as LaserSlam::SetMapping decides).
   const bool unmapped = !map_empty && (suspect() || u.fit < options_.map_min_fit);
   if (unmapped) ++unmapped_scans_;
-  if (map_uncertainty && !unmapped) RecordMapCovariance(pose(), points_robot, covariance());
+  if (map_uncertainty && !unmapped) {
+    // The parts this scan maps first are as certain as the pose now, less the drift of the map
+    // over the distance explored since the last scan.
+    const double d = travelled_since_scan_m_;
+    const double gxy = options_.map_drift_xy_m * options_.map_drift_xy_m * d;
+    const double gt = options_.map_drift_theta_rad * options_.map_drift_theta_rad * d;
+    RecordMapCovariance(pose(), points_robot, covariance() + Eigen::Matrix3d(Eigen::Vector3d(gxy, gxy, gt).asDiagonal()));
+  }
+  travelled_since_scan_m_ = 0;
   return u;
 }
 

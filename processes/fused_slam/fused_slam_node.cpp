@@ -57,6 +57,8 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.relocalize_max_fit_loss = ini.GetDouble(s, "relocalize_max_fit_loss");
   o.suspect_after = ini.GetInt(s, "suspect_after");
   o.map_cell_m = ini.GetDouble(s, "map_cell_m");
+  o.map_drift_xy_m = ini.GetDouble(s, "map_drift_xy_m");
+  o.map_drift_theta_rad = ini.GetDouble(s, "map_drift_theta_deg") / kDegPerRad;
   o.laser_sigma_xy_m = ini.GetDouble(s, "laser_sigma_xy_m");
   o.laser_sigma_theta_rad = ini.GetDouble(s, "laser_sigma_theta_deg") / kDegPerRad;
   o.map_min_fit = ini.GetDouble(s, "map_min_fit");
@@ -88,6 +90,7 @@ void FusedSlamConfig::Print(std::ostream& out) const {
       << "\nrelocalize_window_s = " << o.relocalize_window_s
       << "\nrelocalize_max_fit_loss = " << o.relocalize_max_fit_loss
       << "\nsuspect_after = " << o.suspect_after << "\nmap_cell_m = " << o.map_cell_m
+      << "\nmap_drift_xy_m = " << o.map_drift_xy_m << "\nmap_drift_theta_deg = " << o.map_drift_theta_rad * kDegPerRad
       << "\nlaser_sigma_xy_m = " << o.laser_sigma_xy_m << "\nlaser_sigma_theta_deg = " << o.laser_sigma_theta_rad * kDegPerRad
       << "\nmap_min_fit = " << o.map_min_fit
       << "\nmap_every_n_scans = " << map_every_n_scans << "\nstatus_every_n_scans = " << status_every_n_scans << "\n";

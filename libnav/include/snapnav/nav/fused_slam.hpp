@@ -35,7 +35,8 @@
 //
 // Map uncertainty (map_cell_m > 0): a scan matched to the map measures the pose relative to the
 // map, and the map is only as certain as the poses it was built from. Every map_cell_m cell the
-// scan points reach gets, when first mapped, the filter's covariance then; a later scan's
+// scan points reach gets, when first mapped, the filter's covariance then plus the map's drift over
+// the distance explored since the previous scan (map_drift_*); a later scan's
 // measurement covariance R is ICP's plus the mean recorded covariance of the cells its points fall
 // in (LaserSlam::SetMeasurementInflation), and the scan does not make the filter more certain than
 // that (the variances after the update are at least the smaller of the prediction's and the
@@ -76,11 +77,15 @@ struct FusedSlamOptions {
   double relocalize_max_fit_loss = 0.2;
   int suspect_after = 1;              // this many consecutive rejections: no points join the map; 0: never
   double map_cell_m = 1.0;            // map uncertainty cells [m]; 0: off (see above)
-  // Added to every scan measurement's covariance (ICP's own is far too certain for fusion): the
-  // error of one scan against the map [m, rad]. With the map uncertainty it is also the growth of
-  // the map's uncertainty from one part of the map to the next while exploring.
-  double laser_sigma_xy_m = 0.01;
-  double laser_sigma_theta_rad = 0.005;
+  // The map's drift while exploring: a cell mapped first gets the filter's covariance plus this
+  // std. dev. per square root of the metres travelled since the previous scan (the variance grows
+  // with the distance explored) [m, rad over 1 m].
+  double map_drift_xy_m = 0.05;
+  double map_drift_theta_rad = 0.0087;
+  // Added to every scan measurement's covariance (the error of one scan against the map) [m, rad];
+  // 0: ICP's own covariance. It also weakens the laser where the map is certain.
+  double laser_sigma_xy_m = 0;
+  double laser_sigma_theta_rad = 0;
   // A scan with an ICP fit below this adds no points [0-1]; 0: off. Off by default: where the
   // map has nothing yet (just relocalised into an unexplored part) every fit is poor, and the map
   // could never grow there.
@@ -182,6 +187,7 @@ class FusedSlam {
   int consecutive_rejections_ = 0;
   int64_t accepted_ = 0, rejected_ = 0, relocalizations_ = 0, stale_ = 0, unmapped_scans_ = 0;
   int64_t refused_relocalizations_ = 0;
+  double travelled_since_scan_m_ = 0;  // odometry distance since the last scan [m]
   std::vector<Eigen::Vector2d> last_points_;  // a sample of the last scan (robot frame)
 };
 
