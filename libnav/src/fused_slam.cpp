@@ -56,6 +56,7 @@ void FusedSlamOptions::Validate() const {
           "min_fix sigmas must be positive");
   Require(max_fix_age_s > 0 && std::isfinite(max_fix_age_s), "max_fix_age_s must be positive");
   Require(relocalize_window_s > 0 && std::isfinite(relocalize_window_s), "relocalize_window_s must be positive");
+  Require(relocalize_min_distance_m >= 0 && relocalize_min_heading_rad >= 0, "relocalize minimum jumps must be >= 0");
   Require(relocalize_max_fit_loss >= 0 && relocalize_max_fit_loss <= 1, "relocalize_max_fit_loss must be in [0, 1]");
   Require(suspect_after >= 0, "suspect_after must be >= 0 (0: never)");
   Require(map_min_fit >= 0 && map_min_fit <= 1, "map_min_fit must be in [0, 1]");
@@ -276,8 +277,14 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   // Relocalise when enough agree, their fused pose still disagrees with the filter, and the last
   // scan does not fit the map clearly worse there than at the filter's pose (aliasing that moves
   // with the robot: views a metre behind along a straight wall look alike).
+  const Eigen::Vector3d jump = Difference(h.pose, pose());
   bool relocalize = options_.relocalize_after > 0 && count >= options_.relocalize_after &&
-                    Mahalanobis2(Difference(h.pose, pose()), covariance(), h.covariance) > options_.gate_chi2;
+                    Mahalanobis2(jump, covariance(), h.covariance) > options_.gate_chi2;
+  if (relocalize && jump.head<2>().norm() < options_.relocalize_min_distance_m &&
+      std::abs(jump.z()) < options_.relocalize_min_heading_rad) {
+    relocalize = false;  // a small disagreement (a drifted map), not a kidnapping: the laser keeps the pose
+    ++small_disagreements_;
+  }
   if (relocalize && options_.relocalize_max_fit_loss < 1) {
     double judged_here = 0, judged_there = 0;
     const double here = ScanFit(pose(), &judged_here), there = ScanFit(h.pose, &judged_there);

@@ -55,6 +55,8 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.max_fix_age_s = ini.GetDouble(s, "max_fix_age_s");
   o.relocalize_window_s = ini.GetDouble(s, "relocalize_window_s");
   o.relocalize_max_fit_loss = ini.GetDouble(s, "relocalize_max_fit_loss");
+  o.relocalize_min_distance_m = ini.GetDouble(s, "relocalize_min_distance_m");
+  o.relocalize_min_heading_rad = ini.GetDouble(s, "relocalize_min_heading_deg") / kDegPerRad;
   o.suspect_after = ini.GetInt(s, "suspect_after");
   o.map_cell_m = ini.GetDouble(s, "map_cell_m");
   o.map_drift_xy_m = ini.GetDouble(s, "map_drift_xy_m");
@@ -89,6 +91,8 @@ void FusedSlamConfig::Print(std::ostream& out) const {
       << "\nmin_fix_sigma_theta_deg = " << o.min_fix_sigma_theta_rad * kDegPerRad << "\nmax_fix_age_s = " << o.max_fix_age_s
       << "\nrelocalize_window_s = " << o.relocalize_window_s
       << "\nrelocalize_max_fit_loss = " << o.relocalize_max_fit_loss
+      << "\nrelocalize_min_distance_m = " << o.relocalize_min_distance_m
+      << "\nrelocalize_min_heading_deg = " << o.relocalize_min_heading_rad * kDegPerRad
       << "\nsuspect_after = " << o.suspect_after << "\nmap_cell_m = " << o.map_cell_m
       << "\nmap_drift_xy_m = " << o.map_drift_xy_m << "\nmap_drift_theta_deg = " << o.map_drift_theta_rad * kDegPerRad
       << "\nlaser_sigma_xy_m = " << o.laser_sigma_xy_m << "\nlaser_sigma_theta_deg = " << o.laser_sigma_theta_rad * kDegPerRad

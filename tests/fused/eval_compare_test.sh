@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The SLAM comparison's bounds (issue 8), a short variant of ./snapnav eval compare: 90 s of the
+# The SLAM comparison's bounds (issue 8), a short variant of ./snapnav eval compare: 150 s of the
 # corridor route (down the left wing, along the corridor) and the kidnapped robot (carried at 10 s
 # to the mirrored place in the right wing, 40 s). Fused SLAM's ATE (aligned, and in the scene
 # frame) is below laser-only SLAM's and dead reckoning's, the visual measurements are mostly
@@ -8,7 +8,7 @@ set -euo pipefail
 BIN="$1"
 OUT="$(mktemp -d)"
 trap 'rm -rf "$OUT"' EXIT
-"$BIN/eval-compare" --scene corridor --duration-s 90 --with-kidnap-run --kidnap-run-s 40 --ratslam-rate-hz 5 \
+"$BIN/eval-compare" --scene corridor --duration-s 150 --with-kidnap-run --kidnap-run-s 40 --ratslam-rate-hz 5 \
   --out "$OUT" > "$OUT/stdout.txt"
 cat "$OUT/stdout.txt"
 python3 - "$OUT/summary.json" <<'PY'

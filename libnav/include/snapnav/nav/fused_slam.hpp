@@ -26,7 +26,10 @@
 //      evidence, and they rarely agree with each other once carried by odometry. A kidnapped
 //      robot (the laser pose consistently wrong) thus recovers after relocalize_after visual
 //      measurements; so does a filter the laser led astray.
-//      No relocalisation either when the last scan fits the map clearly worse at the new pose
+//      No relocalisation for a jump shorter than relocalize_min_distance_m (and a turn smaller
+//      than relocalize_min_heading_rad): that is a map that drifted while it was built, and
+//      jumping off it only corrupts it. No relocalisation either when the last scan fits the map
+//      clearly worse at the new pose
 //      than at the filter's (relocalize_max_fit_loss): aliasing that moves with the robot (the
 //      views a metre behind along a straight wall look alike) agrees with itself too.
 // Map protection: while the filter suspects it is lost (at least suspect_after consecutive
@@ -70,6 +73,11 @@ struct FusedSlamOptions {
   double min_fix_sigma_theta_rad = 0.03;  // floor of its heading std. dev. [rad]
   double max_fix_age_s = 2.0;         // older than this before the latest odometry: stale [s]
   double relocalize_window_s = 10.0;  // rejected measurements are evidence for this long [s]
+  // Relocalise only for a jump of at least this distance or this heading change: smaller
+  // disagreements come from a map that drifted while it was built (the pose stays on the map, the
+  // fixes are refused) [m, rad]. 0, 0: any.
+  double relocalize_min_distance_m = 1.0;
+  double relocalize_min_heading_rad = 0.35;
   // No relocalisation when the last scan fits the map worse at the new pose than at the filter's
   // by more than this (fraction of the points within 2 laser.point_sigma_m of the map, among those
   // near mapped parts at both poses; not judged when either pose sees less than 30 % mapped
@@ -141,6 +149,7 @@ class FusedSlam {
   int64_t rejected() const { return rejected_; }          // relocalising ones included
   int64_t relocalizations() const { return relocalizations_; }
   int64_t refused_relocalizations() const { return refused_relocalizations_; }  // by the scan fit
+  int64_t small_disagreements() const { return small_disagreements_; }  // agreeing rejections too close to relocalise
   int64_t stale() const { return stale_; }
   int consecutive_rejections() const { return consecutive_rejections_; }
   // Of the latest rejected measurement (0 once a measurement is accepted or after relocalising).
@@ -186,7 +195,7 @@ class FusedSlam {
   int hypothesis_count_ = 0;
   int consecutive_rejections_ = 0;
   int64_t accepted_ = 0, rejected_ = 0, relocalizations_ = 0, stale_ = 0, unmapped_scans_ = 0;
-  int64_t refused_relocalizations_ = 0;
+  int64_t refused_relocalizations_ = 0, small_disagreements_ = 0;
   double travelled_since_scan_m_ = 0;  // odometry distance since the last scan [m]
   std::vector<Eigen::Vector2d> last_points_;  // a sample of the last scan (robot frame)
 };
