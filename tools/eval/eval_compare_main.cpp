@@ -1,6 +1,7 @@
 // eval-compare (./snapnav eval compare): dead reckoning, laser-only SLAM, RatSLAM and fused visual
 // + laser SLAM on the same simulated runs with ground truth (issue 8; tools/eval/slam_compare.hpp),
 // and the laser methods on recorded logs (--log).
+#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -87,8 +88,9 @@ int Main(int argc, char** argv) {
   flags.AddString("fused-config", &paths.fused, "fused-slam config ([laser_slam], [fused_slam])");
   flags.AddString("laser-config", &paths.laser, "laser-slam config of laser-only SLAM ([laser_slam])");
   flags.AddString("placecells-config", &paths.placecells, "place-cell config (view, localizer, vocabulary)");
-  flags.AddString("log", &log_path, "also run dead reckoning and laser SLAM on this LCM log (made by ./snapnav import)");
-  flags.AddString("reference", &reference_path, "reference of --log: CSV utime,x,y,theta or a CARMEN corrected log");
+  flags.AddString("log", &log_path, "dead reckoning and laser SLAM on these LCM logs too (comma-separated; made by "
+                                     "./snapnav import); alone, without --scene/--scenes: only the logs");
+  flags.AddString("reference", &reference_path, "references of --log, in order: CSV utime,x,y,theta or a CARMEN corrected log");
   flags.AddInt("threads", &threads, "OpenCV threads (SIFT is parallel); 1: one core");
   if (!flags.Parse(argc, argv)) return 0;
   if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
@@ -137,7 +139,7 @@ int Main(int argc, char** argv) {
     runs.push_back(make_run(scene_name, fs::path(scene_name).stem().string()));
   } else if (!scenes.empty()) {
     for (const auto& s : glue::SplitList(scenes)) runs.push_back(make_run(s, fs::path(s).stem().string()));
-  } else {
+  } else if (log_path.empty()) {
     for (const char* s : {"indoor13", "people11", "corridor"}) runs.push_back(make_run(s, s));
     with_kidnap_run = !no_kidnap_run;
   }
@@ -154,7 +156,7 @@ int Main(int argc, char** argv) {
     k.sim.kidnap = {kKidnapAtS, kidnap_to};
     runs.push_back(k);
   }
-  if (runs.empty()) throw glue::FlagError("--scenes must name at least one scene");
+  if (runs.empty() && log_path.empty()) throw glue::FlagError("--scenes must name at least one scene");
 
   std::ostringstream effective;
   eval::PrintCompareOptions(effective, paths, o);
@@ -209,8 +211,14 @@ int Main(int argc, char** argv) {
   }
   std::vector<eval::LogComparison> logs;
   if (!log_path.empty()) {
-    std::cerr << "eval-compare: dead reckoning and laser SLAM on " << log_path << "\n";
-    logs.push_back(eval::CompareOnLog(log_path, reference_path, o.laser, o.rpe_delta_m));
+    const auto log_paths = glue::SplitList(log_path), references = glue::SplitList(reference_path);
+    if (references.size() > log_paths.size()) throw glue::FlagError("--reference lists more files than --log");
+    for (size_t i = 0; i < log_paths.size(); ++i) {
+      const std::string ref = i < references.size() ? references[i] : "";
+      std::cerr << "eval-compare: dead reckoning and laser SLAM on " << log_paths[i]
+                << (ref.empty() ? "" : " against " + ref) << "\n";
+      logs.push_back(eval::CompareOnLog(log_paths[i], ref, o.laser, o.rpe_delta_m));
+    }
   }
 
   std::ofstream(out / "compare.md") << "# SLAM comparison\n\n" << eval::CompareTableMarkdown(results, logs) << "\n"
@@ -233,12 +241,20 @@ int Main(int argc, char** argv) {
       for (const auto& [key, value] : eval::SummaryKeys(run)) j << ",\n  \"" << prefix << key << "\": " << JsonValue(value);
     }
     for (const auto& l : logs) {
-      j << ",\n  \"log\": " << eval::JsonString(l.log) << ",\n  \"log_scans\": " << l.scans;
-      if (l.has_reference) {
-        j << ",\n  \"log_dead_reckoning_ate_rmse_m\": " << JsonValue(l.dead_reckoning.errors.ate_aligned.rmse_m)
-          << ",\n  \"log_laser_slam_ate_rmse_m\": " << JsonValue(l.laser_slam.errors.ate_aligned.rmse_m);
+      // Keys named after the log file: log_<stem>_...
+      std::string stem = fs::path(l.log).stem().string();
+      for (char& c : stem) {
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
       }
-      j << ",\n  \"log_laser_slam_ms_per_scan\": " << JsonValue(l.laser_slam.ms_per_update);
+      const std::string k = "log_" + stem + "_";
+      j << ",\n  \"" << k << "path\": " << eval::JsonString(l.log) << ",\n  \"" << k << "scans\": " << l.scans;
+      if (l.has_reference) {
+        j << ",\n  \"" << k << "dead_reckoning_ate_rmse_m\": " << JsonValue(l.dead_reckoning.errors.ate_aligned.rmse_m)
+          << ",\n  \"" << k << "laser_slam_ate_rmse_m\": " << JsonValue(l.laser_slam.errors.ate_aligned.rmse_m)
+          << ",\n  \"" << k << "laser_slam_rpe_translation_rmse_m\": "
+          << JsonValue(l.laser_slam.errors.rpe.translation_rmse_m);
+      }
+      j << ",\n  \"" << k << "laser_slam_ms_per_scan\": " << JsonValue(l.laser_slam.ms_per_update);
     }
     j << ",\n  \"targets_missed\": " << missed.size() << ",\n  \"missed\": [";
     for (size_t i = 0; i < missed.size(); ++i) j << (i ? ", " : "") << eval::JsonString(missed[i]);

@@ -467,6 +467,18 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
     k.push_back({m.name + "_ate_unaligned_final_m", v(m.errors.ate.final_m)});
     k.push_back({m.name + "_rpe_translation_rmse_m", v(m.errors.rpe.translation_rmse_m)});
     k.push_back({m.name + "_rpe_rotation_rmse_deg", v(m.errors.rpe.rotation_rmse_deg)});
+    if (run.kidnapped) {
+      // After fused SLAM recovered (or the last third of the run when it did not).
+      const double from = run.kidnap_at_s + (std::isfinite(run.recovery_s) ? run.recovery_s : 0.0);
+      double sum = 0;
+      int n = 0;
+      for (size_t i = 0; m.ran && i < m.error_m.size(); ++i) {
+        if (run.time_s[i] < from) continue;
+        sum += m.error_m[i] * m.error_m[i];
+        ++n;
+      }
+      k.push_back({m.name + "_error_after_recovery_rmse_m", n > 0 ? std::sqrt(sum / n) : nan});
+    }
     k.push_back({m.name + "_ms_per_update", v(m.ms_per_update)});
     k.push_back({m.name + "_ms_max_update", v(m.ms_max_update)});
     k.push_back({m.name + "_ms_per_frame", v(m.ms_per_frame)});
@@ -514,11 +526,13 @@ const char* Label(const std::string& method) {
   return "fused SLAM";
 }
 
-cv::Mat DrawErrors(const CompareRun& run) {
+// Position error over time of the methods in `only` (all when empty).
+cv::Mat DrawErrors(const CompareRun& run, const std::vector<std::string>& only = {}) {
   std::vector<plot::Series> series;
   const size_t every = std::max<size_t>(1, run.time_s.size() / 500);
   for (const auto& m : run.methods) {
     if (!m.ran) continue;
+    if (!only.empty() && std::find(only.begin(), only.end(), m.name) == only.end()) continue;
     plot::Series s{Label(m.name), {}, {}};
     for (size_t i = 0; i < m.error_m.size(); i += every) {
       s.x.push_back(run.time_s[i]);
@@ -528,7 +542,8 @@ cv::Mat DrawErrors(const CompareRun& run) {
   }
   plot::Axes axes;
   axes.title = run.name + ": position error against the ground truth (scene frame)" +
-               (run.kidnapped ? ", kidnapped at " + Fixed(run.kidnap_at_s, 1) + " s" : "");
+               (run.kidnapped ? ", kidnapped at " + Fixed(run.kidnap_at_s, 1) + " s" : "") +
+               (only.empty() ? "" : ", the laser methods");
   axes.x_label = "simulated time [s]";
   axes.y_label = "error [m]";
   axes.y_from_zero = true;
@@ -573,6 +588,7 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
   }
   plot::SavePng(DrawRun(tracks, names, run.map, title.str()), (out / "trajectories.png").string());
   plot::SavePng(DrawErrors(run), (out / "errors.png").string());
+  plot::SavePng(DrawErrors(run, {"laser_slam", "fused_slam"}), (out / "errors_laser_fused.png").string());
   plot::SavePng(DrawTiming(run), (out / "timing.png").string());
   {
     std::ofstream csv(out / "trajectories.csv");
@@ -613,7 +629,7 @@ std::string CompareTableMarkdown(const std::vector<CompareRun>& runs, const std:
         s << " | n/a";
         continue;
       }
-      s << " | " << Fixed(m.errors.ate_aligned.rmse_m, 3) << " (" << Fixed(m.errors.ate.rmse_m, 3) << ")";
+      s << " | " << Fixed(m.errors.ate_aligned.rmse_m, 4) << " (" << Fixed(m.errors.ate.rmse_m, 4) << ")";
     }
     s << " | " << r.visual_accepted << " / " << r.visual_rejected << " | " << r.relocalizations << " | "
       << (r.kidnapped ? (std::isfinite(r.recovery_s) ? Fixed(r.recovery_s, 1) + " s" : std::string("not recovered"))
