@@ -35,10 +35,10 @@ TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // (tests/drivers/): omni_camera.ini, laser_hokuyo.ini; (tests/homing/homing_node_test.cpp): homing.ini,
   // landmarks.ini.
   // laser_slam.ini: tests/laser_slam_node_test.cpp; placecells.ini: tests/placecells/place_cells_glue_test.cpp;
-  // navigator.ini: tests/navigator/.
+  // navigator.ini: tests/navigator/; ratslam.ini: tests/ratslam/ratslam_node_test.cpp.
   const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini", "sim.ini", "omni_camera.ini",
                                     "laser_hokuyo.ini", "homing.ini", "laser_slam.ini", "landmarks.ini",
-                                    "placecells.ini", "navigator.ini", "fused_slam.ini"};
+                                    "placecells.ini", "navigator.ini", "fused_slam.ini", "ratslam.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();

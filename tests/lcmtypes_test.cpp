@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "snapnav/drive_command_t.hpp"
+#include "snapnav/experience_map_t.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/landmark_set_t.hpp"
@@ -208,6 +209,37 @@ TEST(LcmTypes, DriveCommandPointMapRouteRoundTrip) {
   const auto rw = RoundTrip(w);
   EXPECT_TRUE(rw.loop);
   EXPECT_EQ(rw.x_m, w.x_m);
+}
+
+TEST(LcmTypes, ExperienceMapRoundTripAndBadLinkCount) {
+  experience_map_t m{};
+  m.utime = 6;
+  m.estimator = "ratslam";
+  m.frame = "map";
+  m.templates = 12;
+  m.loop_closures = 1;
+  m.current_experience = 2;
+  m.robot_x_m = 0.5;
+  m.nexperiences = 3;
+  m.x_m = {0, 1, 0.1};
+  m.y_m = {0, 0, 0.05};
+  m.theta_rad = {0, 1.5, 3.1};
+  m.view_template = {0, 4, 11};
+  m.nlinks = 3;
+  m.link_from = {0, 1, 2};
+  m.link_to = {1, 2, 0};
+  m.link_loop_closure = {0, 0, 1};
+  const auto r = RoundTrip(m);
+  EXPECT_EQ(r.theta_rad, m.theta_rad);
+  EXPECT_EQ(r.view_template, m.view_template);
+  EXPECT_EQ(r.link_loop_closure, m.link_loop_closure);
+  EXPECT_EQ(r.current_experience, 2);
+  // Every truncation is refused.
+  const std::string bytes = Encode(m);
+  for (size_t n = 0; n < bytes.size(); ++n) {
+    std::string error;
+    EXPECT_FALSE(Decode<experience_map_t>(bytes.data(), n, &error).has_value()) << n;
+  }
 }
 
 TEST(LcmTypes, EveryTruncationIsAnErrorNotACrash) {

@@ -44,14 +44,15 @@ Pose2 ExperienceMap::robot_pose() const {
   return {base.x_m + accum_x_m_, base.y_m + accum_y_m_, accum_facing_rad_};
 }
 
-int ExperienceMap::CreateExperience(int view_template) {
+int ExperienceMap::CreateExperience(int view_template, double relative_rad) {
   Experience e;
   e.pose = robot_pose();
   e.view_template = view_template;
+  e.view_relative_rad = relative_rad;
   experiences_.push_back(std::move(e));
   const int id = static_cast<int>(experiences_.size()) - 1;
-  if (current_ >= 0) LinkTo(id, 0.0, false);
-  SetExperience(id, 0.0);
+  if (current_ >= 0) LinkTo(id, relative_rad, false);
+  SetExperience(id, relative_rad);
   return id;
 }
 
@@ -73,8 +74,10 @@ bool ExperienceMap::LinkTo(int to, double relative_rad, bool loop_closure) {
   link.to = to;
   link.d_m = std::hypot(accum_x_m_, accum_y_m_);
   link.heading_rad = SignedDelta(from.theta_rad, std::atan2(accum_y_m_, accum_x_m_));
-  // The robot faces relative_rad from `to`'s heading, so `to` faces the robot's heading minus it.
-  link.facing_rad = SignedDelta(from.theta_rad, WrapAngle(accum_facing_rad_ - relative_rad));
+  // The robot faces its heading now; the template of `to` was learnt facing that minus relative_rad,
+  // and `to` faces the template's heading plus the offset it was created with.
+  const double to_facing = accum_facing_rad_ - relative_rad + experiences_[static_cast<size_t>(to)].view_relative_rad;
+  link.facing_rad = SignedDelta(from.theta_rad, WrapAngle(to_facing));
   link.dt_s = accum_time_s_;
   link.loop_closure = loop_closure;
   links_.push_back(link);
@@ -92,7 +95,8 @@ void ExperienceMap::SetExperience(int id, double relative_rad) {
   current_ = id;
   accum_x_m_ = accum_y_m_ = 0;
   accum_time_s_ = 0;
-  accum_facing_rad_ = WrapAngle(experiences_[static_cast<size_t>(id)].pose.theta_rad + relative_rad);
+  const Experience& e = experiences_[static_cast<size_t>(id)];
+  accum_facing_rad_ = WrapAngle(e.pose.theta_rad - e.view_relative_rad + relative_rad);
 }
 
 void ExperienceMap::Relax() {

@@ -186,6 +186,27 @@ void LocalViewCells::Compare(int* best_id, double* best_sum, int* best_shift) co
   *best_sum = min_sum;
 }
 
+double LocalViewCells::Difference(int id, double offset) const {
+  const int nx = options_.template_x_size, ny = options_.template_y_size;
+  // Template column c against the view at column c - offset: between view columns c - n and
+  // c - n - 1 for offset = n + f (linear interpolation).
+  const double n0 = std::floor(offset);
+  const double f = offset - n0;
+  const int n = ((static_cast<int>(n0) % nx) + nx) % nx;
+  const Template& t = templates_[static_cast<size_t>(id)];
+  double sum = 0;
+  for (int y = 0; y < ny; ++y) {
+    const float* tr = &t.data[static_cast<size_t>(y) * nx];
+    const float* vr = &doubled_[static_cast<size_t>(y) * 2 * nx + nx];  // vr[c] = view column c, c in [-nx, nx)
+    for (int c = 0; c < nx; ++c) {
+      const int a = c - n;  // in [-nx, nx)
+      const int b = a - 1 < -nx ? a - 1 + nx : a - 1;
+      sum += std::abs(tr[c] - ((1 - f) * vr[a] + f * vr[b]));
+    }
+  }
+  return sum;
+}
+
 ViewMatch LocalViewCells::OnImage(const cv::Mat& gray) {
   ConvertView(gray);
   const LocalViewOptions& o = options_;
@@ -201,6 +222,19 @@ ViewMatch LocalViewCells::OnImage(const cv::Mat& gray) {
   int id = -1, shift = 0;
   double sum = 0;
   Compare(&id, &sum, &shift);
+  double fraction = 0;  // refinement of the offset [columns]
+  if (id >= 0 && o.vt_panoramic && o.vt_shift_subcolumn) {
+    // The best fraction of a column around the matched shift (the whole shift when none is
+    // better): a view turned between template columns differs less than at either whole shift.
+    for (int k = -10; k <= 10; ++k) {
+      if (k == 0) continue;
+      const double d = Difference(id, shift + 0.05 * k);
+      if (d < sum) {
+        sum = d;
+        fraction = 0.05 * k;
+      }
+    }
+  }
   ViewMatch m;
   if (id >= 0) {
     const int compared = o.vt_panoramic ? nx * ny : (nx - 2 * o.vt_shift_match) * ny;
@@ -213,8 +247,10 @@ ViewMatch LocalViewCells::OnImage(const cv::Mat& gray) {
     // counter-clockwise turn of -offset * 2 pi / nx (offsets past half a turn wrap to negative).
     const int offset = o.vt_panoramic && shift > nx / 2 ? shift - nx : shift;
     m.shift_columns = -offset;
+    m.shift_fraction = -fraction;
+    const double fine = offset + fraction;
     // OpenRatSLAM: a camera that does not see all around gives no heading.
-    m.relative_rad = o.vt_panoramic ? -offset * kTwoPi / nx : 0.0;
+    m.relative_rad = o.vt_panoramic ? -fine * kTwoPi / nx : 0.0;
   } else {
     m.new_template = true;
     m.template_id = static_cast<int>(templates_.size());

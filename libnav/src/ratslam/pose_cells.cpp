@@ -71,6 +71,8 @@ void PoseCellOptions::Validate() const {
   Require(std::isfinite(pc_vt_restore) && pc_vt_restore >= 0, "pc_vt_restore must be >= 0");
   Require(pc_vt_skip_recent >= 0, "pc_vt_skip_recent must be >= 0");
   Require(std::isfinite(exp_delta_pc_threshold) && exp_delta_pc_threshold > 0, "exp_delta_pc_threshold must be > 0");
+  Require(std::isfinite(pc_update_interval_s) && pc_update_interval_s >= 0,
+          "pc_update_interval_s must be >= 0 (0: every odometry message)");
 }
 
 PoseCellNetwork::PoseCellNetwork(const PoseCellOptions& options) : options_(options) {
@@ -319,15 +321,18 @@ void PoseCellNetwork::OnViewTemplate(int id, double relative_rad) {
 }
 
 double PoseCellNetwork::DeltaPc(const CellExperience& e) const {
+  // Headings in the frame of the templates: the best cell's and the experience's, each without the
+  // heading offset of its view.
   const double th = WrapCells(best_th_ - vt_delta_pc_th_, options_.pc_dim_th);
+  const double e_th = WrapCells(e.th - e.th_offset, options_.pc_dim_th);
   const double dx = MinDelta(best_x_, e.x, options_.pc_dim_xy);
   const double dy = MinDelta(best_y_, e.y, options_.pc_dim_xy);
-  const double dth = MinDelta(th, e.th, options_.pc_dim_th);
+  const double dth = MinDelta(th, e_th, options_.pc_dim_th);
   return std::sqrt(dx * dx + dy * dy + dth * dth);
 }
 
 void PoseCellNetwork::CreateExperience() {
-  experiences_.push_back({best_x_, best_y_, best_th_, current_vt_});
+  experiences_.push_back({best_x_, best_y_, best_th_, current_vt_, vt_delta_pc_th_});
   current_exp_ = static_cast<int>(experiences_.size()) - 1;
   templates_[static_cast<size_t>(current_vt_)].experiences.push_back(current_exp_);
 }

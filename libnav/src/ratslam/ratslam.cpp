@@ -30,18 +30,23 @@ void RatSlam::OnOdometry(const Pose2& delta, double dt_s) {
   }
   if (!std::isfinite(dt_s) || dt_s < 0) throw std::invalid_argument("ratslam: dt_s must be finite and >= 0");
   ++odometry_steps_;
-  // Pose cells: the chord of the increment, from each layer's heading.
-  const double translation_m = std::hypot(delta.x_m, delta.y_m);
-  const double direction_rad = translation_m > 0 ? std::atan2(delta.y_m, delta.x_m) : 0.0;
-  cells_.OnOdometry(translation_m, direction_rad, delta.theta_rad);
   map_.OnOdometry(delta, dt_s);
+  pc_pending_ = pc_pending_.Compose(delta);
+  pc_pending_s_ += dt_s;
+  if (pc_pending_s_ + 1e-9 < options_.pose_cells.pc_update_interval_s) return;  // (rounding of summed dt)
+  // Pose cells: the chord of the increments, from each layer's heading.
+  const double translation_m = std::hypot(pc_pending_.x_m, pc_pending_.y_m);
+  const double direction_rad = translation_m > 0 ? std::atan2(pc_pending_.y_m, pc_pending_.x_m) : 0.0;
+  cells_.OnOdometry(translation_m, direction_rad, pc_pending_.theta_rad);
+  pc_pending_ = {};
+  pc_pending_s_ = 0;
   // As OpenRatSLAM's experience map node handles the pose cells' TopologicalAction.
   const PoseCellAction action = cells_.GetAction();
   switch (action.kind) {
     case PoseCellAction::kNone:
       return;
     case PoseCellAction::kCreateExperience: {
-      const int id = map_.CreateExperience(view_.current());
+      const int id = map_.CreateExperience(view_.current(), action.relative_rad);
       if (id != action.experience) {
         throw std::logic_error("ratslam: experience map and pose cells disagree on experience ids (" +
                                std::to_string(id) + " vs " + std::to_string(action.experience) + ")");

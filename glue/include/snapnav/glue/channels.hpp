@@ -16,6 +16,7 @@ inline constexpr char kPoseDeadReckoning[] = "POSE_DEAD_RECKONING";
 inline constexpr char kPoseLaserSlam[] = "POSE_LASER_SLAM";
 inline constexpr char kPoseFusedSlam[] = "POSE_EKF";            // fused visual + laser EKF
 inline constexpr char kPoseRatslam[] = "POSE_RATSLAM";
+inline constexpr char kExperienceMap[] = "EXPERIENCE_MAP";      // experience_map_t (RatSLAM)
 inline constexpr char kPosePlaceCells[] = "POSE_PLACE_CELLS";
 inline constexpr char kLandmarks[] = "LANDMARKS";               // landmark_set_t (suffix _SIFT, _SURF, ...)
 inline constexpr char kHomeSnapshot[] = "HOME_SNAPSHOT";        // omni_frame_t that becomes the home

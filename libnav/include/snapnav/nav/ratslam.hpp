@@ -34,10 +34,16 @@
 //     (OpenRatSLAM keeps the one of the last injection), and a link to a familiar experience expects
 //     its heading to be the current heading minus that offset (OpenRatSLAM adds it there, and
 //     subtracts it everywhere else);
+//   - an experience remembers the heading offset of the view it was created with, in the pose cells
+//     and in the map: moving to it, comparing the best cell with it and linking to it use the heading
+//     of its template, not the robot's heading at creation (OpenRatSLAM assumes the offset was 0,
+//     true for a forward camera; with a panorama, experiences made while turning broke the map);
 //   - a familiar view injects its energy at the cell nearest to the template's (OpenRatSLAM truncates
 //     the coordinates, which puts it half a cell off on average);
 //   - the templates skipped for injection ("recently created") are pc_vt_skip_recent, also when fewer
 //     exist (OpenRatSLAM's unsigned arithmetic skips none until 10 exist);
+//   - on a panorama the matched shift is refined between template columns (vt_shift_subcolumn), for
+//     the heading offset and the difference (OpenRatSLAM: whole columns, 6 degrees for 60 columns);
 //   - patch normalisation wraps around the columns of a panoramic template (OpenRatSLAM clips at the
 //     image edge), so a rotated panorama gives the rotated template;
 //   - the first experience is at the start pose given to RatSlam (OpenRatSLAM: the origin, facing
@@ -48,8 +54,8 @@
 // a * width / 2 pi. relative_rad below is that turn (the current heading minus the heading at which
 // the matched template was learnt).
 //
-// Pure algorithm: no I/O, no clock, no randomness; the same inputs give the same outputs. No heap
-// allocation per odometry step; a view allocates only when it becomes a new template.
+// Pure algorithm: no I/O, no clock, no randomness; the same inputs give the same outputs. Buffers
+// are allocated once: a step allocates only when the map grows (a new template, experience or link).
 
 #include <cstdint>
 #include <optional>
@@ -78,9 +84,14 @@ struct LocalViewOptions {
   bool vt_panoramic = true;
   int vt_shift_match = 4;   // largest shift when not panoramic [template columns]
   int vt_step_match = 1;    // shift step [template columns]
+  // snapnav: on a panorama, refine the matched shift between template columns (the view's columns
+  // interpolated linearly, fractions of +-0.5 column in steps of 0.05 against the matched template),
+  // so the view's heading offset is not rounded to whole columns (360 / template_x_size degrees).
+  // false: whole columns (OpenRatSLAM).
+  bool vt_shift_subcolumn = true;
   // A view matches its best template when their mean absolute difference is at most this
   // [intensity, 0-1]; otherwise it becomes a new template.
-  double vt_match_threshold = 0.06;
+  double vt_match_threshold = 0.04;
   double vt_normalisation = 0;  // > 0: scale the template to this mean, clipped to [0, 1] [intensity]; 0: off
   int vt_patch_normalise = 2;   // > 0: patch normalisation over (2n+1)^2 template cells [cells]; 0: off
   double vt_min_patch_normalisation_std = 0;  // flatter patches become 0.5 [intensity]
@@ -91,10 +102,12 @@ struct LocalViewOptions {
 struct ViewMatch {
   int template_id = -1;        // the matched or new template
   bool new_template = false;   // the view became a new template
-  // Mean absolute difference to the most similar template [intensity, 0-1]; nullopt when no
-  // template was compared (none yet, or every one's mean differs by more than the threshold).
+  // Mean absolute difference to the most similar template at the best shift (refined to fractions
+  // of a column with vt_shift_subcolumn) [intensity, 0-1]; nullopt when no template was compared
+  // (none yet, or every one's mean differs by more than the threshold).
   std::optional<double> difference;
   int shift_columns = 0;       // template columns the view is shifted against the template (0 if new)
+  double shift_fraction = 0;   // with vt_shift_subcolumn: the refinement of that shift, -0.5..0.5 [columns]
   double relative_rad = 0;     // heading now minus heading when the template was learnt [rad]
 };
 
@@ -122,6 +135,9 @@ class LocalViewCells {
   void ConvertView(const cv::Mat& gray);  // -> view_, view_mean_
   // Best template for view_: (id, summed difference, shift); id -1 when none was compared.
   void Compare(int* best_id, double* best_sum, int* best_shift) const;
+  // The summed difference of view_ against template `id` at the fractional circular offset
+  // `offset` (view column c against template column c + offset; no early stop).
+  double Difference(int id, double offset) const;
 
   LocalViewOptions options_;
   std::vector<Template> templates_;
@@ -142,15 +158,21 @@ struct PoseCellOptions {
   int pc_w_i_dim = 5;               // local inhibition: weight cube side [cells, odd]
   double pc_w_i_var = 2;            // ... its Gaussian's spread [cells]
   double pc_global_inhib = 0.00002; // subtracted from every cell each step, floor 0 [activity]
-  double pc_cell_x_size_m = 0.25;   // size of one pose cell in x and y [m]
+  double pc_cell_x_size_m = 0.5;    // size of one pose cell in x and y [m]
   int pc_cells_to_avg = 3;          // the best estimate averages +- this many cells around the maximum [cells]
-  double pc_vt_inject_energy = 0.15;  // energy a familiar view injects: pc_vt_inject_energy/30 * (30 - e^(1.2 decay)) [activity]
+  double pc_vt_inject_energy = 0.015; // energy a familiar view injects: pc_vt_inject_energy/30 * (30 - e^(1.2 decay)) [activity]
   double vt_active_decay = 1.0;     // decay added each view the template stays active, and its floor [1]
   double pc_vt_restore = 0.05;      // decay removed from every template each view [1]
   int pc_vt_skip_recent = 10;       // the newest templates inject nothing (OpenRatSLAM: 10, fixed) [count]
   // A new experience when the best cell moved this far from the current experience's cell,
   // or the view changed and no experience of the view is this close [cells].
   double exp_delta_pc_threshold = 2.0;
+  // snapnav: the pose cells step once this much odometry time has accumulated, with the increments
+  // composed (0: on every odometry message, as OpenRatSLAM). A step shifts the packet by a fraction
+  // of a cell and the attractor pulls part of it back, so a fast odometry source (50 Hz, millimetres
+  // per message) makes the packet lag its motion (about 25 % at 1 cm per step and 0.5 m cells);
+  // stepping less often shortens the lag but makes each injection count more [s].
+  double pc_update_interval_s = 0;
   void Validate() const;  // throws std::invalid_argument
 };
 
@@ -222,6 +244,7 @@ class PoseCellNetwork {
   struct CellExperience {  // OpenRatSLAM PosecellExperience
     double x, y, th;
     int view_template;
+    double th_offset;  // the view's heading offset when it was created [cells]
   };
   size_t Index(int x, int y, int th) const {
     return (static_cast<size_t>(th) * options_.pc_dim_xy + static_cast<size_t>(y)) * options_.pc_dim_xy +
@@ -259,6 +282,7 @@ struct ExperienceMapOptions {
 struct Experience {
   Pose2 pose;                 // in the map frame [m, rad]; moves with relaxation
   int view_template = -1;     // the template it was created with
+  double view_relative_rad = 0;  // that view's heading offset (ViewMatch::relative_rad) then [rad]
   std::vector<int> links_from, links_to;  // link indices
 };
 
@@ -280,15 +304,17 @@ class ExperienceMap {
   // Accumulates an odometry increment (robot frame) since the current experience.
   void OnOdometry(const Pose2& delta, double dt_s);
   // A new experience where the robot is (the current one plus the odometry since), linked from the
-  // current one; it becomes the current one. Returns its id.
-  int CreateExperience(int view_template);
+  // current one; it becomes the current one. `relative_rad`: the heading offset of the current view
+  // against its template. Returns its id.
+  int CreateExperience(int view_template, double relative_rad = 0);
   // Links the current experience to `to` with the odometry accumulated since the current one (the
-  // robot is at `to`, facing relative_rad from to's heading). False if the two are already linked
-  // either way (or `to` is the current one). Throws std::out_of_range for an unknown id or before
-  // the first experience.
+  // robot is at `to`, seeing to's template with heading offset relative_rad). False if the two are
+  // already linked either way (or `to` is the current one). Throws std::out_of_range for an unknown
+  // id or before the first experience.
   bool LinkTo(int to, double relative_rad, bool loop_closure);
-  // The robot is at experience `id`, facing relative_rad from its heading; the odometry since
-  // restarts there. Throws std::out_of_range for an unknown id.
+  // The robot is at experience `id`, seeing its template with heading offset relative_rad: it faces
+  // the experience's heading plus (relative_rad - the offset the experience was created with). The
+  // odometry since restarts there. Throws std::out_of_range for an unknown id.
   void SetExperience(int id, double relative_rad);
   // exp_loops iterations of relaxation over every link.
   void Relax();
@@ -332,8 +358,9 @@ class RatSlam {
  public:
   explicit RatSlam(const RatSlamOptions& options, const Pose2& start = {});  // throws std::invalid_argument
 
-  // An odometry increment in the robot frame of the previous step, over dt_s. Steps the pose
-  // cells and the experience map, and applies the pose cells' action (new experience, link,
+  // An odometry increment in the robot frame of the previous step, over dt_s. Steps the experience
+  // map, and the pose cells with the increments since their last step once pc_update_interval_s of
+  // them have accumulated; after a pose-cell step applies their action (new experience, link,
   // switch, then relaxation). Throws std::invalid_argument on non-finite values or dt_s < 0.
   void OnOdometry(const Pose2& delta_robot_frame, double dt_s);
   // A grey panorama (CV_8UC1, columns over 360 degrees): local view match, then the pose cells.
@@ -363,6 +390,8 @@ class RatSlam {
   ExperienceMap map_;
   int loop_closures_ = 0, switches_ = 0;
   int64_t odometry_steps_ = 0, images_ = 0;
+  Pose2 pc_pending_;          // odometry since the last pose-cell step
+  double pc_pending_s_ = 0;   // its duration [s]
 };
 
 }  // namespace snapnav::nav

@@ -1,0 +1,327 @@
+#include "ratslam_node.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <iostream>
+#include <ostream>
+#include <stdexcept>
+
+#include <opencv2/imgproc.hpp>
+
+#include "snapnav/experience_map_t.hpp"
+#include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/image_msg.hpp"
+
+namespace snapnav::processes {
+namespace {
+
+bool Finite(double a, double b, double c) { return std::isfinite(a) && std::isfinite(b) && std::isfinite(c); }
+
+double Ms(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+nav::RatSlamOptions ReadRatSlamOptions(const glue::IniFile& ini, const std::string& section) {
+  const std::string& s = section;
+  nav::RatSlamOptions o;
+  nav::LocalViewOptions& v = o.local_view;
+  v.image_crop_x_min_px = ini.GetInt(s, "image_crop_x_min_px");
+  v.image_crop_x_max_px = ini.GetInt(s, "image_crop_x_max_px");
+  v.image_crop_y_min_px = ini.GetInt(s, "image_crop_y_min_px");
+  v.image_crop_y_max_px = ini.GetInt(s, "image_crop_y_max_px");
+  v.template_x_size = ini.GetInt(s, "template_x_size");
+  v.template_y_size = ini.GetInt(s, "template_y_size");
+  v.vt_panoramic = ini.GetBool(s, "vt_panoramic");
+  v.vt_shift_match = ini.GetInt(s, "vt_shift_match");
+  v.vt_step_match = ini.GetInt(s, "vt_step_match");
+  v.vt_shift_subcolumn = ini.GetBool(s, "vt_shift_subcolumn");
+  v.vt_match_threshold = ini.GetDouble(s, "vt_match_threshold");
+  v.vt_normalisation = ini.GetDouble(s, "vt_normalisation");
+  v.vt_patch_normalise = ini.GetInt(s, "vt_patch_normalise");
+  v.vt_min_patch_normalisation_std = ini.GetDouble(s, "vt_min_patch_normalisation_std");
+  nav::PoseCellOptions& p = o.pose_cells;
+  p.pc_dim_xy = ini.GetInt(s, "pc_dim_xy");
+  p.pc_dim_th = ini.GetInt(s, "pc_dim_th");
+  p.pc_w_e_dim = ini.GetInt(s, "pc_w_e_dim");
+  p.pc_w_e_var = ini.GetDouble(s, "pc_w_e_var");
+  p.pc_w_i_dim = ini.GetInt(s, "pc_w_i_dim");
+  p.pc_w_i_var = ini.GetDouble(s, "pc_w_i_var");
+  p.pc_global_inhib = ini.GetDouble(s, "pc_global_inhib");
+  p.pc_cell_x_size_m = ini.GetDouble(s, "pc_cell_x_size_m");
+  p.pc_cells_to_avg = ini.GetInt(s, "pc_cells_to_avg");
+  p.pc_vt_inject_energy = ini.GetDouble(s, "pc_vt_inject_energy");
+  p.vt_active_decay = ini.GetDouble(s, "vt_active_decay");
+  p.pc_vt_restore = ini.GetDouble(s, "pc_vt_restore");
+  p.pc_vt_skip_recent = ini.GetInt(s, "pc_vt_skip_recent");
+  p.exp_delta_pc_threshold = ini.GetDouble(s, "exp_delta_pc_threshold");
+  p.pc_update_interval_s = ini.GetDouble(s, "pc_update_interval_s");
+  o.experience_map.exp_loops = ini.GetInt(s, "exp_loops");
+  o.experience_map.exp_correction = ini.GetDouble(s, "exp_correction");
+  try {
+    o.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": [" + s + "] " + e.what());
+  }
+  return o;
+}
+
+void PrintRatSlamOptions(std::ostream& out, const nav::RatSlamOptions& o, const std::string& section) {
+  const nav::LocalViewOptions& v = o.local_view;
+  const nav::PoseCellOptions& p = o.pose_cells;
+  out << "[" << section << "]\nimage_crop_x_min_px = " << v.image_crop_x_min_px
+      << "\nimage_crop_x_max_px = " << v.image_crop_x_max_px << "\nimage_crop_y_min_px = " << v.image_crop_y_min_px
+      << "\nimage_crop_y_max_px = " << v.image_crop_y_max_px << "\ntemplate_x_size = " << v.template_x_size
+      << "\ntemplate_y_size = " << v.template_y_size << "\nvt_panoramic = " << (v.vt_panoramic ? "true" : "false")
+      << "\nvt_shift_match = " << v.vt_shift_match << "\nvt_step_match = " << v.vt_step_match
+      << "\nvt_shift_subcolumn = " << (v.vt_shift_subcolumn ? "true" : "false")
+      << "\nvt_match_threshold = " << v.vt_match_threshold << "\nvt_normalisation = " << v.vt_normalisation
+      << "\nvt_patch_normalise = " << v.vt_patch_normalise
+      << "\nvt_min_patch_normalisation_std = " << v.vt_min_patch_normalisation_std << "\npc_dim_xy = " << p.pc_dim_xy
+      << "\npc_dim_th = " << p.pc_dim_th << "\npc_w_e_dim = " << p.pc_w_e_dim << "\npc_w_e_var = " << p.pc_w_e_var
+      << "\npc_w_i_dim = " << p.pc_w_i_dim << "\npc_w_i_var = " << p.pc_w_i_var
+      << "\npc_global_inhib = " << p.pc_global_inhib << "\npc_cell_x_size_m = " << p.pc_cell_x_size_m
+      << "\npc_cells_to_avg = " << p.pc_cells_to_avg << "\npc_vt_inject_energy = " << p.pc_vt_inject_energy
+      << "\nvt_active_decay = " << p.vt_active_decay << "\npc_vt_restore = " << p.pc_vt_restore
+      << "\npc_vt_skip_recent = " << p.pc_vt_skip_recent << "\nexp_delta_pc_threshold = " << p.exp_delta_pc_threshold
+      << "\npc_update_interval_s = " << p.pc_update_interval_s
+      << "\nexp_loops = " << o.experience_map.exp_loops << "\nexp_correction = " << o.experience_map.exp_correction
+      << "\n";
+}
+
+experience_map_t ToExperienceMapMsg(int64_t utime, const nav::RatSlam& slam) {
+  const nav::ExperienceMap& map = slam.experience_map();
+  experience_map_t m{};
+  m.utime = utime;
+  m.estimator = "ratslam";
+  m.frame = "map";
+  m.templates = slam.templates();
+  m.loop_closures = slam.loop_closures();
+  m.current_experience = map.current();
+  const nav::Pose2 robot = slam.pose();
+  m.robot_x_m = robot.x_m;
+  m.robot_y_m = robot.y_m;
+  m.robot_theta_rad = robot.theta_rad;
+  const auto& experiences = map.experiences();
+  m.nexperiences = static_cast<int32_t>(experiences.size());
+  m.x_m.reserve(experiences.size());
+  m.y_m.reserve(experiences.size());
+  m.theta_rad.reserve(experiences.size());
+  m.view_template.reserve(experiences.size());
+  for (const nav::Experience& e : experiences) {
+    m.x_m.push_back(e.pose.x_m);
+    m.y_m.push_back(e.pose.y_m);
+    m.theta_rad.push_back(e.pose.theta_rad);
+    m.view_template.push_back(e.view_template);
+  }
+  const auto& links = map.links();
+  m.nlinks = static_cast<int32_t>(links.size());
+  for (const nav::ExperienceLink& l : links) {
+    m.link_from.push_back(l.from);
+    m.link_to.push_back(l.to);
+    m.link_loop_closure.push_back(l.loop_closure ? 1 : 0);
+  }
+  return m;
+}
+
+const char* RatSlamPoseOnName(RatSlamPoseOn p) {
+  switch (p) {
+    case RatSlamPoseOn::kFrame:
+      return "frame";
+    case RatSlamPoseOn::kOdometry:
+      return "odometry";
+    case RatSlamPoseOn::kBoth:
+      return "both";
+  }
+  return "?";
+}
+
+RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  RatSlamConfig c;
+  c.omni_channel = channel_prefix + ini.GetString("channels", "omni");
+  c.panorama_channel = channel_prefix + ini.GetString("channels", "panorama");
+  c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
+  c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
+  c.experience_map_channel = channel_prefix + ini.GetString("channels", "experience_map");
+  c.raw_input = glue::ReadChoice<bool>(ini, "node", "input", {{"raw", true}, {"panorama", false}});
+  c.pose_on = glue::ReadChoice<RatSlamPoseOn>(
+      ini, "node", "pose_on",
+      {{"frame", RatSlamPoseOn::kFrame}, {"odometry", RatSlamPoseOn::kOdometry}, {"both", RatSlamPoseOn::kBoth}});
+  c.experience_map_interval_s = ini.GetDouble("node", "experience_map_interval_s");
+  c.stats_interval_s = ini.GetDouble("node", "stats_interval_s");
+  c.panorama = glue::ReadPanoramaConfig(ini);
+  c.mirror = glue::ReadMirrorConfig(ini);
+  c.options = ReadRatSlamOptions(ini);
+  ini.CheckAllUsed();
+  if (!(c.experience_map_interval_s >= 0) || !std::isfinite(c.experience_map_interval_s)) {
+    throw glue::ConfigError(ini.origin() + ": [node] experience_map_interval_s must be >= 0 (0: never publish)");
+  }
+  if (!(c.stats_interval_s >= 0) || !std::isfinite(c.stats_interval_s)) {
+    throw glue::ConfigError(ini.origin() + ": [node] stats_interval_s must be >= 0 (0: no stats lines)");
+  }
+  try {
+    c.panorama.Validate();
+    c.mirror.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": " + e.what());
+  }
+  return c;
+}
+
+void RatSlamConfig::Print(std::ostream& out) const {
+  out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel
+      << "\nodometry = " << odometry_channel << "\npose = " << pose_channel
+      << "\nexperience_map = " << experience_map_channel << "\n[node]\ninput = " << (raw_input ? "raw" : "panorama")
+      << "\npose_on = " << RatSlamPoseOnName(pose_on) << "\nexperience_map_interval_s = " << experience_map_interval_s
+      << "\nstats_interval_s = " << stats_interval_s << "\n";
+  glue::PrintPanoramaConfig(out, panorama);
+  glue::PrintMirrorConfig(out, mirror);
+  PrintRatSlamOptions(out, options);
+}
+
+RatSlamNode::RatSlamNode(glue::Bus& bus, const RatSlamConfig& config, std::ostream& log)
+    : bus_(bus), config_(config), log_(log), frames_to_panoramas_(config.panorama, config.mirror) {
+  config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
+  bus_.Subscribe(config_.input_channel(), &RatSlamNode::OnFrame, this);
+  bus_.Subscribe(config_.odometry_channel, &RatSlamNode::OnOdometry, this);
+}
+
+int64_t RatSlamNode::rejected(const std::string& reason) const {
+  const auto it = rejected_.find(reason);
+  return it == rejected_.end() ? 0 : it->second;
+}
+
+int64_t RatSlamNode::rejected_total() const {
+  int64_t n = 0;
+  for (const auto& [_, k] : rejected_) n += k;
+  return n;
+}
+
+void RatSlamNode::Reject(const std::string& reason, const std::string& detail) {
+  ++rejected_[reason];
+  bus_.CountDecodeError(reason + (detail.empty() ? "" : ": " + detail));  // per channel; printed, rate-limited
+}
+
+void RatSlamNode::InternalError(const std::string& what) {
+  last_internal_error_ = what;
+  const int64_t n = ++internal_errors_;
+  if (n <= 5 || n % 100 == 0) std::cerr << "ratslam: internal error #" << n << ": " << what << "\n";
+}
+
+// Nothing leaves a handler: inputs are checked before libnav sees them, and anything else (a failed
+// publish) is counted as an internal error and reported at exit.
+void RatSlamNode::OnFrame(const omni_frame_t& frame) {
+  try {
+    HandleFrame(frame);
+  } catch (const std::exception& e) {
+    InternalError(std::string("frame: ") + e.what());
+  }
+}
+
+void RatSlamNode::OnOdometry(const odometry_t& msg) {
+  try {
+    HandleOdometry(msg);
+  } catch (const std::exception& e) {
+    InternalError(std::string("odometry: ") + e.what());
+  }
+}
+
+void RatSlamNode::HandleOdometry(const odometry_t& msg) {
+  ++odometry_;
+  if (!odometry_seen_) {
+    // The first message fixes the start; its increment is relative to a message never seen.
+    if (!Finite(msg.x_m, msg.y_m, msg.theta_rad)) {
+      Reject("non-finite odometry", "cumulative pose is not finite");
+      return;
+    }
+    odometry_seen_ = true;
+    if (!slam_) slam_.emplace(config_.options, glue::OdometryPose(msg));
+    AfterMessage(msg.utime);
+    return;
+  }
+  if (!Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)) {
+    Reject("non-finite odometry", "increment is not finite");
+    return;
+  }
+  if (!std::isfinite(msg.delta_t_s) || msg.delta_t_s < 0) {
+    Reject("bad odometry time", "delta_t_s " + std::to_string(msg.delta_t_s) + " (finite, >= 0)");
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  slam_->OnOdometry(glue::OdometryDelta(msg), msg.delta_t_s);
+  odometry_ms_ += Ms(t0);
+  ++steps_;
+  if (config_.pose_on != RatSlamPoseOn::kFrame) PublishPose(msg.utime);
+  AfterMessage(msg.utime);
+}
+
+void RatSlamNode::HandleFrame(const omni_frame_t& frame) {
+  ++frames_;
+  const std::optional<cv::Mat> panorama = frames_to_panoramas_.Convert(frame);
+  if (!panorama) {
+    Reject(frames_to_panoramas_.reason(), frames_to_panoramas_.detail());
+    return;
+  }
+  if (panorama->channels() == 1) {
+    gray_ = *panorama;
+  } else {
+    cv::cvtColor(*panorama, gray_, cv::COLOR_BGR2GRAY);
+  }
+  if (!slam_) slam_.emplace(config_.options, nav::Pose2{});  // no odometry yet: start at the origin
+  const auto t0 = std::chrono::steady_clock::now();
+  slam_->OnImage(gray_);
+  image_ms_ += Ms(t0);
+  ++processed_;
+  if (config_.pose_on != RatSlamPoseOn::kOdometry) PublishPose(frame.utime);
+  AfterMessage(frame.utime);
+}
+
+void RatSlamNode::PublishPose(int64_t utime) {
+  bus_.Publish(config_.pose_channel, glue::ToPoseMsg(utime, "ratslam", "map", slam_->pose(), Eigen::Matrix3d::Zero()));
+  ++poses_published_;
+}
+
+void RatSlamNode::PublishExperienceMap(int64_t utime) {
+  if (!slam_) return;
+  bus_.Publish(config_.experience_map_channel, ToExperienceMapMsg(utime, *slam_));
+  ++maps_published_;
+}
+
+void RatSlamNode::AfterMessage(int64_t utime) {
+  if (!first_utime_) first_utime_ = utime;
+  const double map_us = config_.experience_map_interval_s * 1e6;
+  if (map_us > 0 && slam_ && (!last_map_utime_ || utime - *last_map_utime_ >= map_us || utime < *last_map_utime_)) {
+    last_map_utime_ = utime;
+    PublishExperienceMap(utime);
+  }
+  const double stats_us = config_.stats_interval_s * 1e6;
+  if (stats_us > 0 && slam_ && (!last_stats_utime_ || utime - *last_stats_utime_ >= stats_us)) {
+    if (last_stats_utime_) PrintStats(log_, utime);
+    last_stats_utime_ = utime;
+  }
+}
+
+void RatSlamNode::PrintStats(std::ostream& out, int64_t utime) const {
+  const nav::Pose2 p = slam_->pose();
+  out << "ratslam: t+" << (utime - first_utime_.value_or(utime)) * 1e-6 << " s: " << processed_ << " frames, " << slam_->templates() << " templates, "
+      << slam_->experience_map().experiences().size() << " experiences, " << slam_->loop_closures()
+      << " loop closures, pose (" << p.x_m << ", " << p.y_m << ") m; " << mean_image_ms() << " ms per frame, "
+      << mean_odometry_ms() << " ms per odometry\n";
+}
+
+void RatSlamNode::Report(std::ostream& out) const {
+  out << "ratslam: frames " << frames_ << ", processed " << processed_ << ", odometry " << odometry_
+      << ", poses published " << poses_published_ << ", experience maps published " << maps_published_
+      << ", rejected " << rejected_total() << ", internal errors " << internal_errors_ << "\n";
+  if (slam_) {
+    out << "ratslam: " << slam_->templates() << " templates, " << slam_->experience_map().experiences().size()
+        << " experiences, " << slam_->experience_map().links().size() << " links, " << slam_->loop_closures()
+        << " loop closures; mean " << mean_image_ms() << " ms per frame, " << mean_odometry_ms()
+        << " ms per odometry message\n";
+  }
+  for (const auto& [reason, n] : rejected_) out << "ratslam:   rejected (" << reason << "): " << n << "\n";
+  if (!last_internal_error_.empty()) out << "ratslam:   last internal error: " << last_internal_error_ << "\n";
+}
+
+}  // namespace snapnav::processes
