@@ -4,13 +4,8 @@
 add_library(snapnav_slam_compare STATIC eval/slam_compare.cpp eval/compare_config.cpp)
 target_include_directories(snapnav_slam_compare PUBLIC eval)
 target_link_libraries(snapnav_slam_compare PUBLIC snapnav_slam_sim snapnav_localization_eval snapnav_fused_slam
-  snapnav_slam_plot snapnav_plot PRIVATE snapnav_fused_slam_node snapnav_laser_slam_node snapnav_glue_places
-  opencv_imgproc)
-# RatSLAM (libnav, branch ratslam) joins the comparison when the build has it.
-if(TARGET snapnav_ratslam)
-  target_link_libraries(snapnav_slam_compare PUBLIC snapnav_ratslam)
-  target_compile_definitions(snapnav_slam_compare PRIVATE SNAPNAV_HAVE_RATSLAM=1)
-endif()
+  snapnav_slam_plot snapnav_plot snapnav_ratslam PRIVATE snapnav_fused_slam_node snapnav_laser_slam_node
+  snapnav_ratslam_node snapnav_glue_places opencv_imgproc)
 add_executable(eval-compare eval/eval_compare_main.cpp)
 target_link_libraries(eval-compare PRIVATE snapnav_slam_compare)
 add_executable(bench-compare bench/bench_compare.cpp)

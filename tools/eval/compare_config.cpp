@@ -4,6 +4,7 @@
 
 #include "fused_slam_node.hpp"
 #include "laser_slam_node.hpp"
+#include "ratslam_node.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/place_cells.hpp"
 
@@ -19,16 +20,17 @@ processes::SimConfig LoadCompareConfigs(const CompareConfigPaths& paths, Compare
   o->vocabulary = glue::ReadVocabularyOptions(places);
   o->laser = processes::LaserSlamConfig::FromIni(glue::IniFile::Load(paths.laser), "").options;
   o->fused = processes::FusedSlamConfig::FromIni(glue::IniFile::Load(paths.fused), "").options;
+  o->ratslam = processes::RatSlamConfig::FromIni(glue::IniFile::Load(paths.ratslam), "").options;
   return sim;
 }
 
 void PrintCompareOptions(std::ostream& out, const CompareConfigPaths& paths, const CompareOptions& o) {
   const nav::FusedSlamOptions& f = o.fused;
   out << "sim config " << paths.sim << ", fused config " << paths.fused << ", laser config " << paths.laser
-      << ", place-cell config " << paths.placecells << "\n"
+      << ", place-cell config " << paths.placecells << ", RatSLAM config " << paths.ratslam << "\n"
       << "visual fixes " << o.visual_rate_hz << " Hz (" << (o.visual_prediction ? "fused pose as prediction" : "global")
       << "), RatSLAM frames " << o.ratslam_rate_hz << " Hz ("
-      << (RatSlamAvailable() ? (o.run_ratslam ? "on, default options" : "off") : "not in this build")
+      << (o.run_ratslam ? "on" : "off")
       << "), cells every " << o.cell_spacing_m << " m (explore seed " << o.explore_seed << "), RPE per " << o.rpe_delta_m
       << " m, recovery under " << o.recovery_error_m << " m for " << o.recovery_hold_s << " s\n"
       << "[fused_slam] gate_chi2 " << f.gate_chi2 << ", agree_chi2 " << f.agree_chi2 << ", relocalize_after "

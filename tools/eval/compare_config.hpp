@@ -2,7 +2,8 @@
 // The options of the SLAM comparison from the shipped configs (eval-compare and bench-compare):
 // the simulator's camera and effects (config/sim.ini), laser-only SLAM's [laser_slam]
 // (config/laser_slam.ini), fused SLAM's [laser_slam] and [fused_slam] (config/fused_slam.ini), and
-// the place cells' view, localizer and vocabulary (config/placecells.ini).
+// the place cells' view, localizer and vocabulary (config/placecells.ini), RatSLAM's [ratslam]
+// (config/ratslam.ini).
 #include <iosfwd>
 #include <string>
 
@@ -16,6 +17,7 @@ struct CompareConfigPaths {
   std::string fused = SNAPNAV_CONFIG_DIR "/fused_slam.ini";
   std::string laser = SNAPNAV_CONFIG_DIR "/laser_slam.ini";
   std::string placecells = SNAPNAV_CONFIG_DIR "/placecells.ini";
+  std::string ratslam = SNAPNAV_CONFIG_DIR "/ratslam.ini";
 };
 
 // Fills `options` (the rest keeps its values) and returns the simulator's config. Throws

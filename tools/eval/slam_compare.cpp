@@ -19,9 +19,7 @@
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/plot/plot.hpp"
-#ifdef SNAPNAV_HAVE_RATSLAM
 #include "snapnav/nav/ratslam.hpp"
-#endif
 
 namespace snapnav::eval {
 namespace {
@@ -34,11 +32,10 @@ double Ms(Clock::time_point since) { return std::chrono::duration<double, std::m
 
 double Distance(const nav::Pose2& a, const nav::Pose2& b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
 
-// RatSLAM beside the simulation, when the build has it.
+// RatSLAM beside the simulation.
 class RatSlamRunner {
  public:
-#ifdef SNAPNAV_HAVE_RATSLAM
-  explicit RatSlamRunner(const nav::Pose2& start) : slam_(nav::RatSlamOptions{}, start) {}
+  RatSlamRunner(const nav::RatSlamOptions& options, const nav::Pose2& start) : slam_(options, start) {}
   void Odometry(const nav::Pose2& delta, double dt_s) { slam_.OnOdometry(delta, dt_s); }
   void Frame(const cv::Mat& gray) { slam_.OnImage(gray); }
   nav::Pose2 pose() const { return slam_.pose(); }
@@ -47,14 +44,6 @@ class RatSlamRunner {
 
  private:
   nav::RatSlam slam_;
-#else
-  explicit RatSlamRunner(const nav::Pose2&) {}
-  void Odometry(const nav::Pose2&, double) {}
-  void Frame(const cv::Mat&) {}
-  nav::Pose2 pose() const { return {}; }
-  int64_t loop_closures() const { return 0; }
-  int64_t experiences() const { return 0; }
-#endif
 };
 
 // RPE over the pairs, leaving out the segments that span `split` (a kidnapping: the truth jumps,
@@ -126,13 +115,7 @@ const std::vector<std::string>& CompareMethodNames() {
   return names;
 }
 
-bool RatSlamAvailable() {
-#ifdef SNAPNAV_HAVE_RATSLAM
-  return true;
-#else
-  return false;
-#endif
-}
+bool RatSlamAvailable() { return true; }
 
 void CompareOptions::Validate() const {
   camera.Validate();
@@ -146,6 +129,7 @@ void CompareOptions::Validate() const {
   view.Validate();
   localizer.Validate();
   vocabulary.Validate();
+  ratslam.Validate();
   laser.Validate();
   fused.Validate();
 }
@@ -207,7 +191,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   nav::FusedSlam fused(options.fused, start);
   const bool with_ratslam = options.run_ratslam && RatSlamAvailable();
   std::optional<RatSlamRunner> ratslam;
-  if (with_ratslam) ratslam.emplace(start);
+  if (with_ratslam) ratslam.emplace(options.ratslam, start);
 
   MethodResult fused_result, ratslam_result;
   double fused_scan_ms = 0, fused_max_ms = 0, filter_visual_ms = 0, view_ms = 0, localize_ms = 0;
@@ -376,8 +360,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     out.ratslam_loop_closures = ratslam->loop_closures();
     out.ratslam_experiences = ratslam->experiences();
   } else {
-    ratslam_result.note = options.run_ratslam ? "not in this build (RatSLAM, branch ratslam, not merged yet)"
-                                              : "not run (--no-ratslam)";
+    ratslam_result.note = "not run (--no-ratslam)";
   }
 
   // The scan at which the truth jumps (a kidnapping): RPE segments do not span it.

@@ -38,6 +38,7 @@
 #include "snapnav/nav/fused_slam.hpp"
 #include "snapnav/nav/laser_slam.hpp"
 #include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/ratslam.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 #include "snapnav/nav/sim/scene.hpp"
@@ -46,7 +47,8 @@ namespace snapnav::eval {
 
 // The methods in table order (summary.json keys start with these names).
 const std::vector<std::string>& CompareMethodNames();  // dead_reckoning, laser_slam, ratslam, fused_slam
-// Whether this build has RatSLAM (nav::RatSlam, library snapnav_ratslam).
+// Whether this build has RatSLAM (nav::RatSlam, library snapnav_ratslam): it has, since the
+// ratslam branch was merged; kept for the summary's "ratslam" entry.
 bool RatSlamAvailable();
 
 struct CompareOptions {
@@ -65,6 +67,7 @@ struct CompareOptions {
   // localization, independent of the filter (after a kidnapping a prediction from the lost pose
   // would deny the cells where the robot really is).
   bool visual_prediction = false;
+  nav::RatSlamOptions ratslam;          // RatSLAM (config/ratslam.ini's [ratslam])
   nav::LaserSlamOptions laser;          // laser-only SLAM
   nav::FusedSlamOptions fused;          // fused SLAM
   double rpe_delta_m = 1.0;             // RPE over this much travel [m]
