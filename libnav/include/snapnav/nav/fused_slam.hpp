@@ -29,9 +29,9 @@
 //      No relocalisation for a jump shorter than relocalize_min_distance_m (and a turn smaller
 //      than relocalize_min_heading_rad): that is a map that drifted while it was built, and
 //      jumping off it only corrupts it. No relocalisation either when the last scan fits the map
-//      clearly worse at the new pose
-//      than at the filter's (relocalize_max_fit_loss): aliasing that moves with the robot (the
-//      views a metre behind along a straight wall look alike) agrees with itself too.
+//      clearly worse at the new pose than at the filter's (relocalize_max_fit_loss): aliasing
+//      that moves with the robot (the views a metre behind along a straight wall look alike)
+//      agrees with itself too.
 // Map protection: while the filter suspects it is lost (at least suspect_after consecutive
 // rejected visual measurements) scans do not add points to the map, nor does a scan whose ICP
 // fit is below map_min_fit.
