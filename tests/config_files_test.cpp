@@ -5,6 +5,7 @@
 #include <set>
 
 #include "dead_reckoning_node.hpp"
+#include "fused_slam_node.hpp"
 #include "snapnav/glue/ini.hpp"
 
 namespace snapnav {
@@ -22,6 +23,12 @@ TEST(ConfigFiles, BusCheck) {
   EXPECT_NO_THROW(ini.CheckAllUsed());
 }
 
+TEST(ConfigFiles, FusedSlam) {
+  const auto c = processes::FusedSlamConfig::FromIni(glue::IniFile::Load(kConfigDir / "fused_slam.ini"), "");
+  EXPECT_EQ(c.pose_channel, "POSE_EKF");
+  EXPECT_EQ(c.visual_channel, "POSE_PLACE_CELLS");
+}
+
 // Every .ini under config/ is covered by a test above.
 TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // Configs with heavy dependencies are tested in their own test executables
@@ -33,7 +40,7 @@ TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // config variants (config/deploy/demo/*.ini): tests/launch/.
   const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini", "sim.ini", "omni_camera.ini",
                                     "laser_hokuyo.ini", "homing.ini", "laser_slam.ini", "landmarks.ini",
-                                    "placecells.ini", "navigator.ini", "viewer.ini", "ratslam.ini"};
+                                    "placecells.ini", "navigator.ini", "viewer.ini", "ratslam.ini", "fused_slam.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();

@@ -5,6 +5,7 @@
 
 #include "snapnav/drive_command_t.hpp"
 #include "snapnav/experience_map_t.hpp"
+#include "snapnav/fused_slam_status_t.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/landmark_set_t.hpp"
@@ -240,6 +241,30 @@ TEST(LcmTypes, ExperienceMapRoundTripAndBadLinkCount) {
     std::string error;
     EXPECT_FALSE(Decode<experience_map_t>(bytes.data(), n, &error).has_value()) << n;
   }
+}
+
+TEST(LcmTypes, FusedSlamStatusRoundTrip) {
+  fused_slam_status_t m{};
+  m.utime = 9;
+  m.state = fused_slam_status_t::SUSPECT;
+  m.last_outcome = fused_slam_status_t::REJECTED;
+  m.last_mahalanobis2 = 259.2;
+  m.consecutive_rejections = 3;
+  m.agreeing_rejections = 2;
+  m.visual_accepted = 40;
+  m.visual_rejected = 7;
+  m.relocalizations = 1;
+  m.map_points = 1234;
+  m.x_m = 29.0;
+  m.position_sigma_m = 0.2;
+  const auto r = RoundTrip(m);
+  EXPECT_EQ(r.state, fused_slam_status_t::SUSPECT);
+  EXPECT_EQ(r.last_outcome, fused_slam_status_t::REJECTED);
+  EXPECT_DOUBLE_EQ(r.last_mahalanobis2, 259.2);
+  EXPECT_EQ(r.agreeing_rejections, 2);
+  EXPECT_EQ(r.visual_rejected, 7);
+  EXPECT_EQ(r.map_points, 1234);
+  EXPECT_DOUBLE_EQ(r.x_m, 29.0);
 }
 
 TEST(LcmTypes, EveryTruncationIsAnErrorNotACrash) {

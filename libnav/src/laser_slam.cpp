@@ -534,6 +534,7 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
       u.measured = true;
       u.measurement = icp.estimate;
       u.measurement_covariance = info.inverse();
+      u.measurement_covariance += measurement_inflation_;
       const Pose2 predicted = pose_;
       const Eigen::Matrix3d predicted_covariance = covariance_;
       pose_ = EkfPoseUpdate(pose_, &covariance_, icp.estimate, u.measurement_covariance);
@@ -557,6 +558,7 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
   odometry_since_scan_ = {};
   if (last_scan_pose_) last_motion_ = last_scan_pose_->Between(pose_);
   last_scan_pose_ = pose_;
+  if (!MayAddPoints(u)) return u;
   // Points with no map point near them join the map at the updated pose, with their normals.
   const Rigid to_map(pose_);
   for (size_t i = 0; i < points.size(); ++i) {
@@ -565,6 +567,42 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
     if (map_.Add(w, Rotate(to_map.c, to_map.s, normals[i]))) ++u.added;
   }
   return u;
+}
+
+// ---- For filters built on this one (nav::FusedSlam).
+
+void LaserSlam::UpdatePose(const Pose2& z, const Eigen::Matrix3d& r) {
+  if (!std::isfinite(z.x_m) || !std::isfinite(z.y_m) || !std::isfinite(z.theta_rad) || !r.allFinite()) {
+    throw std::invalid_argument("laser slam: pose measurement or its covariance is not finite");
+  }
+  pose_ = EkfPoseUpdate(pose_, &covariance_, z, r);
+}
+
+void LaserSlam::ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
+  if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad) ||
+      !covariance.allFinite()) {
+    throw std::invalid_argument("laser slam: reset pose or covariance is not finite");
+  }
+  pose_ = {pose.x_m, pose.y_m, WrapAngle(pose.theta_rad)};
+  covariance_ = 0.5 * (covariance + covariance.transpose());
+}
+
+void LaserSlam::SetMapping(bool add_points, double min_fit) {
+  if (!(min_fit >= 0 && min_fit <= 1)) throw std::invalid_argument("laser slam: mapping min_fit must be in [0, 1]");
+  add_points_ = add_points;
+  min_add_fit_ = min_fit;
+}
+
+void LaserSlam::SetMeasurementInflation(const Eigen::Matrix3d& add) {
+  if (!add.allFinite() || add(0, 0) < 0 || add(1, 1) < 0 || add(2, 2) < 0) {
+    throw std::invalid_argument("laser slam: measurement inflation must be finite with non-negative variances");
+  }
+  measurement_inflation_ = 0.5 * (add + add.transpose());
+}
+
+bool LaserSlam::MayAddPoints(const LaserSlamUpdate& u) const {
+  if (!add_points_) return false;
+  return map_.size() == 0 || u.fit >= min_add_fit_;
 }
 
 }  // namespace snapnav::nav

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/laser_scan_checks.hpp"
 #include "snapnav/point_map_t.hpp"
 
 namespace snapnav::processes {
@@ -20,14 +21,9 @@ bool Finite(double a, double b, double c) { return std::isfinite(a) && std::isfi
 
 }  // namespace
 
-LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
-  LaserSlamConfig c;
-  c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
-  c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
-  c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
-  c.map_channel = channel_prefix + ini.GetString("channels", "map");
-  const char* s = "laser_slam";
-  nav::LaserSlamOptions& o = c.options;
+nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::string& section) {
+  const char* s = section.c_str();
+  nav::LaserSlamOptions o;
   o.motion.translation_noise_m_per_m = ini.GetDouble(s, "translation_noise_m_per_m");
   o.motion.rotation_noise_rad_per_rad = ini.GetDouble(s, "rotation_noise_rad_per_rad");
   o.motion.rotation_noise_rad_per_m = ini.GetDouble(s, "rotation_noise_rad_per_m");
@@ -36,7 +32,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   const std::string metric = ini.GetString(s, "metric");
   const auto parsed = nav::ParseIcpMetric(metric);
   if (!parsed) {
-    throw glue::ConfigError(ini.origin() + ": [laser_slam] metric = " + metric +
+    throw glue::ConfigError(ini.origin() + ": [" + section + "] metric = " + metric +
                             ": expected point_to_point or point_to_line");
   }
   o.metric = *parsed;
@@ -59,24 +55,16 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.add_distance_m = ini.GetDouble(s, "add_distance_m");
   o.scan_step = ini.GetInt(s, "scan_step");
   o.lookup_cell_m = ini.GetDouble(s, "lookup_cell_m");
-  c.map_every_n_scans = ini.GetInt(s, "map_every_n_scans");
-  ini.CheckAllUsed();
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
     throw glue::ConfigError(ini.origin() + ": " + e.what());
   }
-  if (c.map_every_n_scans < 0) {
-    throw glue::ConfigError(ini.origin() + ": [laser_slam] map_every_n_scans must be >= 0 (0: never publish the map)");
-  }
-  return c;
+  return o;
 }
 
-void LaserSlamConfig::Print(std::ostream& out) const {
-  const nav::LaserSlamOptions& o = options;
-  out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\npose = " << pose_channel
-      << "\nmap = " << map_channel << "\n"
-      << "[laser_slam]\ntranslation_noise_m_per_m = " << o.motion.translation_noise_m_per_m
+void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& o) {
+  out << "translation_noise_m_per_m = " << o.motion.translation_noise_m_per_m
       << "\nrotation_noise_rad_per_rad = " << o.motion.rotation_noise_rad_per_rad
       << "\nrotation_noise_rad_per_m = " << o.motion.rotation_noise_rad_per_m
       << "\ninitial_sigma_xy_m = " << o.initial_sigma_xy_m
@@ -93,8 +81,29 @@ void LaserSlamConfig::Print(std::ostream& out) const {
       << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
       << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
       << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step
-      << "\nlookup_cell_m = " << o.lookup_cell_m
-      << "\nmap_every_n_scans = " << map_every_n_scans << "\n";
+      << "\nlookup_cell_m = " << o.lookup_cell_m << "\n";
+}
+
+LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  LaserSlamConfig c;
+  c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
+  c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
+  c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
+  c.map_channel = channel_prefix + ini.GetString("channels", "map");
+  c.options = ReadLaserSlamOptions(ini, "laser_slam");
+  c.map_every_n_scans = ini.GetInt("laser_slam", "map_every_n_scans");
+  ini.CheckAllUsed();
+  if (c.map_every_n_scans < 0) {
+    throw glue::ConfigError(ini.origin() + ": [laser_slam] map_every_n_scans must be >= 0 (0: never publish the map)");
+  }
+  return c;
+}
+
+void LaserSlamConfig::Print(std::ostream& out) const {
+  out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\npose = " << pose_channel
+      << "\nmap = " << map_channel << "\n[laser_slam]\n";
+  PrintLaserSlamOptions(out, options);
+  out << "map_every_n_scans = " << map_every_n_scans << "\n";
 }
 
 LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config) : bus_(bus), config_(config) {
@@ -162,48 +171,15 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
 
 void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   ++scans_;
-  // Malformed scans: counted, no update, no pose. (ranges_m.size() == nranges after decoding; the
-  // intensities are not used, so their count does not matter.)
-  if (msg.ranges_m.empty()) {
-    Skip("no ranges", "scan has 0 beams", true);
-    return;
-  }
-  if (msg.ranges_m.size() > kMaxLaserBeams) {
-    Skip("too many beams",
-         std::to_string(msg.ranges_m.size()) + " beams (at most " + std::to_string(kMaxLaserBeams) + ")", true);
-    return;
-  }
-  if (!std::isfinite(msg.angle_min_rad) || !std::isfinite(msg.angle_increment_rad) || msg.angle_increment_rad == 0) {
-    Skip("bad angles",
-         "angle_min_rad " + std::to_string(msg.angle_min_rad) + ", angle_increment_rad " +
-             std::to_string(msg.angle_increment_rad) + " (finite, increment != 0)",
-         true);
-    return;
-  }
-  // NaN fails these tests too. A bound on range_max_m keeps every point's map cell an integer.
-  if (!(msg.range_min_m >= 0) || !(msg.range_max_m > msg.range_min_m) || !(msg.range_max_m <= kMaxLaserRangeM)) {
-    Skip("bad range limits",
-         "range_min_m " + std::to_string(msg.range_min_m) + ", range_max_m " + std::to_string(msg.range_max_m) +
-             " (0 <= min < max <= " + std::to_string(kMaxLaserRangeM) + ")",
-         true);
-    return;
-  }
-  // The mounting is on the robot: within kMaxLaserRangeM of its centre, like every point (larger
-  // coordinates overflow the map's integer cells).
-  if (!Finite(msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad) || std::abs(msg.sensor_x_m) > kMaxLaserRangeM ||
-      std::abs(msg.sensor_y_m) > kMaxLaserRangeM || std::abs(msg.sensor_theta_rad) > 100) {
-    Skip("bad sensor pose",
-         "sensor (" + std::to_string(msg.sensor_x_m) + " m, " + std::to_string(msg.sensor_y_m) + " m, " +
-             std::to_string(msg.sensor_theta_rad) + " rad): finite, within " + std::to_string(kMaxLaserRangeM) +
-             " m and 100 rad",
-         true);
+  // Malformed scans: counted, no update, no pose.
+  if (const auto problem = glue::CheckLaserScan(msg)) {
+    Skip(problem->reason, problem->detail, true);
     return;
   }
   last_scan_utime_ = msg.utime;
   if (!slam_) slam_.emplace(config_.options, nav::Pose2{});  // no odometry yet: start at the origin
 
-  const auto points = nav::ScanToPoints(msg.ranges_m, msg.angle_min_rad, msg.angle_increment_rad, msg.range_min_m,
-                                        msg.range_max_m, {msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad});
+  const auto points = glue::LaserScanPoints(msg);
   if (points.empty()) {
     // A well-formed scan that saw nothing (every beam NaN or no return, e.g. open space): no update,
     // the prediction stands and its pose is still published, so every well-formed scan has a pose.

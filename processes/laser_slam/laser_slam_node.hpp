@@ -21,6 +21,7 @@
 
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/laser_scan_checks.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/laser_slam.hpp"
 #include "snapnav/odometry_t.hpp"
@@ -41,10 +42,16 @@ struct LaserSlamConfig {
   void Print(std::ostream& out) const;
 };
 
-// Scans with more beams than this are rejected as garbage (real scanners have a few thousand).
-inline constexpr size_t kMaxLaserBeams = 100000;
-// Scans whose range_max_m exceeds this are rejected as garbage [m].
-inline constexpr double kMaxLaserRangeM = 10000.0;
+// The [section] keys of nav::LaserSlamOptions (laser_slam.ini's [laser_slam] without
+// map_every_n_scans; fused_slam.ini has the same section): every key required, invalid values are
+// glue::ConfigError. Angles in degrees in the file.
+nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::string& section);
+// Those keys as ReadLaserSlamOptions reads them, one per line (no section header).
+void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& options);
+
+// Limits of a scan's beam count and range_max_m (glue/laser_scan_checks.hpp, shared with fused-slam).
+using glue::kMaxLaserBeams;
+using glue::kMaxLaserRangeM;
 
 class LaserSlamNode {
  public:

@@ -6,6 +6,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 #include "snapnav/glue/channels.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -89,6 +90,13 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   d.odometry_linear_noise_frac = ini.GetDouble("robot", "odometry_linear_noise_frac");
   d.odometry_angular_noise_frac = ini.GetDouble("robot", "odometry_angular_noise_frac");
   d.robot_radius_m = ini.GetDouble("robot", "radius_m");
+  c.kidnap.at_s = ini.GetDouble("robot", "kidnap_at_s");
+  const std::vector<double> to = ini.GetDoubleList("robot", "kidnap_to");
+  if (to.size() != 3) {
+    throw glue::ConfigError(ini.origin() + ": [robot] kidnap_to must be x_m,y_m,theta_deg (3 values, got " +
+                            std::to_string(to.size()) + ")");
+  }
+  c.kidnap.to = {to[0], to[1], to[2] * kDeg};
 
   c.omni_channel = prefix + ini.GetString("channels", "omni");
   c.panorama_channel = prefix + ini.GetString("channels", "panorama");
@@ -123,6 +131,7 @@ void SimConfig::Validate() const {
   effects.Validate();
   laser.Validate();
   drive_options.Validate();
+  kidnap.Validate();
 }
 
 void SimConfig::Print(std::ostream& o) const {
@@ -140,6 +149,10 @@ void SimConfig::Print(std::ostream& o) const {
     << "robot: odometry_rate_hz=" << odometry_rate_hz << " heading_drift_deg_per_m="
     << drive_options.heading_drift_deg_per_m << " odometry_noise=" << drive_options.odometry_linear_noise_frac << ","
     << drive_options.odometry_angular_noise_frac << "\n"
+    << "kidnap: " << (kidnap.enabled() ? "at " + std::to_string(kidnap.at_s) + " s to (" + std::to_string(kidnap.to.x_m) +
+                                             ", " + std::to_string(kidnap.to.y_m) + ", " +
+                                             std::to_string(kidnap.to.theta_rad / kDeg) + " deg)"
+                                       : std::string("none")) << "\n"
     << "channels: " << omni_channel << " " << panorama_channel << " " << scan_channel << " " << odometry_channel << " "
     << ground_truth_channel << " <- " << command_channel << "\n";
 }
@@ -161,6 +174,7 @@ SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene&
     route_.emplace(scene.route, config_.route_speed_mps, config_.route_tolerance_m, config_.route_loop);
   }
   if (config_.drive == "commands") bus_.Subscribe(config_.command_channel, &SimNode::OnDriveCommand, this);
+  world_.SetKidnap(config_.kidnap);  // throws when the robot does not fit at the destination
 }
 
 int64_t SimNode::utime() const { return config_.start_utime + step_ * dt_us_; }
@@ -255,6 +269,10 @@ bool SimNode::Step() {
     cmd_angular_ = cmd.y();
   }
   world_.Step(cmd_linear_, cmd_angular_, dt_us_ * 1e-6);
+  if (world_.kidnapped() && !route_restarted_) {
+    route_restarted_ = true;  // carried off: the scripted driver goes on from the nearest waypoint ahead
+    if (route_) route_->Restart(world_.true_pose());
+  }
   ++step_;
   return true;
 }

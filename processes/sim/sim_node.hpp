@@ -43,6 +43,7 @@ struct SimConfig {
   nav::sim::LaserOptions laser;
   double odometry_rate_hz = 50;
   nav::sim::DriveOptions drive_options;
+  nav::sim::KidnapOptions kidnap;     // [robot] kidnap_at_s, kidnap_to (x_m, y_m, theta_deg); disabled by default
 
   std::string omni_channel, panorama_channel, scan_channel, odometry_channel, ground_truth_channel, command_channel;
 
@@ -89,6 +90,7 @@ class SimNode {
   int64_t frames_ = 0, scans_ = 0, odometry_ = 0, commands_ = 0;
   std::mt19937_64 effects_rng_;
   cv::Mat image_;
+  bool route_restarted_ = false;  // the route driver went on after the kidnapping
 };
 
 }  // namespace snapnav::processes

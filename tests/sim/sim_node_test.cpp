@@ -122,6 +122,46 @@ TEST(SimNode, FollowsDriveCommands) {
   EXPECT_NEAR(last.x_m, scene.start_pose.x(), 0.01);
 }
 
+TEST(SimNode, KidnappingMovesTheTruthNotTheOdometry) {
+  // The corridor's robot drives down the left wing from (1, 8); at 2 s it is carried to the
+  // mirrored place in the right wing. The ground truth jumps 28 m, the odometry does not, and the
+  // route goes on from the nearest waypoint ahead, (29, 1): down the right wing.
+  glue::Bus bus("memq://");
+  auto config = ShippedConfig("K1_");
+  config.duration_s = 4.0;
+  config.camera_rate_hz = 1;
+  config.kidnap.at_s = 2.0;
+  config.kidnap.to = {29.0, 7.4, -M_PI / 2};
+  const auto scene = LoadSceneFile(SceneFilePath("corridor"));
+  std::vector<pose_t> truth;
+  std::vector<odometry_t> odo;
+  bus.Subscribe<pose_t>("K1_POSE_GROUND_TRUTH", [&](const pose_t& m) { truth.push_back(m); });
+  bus.Subscribe<odometry_t>("K1_ODOMETRY", [&](const odometry_t& m) { odo.push_back(m); });
+  SimNode node(bus, config, scene);
+  while (node.Step()) {
+    while (bus.HandleOnce(0)) {
+    }
+  }
+  ASSERT_EQ(truth.size(), 200u);
+  ASSERT_EQ(odo.size(), 200u);
+  double largest_jump = 0, largest_odometry_step = 0;
+  for (size_t i = 1; i < truth.size(); ++i) {
+    largest_jump = std::max(largest_jump, std::hypot(truth[i].x_m - truth[i - 1].x_m, truth[i].y_m - truth[i - 1].y_m));
+    largest_odometry_step = std::max(largest_odometry_step, std::hypot(odo[i].delta_x_m, odo[i].delta_y_m));
+  }
+  EXPECT_GT(largest_jump, 27.0);
+  EXPECT_LT(largest_odometry_step, 0.02);
+  EXPECT_NEAR(truth.front().x_m, 1.0, 0.01);
+  EXPECT_NEAR(truth.back().x_m, 29.0, 0.05);
+  EXPECT_LT(truth.back().y_m, 7.4 - 0.3);  // still going down, now in the right wing
+  EXPECT_NEAR(odo.back().x_m, 1.0, 0.05);  // odometry believes it is in the left wing
+  EXPECT_TRUE(node.world().kidnapped());
+  // A destination inside a wall is refused.
+  config.kidnap.to = {0.05, 5.0, 0.0};
+  glue::Bus bus2("memq://");
+  EXPECT_THROW(SimNode(bus2, config, scene), std::invalid_argument);
+}
+
 TEST(SceneFiles, EveryShippedSceneLoadsAndHasAGrid) {
   int n = 0;
   for (const auto& e : std::filesystem::directory_iterator(SNAPNAV_CONFIG_DIR "/scenes")) {

@@ -61,6 +61,7 @@ SimSlamOptions SimSlamOptions::FromSimConfig(const processes::SimConfig& sim) {
   o.route_tolerance_m = sim.route_tolerance_m;
   o.drive = sim.drive_options;
   o.laser = sim.laser;
+  o.kidnap = sim.kidnap;
   o.scan_channel = sim.scan_channel;
   o.odometry_channel = sim.odometry_channel;
   o.ground_truth_channel = sim.ground_truth_channel;
@@ -76,7 +77,9 @@ SimulatedSlamLog SimulateSlamLog(const SimSlamOptions& options) {
   if (out.route.empty()) throw std::runtime_error("scene '" + scene.name + "' has no route and none was given");
 
   nav::sim::World world(scene, options.drive, options.laser, options.seed);
+  world.SetKidnap(options.kidnap);
   nav::sim::RouteDriver driver(out.route, options.route_speed_mps, options.route_tolerance_m, /*loop=*/true);
+  bool restarted = false;  // the driver went on after the kidnapping
   out.start = world.true_pose();
   const nav::Pose2 to_start_frame = out.start.Inverse();
 
@@ -115,6 +118,7 @@ SimulatedSlamLog SimulateSlamLog(const SimSlamOptions& options) {
       s.odometry_delta = glue::OdometryDelta(o);
       log.steps.push_back(std::move(s));
       ++log.odometry;
+      if (options.on_sensor) options.on_sensor(log.steps.back());
       out.reference.by_time.push_back({utime, to_start_frame.Compose(world.true_pose())});
       if (writer) {
         writer->Write(options.odometry_channel, o);
@@ -145,10 +149,16 @@ SimulatedSlamLog SimulateSlamLog(const SimSlamOptions& options) {
       log.steps.push_back(std::move(s));
       ++log.scans;
       if (writer) writer->Write(options.scan_channel, m);
+      if (options.on_sensor) options.on_sensor(log.steps.back());
     }
+    if (options.on_step) options.on_step(utime, world);
     const Eigen::Vector2d cmd = driver.Command(world.true_pose());
     if (options.laps > 0 && driver.laps() >= options.laps) break;
     world.Step(cmd.x(), cmd.y(), dt_us * 1e-6);
+    if (world.kidnapped() && !restarted) {
+      restarted = true;
+      driver.Restart(world.true_pose());
+    }
   }
   log.events = 2 * log.odometry + log.scans;  // as many as the written log holds (ground truth included)
   out.laps = driver.laps();

@@ -9,6 +9,7 @@
 // The steps are made from the encoded messages exactly as eval::LoadSlamLog makes them from a
 // log, so the in-memory log and the written one give the same SLAM run.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,12 @@ struct SimSlamOptions {
   nav::sim::DriveOptions drive;               // control error and odometry noise
   nav::sim::LaserOptions laser;
   std::string log_path;                       // non-empty: also write the messages to this LCM log
+  nav::sim::KidnapOptions kidnap;             // a kidnapping (World::SetKidnap); the route goes on from the
+                                              // nearest waypoint ahead (RouteDriver::Restart)
+  // Observers, for methods that run beside the simulation (eval compare): each odometry or scan
+  // step as it joins the log, and every physics step after its sensors (time, the world).
+  std::function<void(const SlamStep&)> on_sensor;
+  std::function<void(int64_t utime, const nav::sim::World&)> on_step;
   // Channels of the written log (the sim's defaults).
   std::string scan_channel = channels::kLaserScan;
   std::string odometry_channel = channels::kOdometry;
@@ -49,8 +56,8 @@ struct SimSlamOptions {
   // non-positive speed or tolerance, or invalid drive or laser options.
   void Validate() const;
   // Takes seed, rates, start time, route speed and tolerance, robot and laser from the sim
-  // process's configuration (config/sim.ini), the scene too; the route and stop condition keep
-  // their defaults.
+  // process's configuration (config/sim.ini), the scene and the kidnapping too; the route and
+  // stop condition keep their defaults.
   static SimSlamOptions FromSimConfig(const processes::SimConfig& sim);
 };
 

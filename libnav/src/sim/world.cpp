@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace snapnav::nav::sim {
 
@@ -50,6 +51,27 @@ World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& 
   }
 }
 
+void KidnapOptions::Validate() const {
+  if (!std::isfinite(at_s) || !std::isfinite(to.x_m) || !std::isfinite(to.y_m) || !std::isfinite(to.theta_rad)) {
+    throw std::invalid_argument("kidnap: time and pose must be finite");
+  }
+}
+
+void World::SetKidnap(const KidnapOptions& kidnap) {
+  kidnap.Validate();
+  if (kidnap.enabled()) {
+    const double clearance = ClearanceAt(scene_, {}, kidnap.to.Transform({0, 0}), drive_.obstacle_min_height_m);
+    if (!(clearance > drive_.robot_radius_m)) {
+      throw std::invalid_argument("kidnap: the robot does not fit at (" + std::to_string(kidnap.to.x_m) + ", " +
+                                  std::to_string(kidnap.to.y_m) + "): " + std::to_string(clearance) +
+                                  " m from the nearest obstacle, radius " + std::to_string(drive_.robot_radius_m) +
+                                  " m");
+    }
+  }
+  kidnap_ = kidnap;
+  kidnapped_ = false;
+}
+
 void World::MovePeople(double dt_s) {
   const PeopleSpec& p = scene_.people;
   std::uniform_real_distribution<double> ux(p.area_min.x(), p.area_max.x()), uy(p.area_min.y(), p.area_max.y());
@@ -89,6 +111,11 @@ void World::MovePeople(double dt_s) {
 
 void World::Step(double linear_mps, double angular_radps, double dt_s) {
   if (!(dt_s > 0)) throw std::invalid_argument("world step needs dt_s > 0");
+  if (kidnap_.enabled() && !kidnapped_ && time_s_ >= kidnap_.at_s - 1e-9) {
+    true_pose_ = {kidnap_.to.x_m, kidnap_.to.y_m, WrapAngle(kidnap_.to.theta_rad)};  // odometry does not see it
+    kidnapped_ = true;
+    kidnapped_at_s_ = time_s_;
+  }
   const double v = std::clamp(linear_mps, -drive_.max_linear_mps, drive_.max_linear_mps);
   const double w = std::clamp(angular_radps, -drive_.max_angular_radps, drive_.max_angular_radps);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -99,7 +126,8 @@ void World::Step(double linear_mps, double angular_radps, double dt_s) {
   const double w_true = w + (v != 0 || w != 0 ? drive_.angular_noise_radps * n01(rng_) : 0.0);
   const double dtheta_true = w_true * dt_s + drive_.heading_drift_deg_per_m * M_PI / 180.0 * std::abs(d_true);
   const Pose2 candidate = true_pose_.Compose({d_true, 0, dtheta_true});
-  const double clearance = ClearanceAt(scene_, people_, candidate.Transform({0, 0}), drive_.obstacle_min_height_m);
+  const double clearance = ClearanceAt(scene_, drive_.people_block_robot ? people_ : std::vector<Cylinder>{},
+                                       candidate.Transform({0, 0}), drive_.obstacle_min_height_m);
   if (clearance > drive_.robot_radius_m) {
     true_pose_ = candidate;
     distance_m_ += std::abs(d_true);
@@ -150,6 +178,22 @@ RouteDriver::RouteDriver(std::vector<Eigen::Vector2d> route, double speed_mps, d
     : route_(std::move(route)), speed_mps_(speed_mps), tolerance_m_(tolerance_m), loop_(loop) {
   if (route_.empty()) throw std::invalid_argument("route driver needs at least one waypoint");
   if (!(speed_mps > 0) || !(tolerance_m > 0)) throw std::invalid_argument("route driver needs positive speed and tolerance");
+}
+
+void RouteDriver::Restart(const Pose2& pose) {
+  const Eigen::Vector2d here(pose.x_m, pose.y_m);
+  const Eigen::Vector2d heading(std::cos(pose.theta_rad), std::sin(pose.theta_rad));
+  size_t best_ahead = route_.size(), best_any = 0;
+  for (size_t i = 0; i < route_.size(); ++i) {
+    const Eigen::Vector2d to = route_[i] - here;
+    if (to.norm() < (route_[best_any] - here).norm()) best_any = i;
+    if (to.norm() >= tolerance_m_ && to.dot(heading) > 0 &&
+        (best_ahead == route_.size() || to.norm() < (route_[best_ahead] - here).norm())) {
+      best_ahead = i;
+    }
+  }
+  next_ = best_ahead < route_.size() ? best_ahead : best_any;
+  finished_ = false;
 }
 
 Eigen::Vector2d RouteDriver::Command(const Pose2& pose) {

@@ -232,6 +232,28 @@ class LaserSlam {
   std::optional<Pose2> last_scan_pose_;    // the pose after the last scan
   Pose2 last_motion_;                  // the estimate's motion between the last two scans
   std::optional<Pose2> stale_since_;   // the pose at the last scan before odometry went stale
+
+  // ---- For filters built on this one (nav::FusedSlam: a visual pose measurement in the same EKF).
+ public:
+  // EKF update with a direct pose measurement z of covariance r (EkfPoseUpdate).
+  void UpdatePose(const Pose2& z, const Eigen::Matrix3d& r);
+  // Replaces the pose and its covariance (relocalisation); the map stays as it is.
+  void ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
+  // Map protection: with add_points false no scan point joins the map; with min_fit > 0 a scan
+  // whose ICP fit (LaserSlamUpdate::fit) is below min_fit adds none either (the first scan, which
+  // builds the map, always does). Defaults: true, 0 (every scan maps, as before).
+  void SetMapping(bool add_points, double min_fit = 0);
+  bool adding_points() const { return add_points_; }
+  // Added to every scan's measurement covariance R before the EKF update (and reported in
+  // LaserSlamUpdate::measurement_covariance): the uncertainty of the map the scan was matched to,
+  // for a filter that also has measurements in another frame. Default zero.
+  void SetMeasurementInflation(const Eigen::Matrix3d& add);
+
+ private:
+  bool MayAddPoints(const LaserSlamUpdate& u) const;
+  bool add_points_ = true;
+  double min_add_fit_ = 0;
+  Eigen::Matrix3d measurement_inflation_ = Eigen::Matrix3d::Zero();
 };
 
 }  // namespace snapnav::nav

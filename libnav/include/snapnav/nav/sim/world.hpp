@@ -21,6 +21,10 @@ struct DriveOptions {
   double odometry_angular_noise_frac = 0.01;  // wheel odometry: std. dev. per step, fraction of the turn
   double robot_radius_m = 0.2;           // for collisions
   double obstacle_min_height_m = 0.05;   // lower things are driven over
+  // People block the robot (and it them). false: they occlude the camera and the laser but the
+  // robot drives on (a robot without obstacle avoidance and people who wait for it deadlock);
+  // they still do not walk into it.
+  bool people_block_robot = true;
   void Validate() const;
 };
 
@@ -35,6 +39,14 @@ struct LaserOptions {
   double mount_x_m = 0.1;              // position on the robot, forward
   void Validate() const;
   double AngleIncrement() const { return (angle_max_rad - angle_min_rad) / (beams - 1); }
+};
+
+// A kidnapping: at simulated time at_s the robot is carried to `to` (odometry does not see it).
+struct KidnapOptions {
+  double at_s = 0;  // simulated time of the kidnapping [s]; <= 0: none
+  Pose2 to;         // where the robot is put [m, rad]
+  bool enabled() const { return at_s > 0; }
+  void Validate() const;  // throws std::invalid_argument on a non-finite time or pose
 };
 
 // Odometry increment measured by the wheels since the previous reading.
@@ -66,6 +78,13 @@ class World {
 
   std::mt19937_64& rng() { return rng_; }
 
+  // Schedules a kidnapping: the first Step at or after kidnap.at_s starts by carrying the robot
+  // to kidnap.to (odometry does not see it). Throws std::invalid_argument for invalid options or
+  // a destination where the robot does not fit (closer than its radius to an obstacle).
+  void SetKidnap(const KidnapOptions& kidnap);
+  bool kidnapped() const { return kidnapped_; }  // the scheduled kidnapping has happened
+  double kidnapped_at_s() const { return kidnapped_at_s_; }
+
  private:
   void MovePeople(double dt_s);
 
@@ -82,6 +101,9 @@ class World {
   int collisions_ = 0;
   std::vector<Cylinder> people_;
   std::vector<Eigen::Vector2d> people_goals_;
+  KidnapOptions kidnap_;
+  bool kidnapped_ = false;
+  double kidnapped_at_s_ = 0;
 };
 
 // Steers towards the next waypoint of a route (pure pursuit on the true pose):
@@ -93,6 +115,10 @@ class RouteDriver {
   bool finished() const { return finished_; }
   int laps() const { return laps_; }
   size_t next_index() const { return next_; }
+  // After the robot was carried off (a kidnapping): heads for the nearest waypoint ahead of
+  // `pose` (within 90 degrees of its heading; the nearest of all if none is) and goes on with the
+  // route from there. Laps keep counting.
+  void Restart(const Pose2& pose);
 
  private:
   std::vector<Eigen::Vector2d> route_;

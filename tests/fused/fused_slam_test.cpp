@@ -1,0 +1,258 @@
+// The fused filter (libnav): visual pose measurements in the laser SLAM's EKF, the gate, the
+// relocalisation after a kidnapping, late measurements and the map protection. Hand-checked
+// numbers where the filter is a plain Kalman update.
+#include "snapnav/nav/fused_slam.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+namespace snapnav::nav {
+namespace {
+
+constexpr int64_t kT0 = 1'700'000'000'000'000;  // [us]
+
+Eigen::Matrix3d Diag(double sxy, double stheta) {
+  return Eigen::Vector3d(sxy * sxy, sxy * sxy, stheta * stheta).asDiagonal();
+}
+
+// Points a laser at `robot` sees inside the rectangle [0, w] x [0, h] (walls only), every 1 deg
+// over 360 deg, in the robot frame.
+std::vector<Eigen::Vector2d> RoomScan(const Pose2& robot, double w, double h) {
+  std::vector<Eigen::Vector2d> points;
+  for (int i = 0; i < 360; ++i) {
+    const double a = robot.theta_rad + i * M_PI / 180.0;
+    const double dx = std::cos(a), dy = std::sin(a);
+    double t = std::numeric_limits<double>::infinity();
+    if (dx > 1e-9) t = std::min(t, (w - robot.x_m) / dx);
+    if (dx < -1e-9) t = std::min(t, -robot.x_m / dx);
+    if (dy > 1e-9) t = std::min(t, (h - robot.y_m) / dy);
+    if (dy < -1e-9) t = std::min(t, -robot.y_m / dy);
+    const Eigen::Vector2d world(robot.x_m + t * dx, robot.y_m + t * dy);
+    points.push_back(robot.Inverse().Transform(world));
+  }
+  return points;
+}
+
+TEST(FusedSlam, ConsistentVisualMeasurementPullsADriftedPoseBack) {
+  // Drifted prediction at x = 1.2 (sigma 0.1 m, 0.05 rad); a visual fix at the truth x = 1.0
+  // (sigma 0.05 m, 0.03 rad). S_xx = 0.01 + 0.0025 = 0.0125: d2 = 0.2^2 / 0.0125 = 3.2, accepted;
+  // K_xx = 0.01 / 0.0125 = 0.8: x = 1.2 - 0.8 * 0.2 = 1.04, var = 0.01 * 0.0025 / 0.0125 = 0.002.
+  FusedSlamOptions o;
+  FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
+  const VisualUpdate v = f.AddVisual(kT0, {1.0, 0.0, 0.0}, Diag(0.05, 0.03));
+  EXPECT_EQ(v.outcome, VisualOutcome::kAccepted);
+  EXPECT_NEAR(v.mahalanobis2, 3.2, 1e-9);
+  EXPECT_NEAR(f.pose().x_m, 1.04, 1e-9);
+  EXPECT_NEAR(f.pose().y_m, 0.0, 1e-12);
+  EXPECT_NEAR(f.covariance()(0, 0), 0.002, 1e-12);
+  // Heading: the first fix left var = 0.0025 * 0.0009 / 0.0034; a fix 0.05 rad off moves the
+  // heading by K = var / (var + 0.0009) times 0.05 (= 0.02119 rad).
+  const double var = 0.0025 * 0.0009 / 0.0034;
+  EXPECT_NEAR(f.covariance()(2, 2), var, 1e-12);
+  const VisualUpdate h = f.AddVisual(kT0, {1.04, 0.0, 0.05}, Diag(0.05, 0.03));
+  EXPECT_EQ(h.outcome, VisualOutcome::kAccepted);
+  EXPECT_NEAR(f.pose().theta_rad, 0.05 * var / (var + 0.0009), 1e-9);
+  EXPECT_EQ(f.accepted(), 2);
+  EXPECT_EQ(f.rejected(), 0);
+}
+
+TEST(FusedSlam, VisualMeasurementBelowTheSigmaFloorIsFloored) {
+  // A fix claiming 1 mm is taken as min_fix_sigma_xy_m = 0.05 m: the same update as above.
+  FusedSlamOptions o;
+  FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
+  EXPECT_EQ(f.AddVisual(kT0, {1.0, 0.0, 0.0}, Diag(0.001, 0.03)).outcome, VisualOutcome::kAccepted);
+  EXPECT_NEAR(f.pose().x_m, 1.04, 1e-9);
+}
+
+TEST(FusedSlam, OutlierIsGatedOut) {
+  // 1.8 m off: d2 = 1.8^2 / 0.0125 = 259.2 > 11.34: rejected, the pose does not move.
+  FusedSlamOptions o;
+  FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
+  const VisualUpdate v = f.AddVisual(kT0, {3.0, 0.0, 0.0}, Diag(0.05, 0.03));
+  EXPECT_EQ(v.outcome, VisualOutcome::kRejected);
+  EXPECT_NEAR(v.mahalanobis2, 259.2, 1e-6);
+  EXPECT_EQ(f.pose().x_m, 1.2);
+  EXPECT_TRUE(f.covariance().isApprox(Diag(0.1, 0.05)));
+  EXPECT_EQ(f.rejected(), 1);
+  EXPECT_EQ(f.consecutive_rejections(), 1);
+  EXPECT_TRUE(f.suspect());  // suspect_after = 1: the map is protected now
+  // A consistent fix clears the suspicion and the hypothesis.
+  EXPECT_EQ(f.AddVisual(kT0, {1.1, 0.0, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kAccepted);
+  EXPECT_FALSE(f.suspect());
+  EXPECT_FALSE(f.hypothesis().has_value());
+  // The heading alone can fail the gate too: 0.5 rad off with S = 0.0025 + 0.0009.
+  EXPECT_EQ(f.AddVisual(kT0, {f.pose().x_m, 0.0, 0.5}, Diag(0.05, 0.03)).outcome, VisualOutcome::kRejected);
+}
+
+TEST(FusedSlam, KidnappingIsRecoveredAfterAgreeingRejections) {
+  // The filter believes it is at (1, 1) heading 0 with 2 cm; the robot was carried to (29, 1).
+  // It drives 0.1 m per step; the visual fixes say (29 + 0.1 k, 1) with 0.05 m.
+  FusedSlamOptions o;
+  o.relocalize_after = 4;
+  FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
+  int64_t t = kT0;
+  for (int k = 0; k < 4; ++k) {
+    if (k > 0) {
+      t += 500000;
+      f.Predict(t, {0.1, 0.0, 0.0});
+    }
+    const VisualUpdate v = f.AddVisual(t, {29.0 + 0.1 * k, 1.0, 0.0}, Diag(0.05, 0.03));
+    if (k < 3) {
+      EXPECT_EQ(v.outcome, VisualOutcome::kRejected) << k;
+      EXPECT_EQ(v.agreeing_rejections, k + 1);
+      EXPECT_NEAR(f.pose().x_m, 1.0 + 0.1 * k, 1e-9);  // the laser pose stays where it was
+    } else {
+      EXPECT_EQ(v.outcome, VisualOutcome::kRelocalized);
+    }
+  }
+  EXPECT_EQ(f.relocalizations(), 1);
+  EXPECT_NEAR(f.pose().x_m, 29.3, 1e-3);
+  EXPECT_NEAR(f.pose().y_m, 1.0, 1e-3);
+  EXPECT_NEAR(f.pose().theta_rad, 0.0, 1e-3);
+  // Widened to relocalize_sigma_xy_m = 0.2 m, relocalize_sigma_theta_rad = 0.087 rad.
+  EXPECT_NEAR(f.covariance()(0, 0), 0.04, 1e-12);
+  EXPECT_NEAR(f.covariance()(2, 2), 0.087 * 0.087, 1e-12);
+  EXPECT_EQ(f.consecutive_rejections(), 0);
+  EXPECT_FALSE(f.hypothesis().has_value());
+  // After it the fixes agree with the filter again.
+  t += 500000;
+  f.Predict(t, {0.1, 0.0, 0.0});
+  EXPECT_EQ(f.AddVisual(t, {29.4, 1.0, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kAccepted);
+}
+
+TEST(FusedSlam, RejectionsThatDisagreeDoNotRelocalise) {
+  // Outliers all over the place (aliasing) rarely agree with each other: two at x = 10 do, but
+  // fewer than relocalize_after = 3: no relocalisation.
+  FusedSlamOptions o;
+  o.relocalize_after = 3;
+  FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
+  const double xs[] = {10.0, 20.0, 10.0, 25.0, 5.0, 15.0};
+  const int agreeing[] = {1, 1, 2, 1, 1, 1};
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_EQ(f.AddVisual(kT0, {xs[i], 1.0, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kRejected);
+    EXPECT_EQ(f.agreeing_rejections(), agreeing[i]) << i;
+  }
+  EXPECT_EQ(f.relocalizations(), 0);
+  EXPECT_NEAR(f.pose().x_m, 1.0, 1e-12);
+  EXPECT_EQ(f.rejected(), 6);
+  EXPECT_EQ(f.consecutive_rejections(), 6);
+  // relocalize_after = 0: never, however consistent.
+  o.relocalize_after = 0;
+  FusedSlam never(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
+  for (int k = 0; k < 20; ++k) never.AddVisual(kT0, {29.0, 1.0, 0.0}, Diag(0.05, 0.03));
+  EXPECT_EQ(never.relocalizations(), 0);
+  EXPECT_GE(never.agreeing_rejections(), 8);  // the window keeps at least 8
+}
+
+TEST(FusedSlam, OutliersBetweenAgreeingRejectionsDoNotStopTheRelocalisation) {
+  // The filter was led 1 m astray; fixes at the truth (2, 1) alternate with aliasing outliers:
+  // the 3rd agreeing rejection relocalises, the outliers between them do not matter.
+  FusedSlamOptions o;
+  o.relocalize_after = 3;
+  FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
+  const double xs[] = {2.0, 15.0, 2.0, 8.0, 2.0};
+  const VisualOutcome expected[] = {VisualOutcome::kRejected, VisualOutcome::kRejected, VisualOutcome::kRejected,
+                                    VisualOutcome::kRejected, VisualOutcome::kRelocalized};
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(f.AddVisual(kT0, {xs[i], 1.0, 0.0}, Diag(0.05, 0.03)).outcome, expected[i]) << i;
+  EXPECT_NEAR(f.pose().x_m, 2.0, 1e-9);
+  // Evidence older than relocalize_window_s (10 s) is forgotten.
+  FusedSlam g(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
+  g.Predict(kT0, {});
+  g.AddVisual(kT0, {2.0, 1.0, 0.0}, Diag(0.05, 0.03));
+  g.AddVisual(kT0, {2.0, 1.0, 0.0}, Diag(0.05, 0.03));
+  g.Predict(kT0 + 11'000'000, {});
+  EXPECT_EQ(g.AddVisual(kT0 + 11'000'000, {2.0, 1.0, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kRejected);
+  EXPECT_EQ(g.agreeing_rejections(), 1);
+}
+
+TEST(FusedSlam, LateMeasurementIsCarriedForwardByOdometry) {
+  // A fix of the pose 0.3 s ago arrives after three odometry increments of 0.1 m: it is compared
+  // with the current pose after moving it by those 0.3 m.
+  FusedSlamOptions o;
+  FusedSlam f(o, {0.0, 0.0, 0.0}, Diag(0.1, 0.05));
+  for (int k = 1; k <= 3; ++k) f.Predict(kT0 + k * 100000, {0.1, 0.0, 0.0});
+  // The pose 0.3 s ago (kT0) is the current one moved back.
+  const auto back = f.PoseAt(kT0);
+  ASSERT_TRUE(back.has_value());
+  EXPECT_NEAR(back->x_m, 0.0, 1e-12);
+  EXPECT_NEAR(f.PoseAt(kT0 + 200000)->x_m, 0.2, 1e-12);
+  const VisualUpdate v = f.AddVisual(kT0, {0.0, 0.0, 0.0}, Diag(0.05, 0.03));
+  EXPECT_EQ(v.outcome, VisualOutcome::kAccepted);
+  EXPECT_NEAR(v.measurement.x_m, 0.3, 1e-12);
+  EXPECT_NEAR(v.mahalanobis2, 0.0, 1e-12);
+  EXPECT_GT(v.measurement_covariance(0, 0), 0.05 * 0.05);  // the odometry's noise was added
+  // Older than max_fix_age_s (2 s) before the latest odometry: stale, nothing changes.
+  f.Predict(kT0 + 3'000'000, {0.0, 0.0, 0.0});
+  EXPECT_EQ(f.AddVisual(kT0 + 500000, {5.0, 0.0, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kStale);
+  EXPECT_EQ(f.stale(), 1);
+  EXPECT_FALSE(f.PoseAt(kT0).has_value());
+}
+
+TEST(FusedSlam, MapIsProtectedWhileSuspect) {
+  // A 6 x 4 m room: the first scan builds the map. While a rejected visual fix makes the filter
+  // suspect, a scan seen from elsewhere (the robot was carried off) adds no points.
+  FusedSlamOptions o;
+  FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.01, 0.01));
+  f.Update(RoomScan({1.0, 1.0, 0.0}, 6, 4));
+  const size_t mapped = f.map().size();
+  ASSERT_GT(mapped, 100u);
+  EXPECT_EQ(f.AddVisual(kT0, {5.0, 3.0, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kRejected);
+  ASSERT_TRUE(f.suspect());
+  // The robot is really at (5, 3) in a 10 x 4 room: points the map does not have.
+  f.Update(RoomScan({5.0, 3.0, 0.0}, 10, 4));
+  EXPECT_EQ(f.map().size(), mapped);
+  EXPECT_EQ(f.unmapped_scans(), 1);
+  // Without protection the same scan adds points.
+  o.suspect_after = 0;
+  FusedSlam open(o, {1.0, 1.0, 0.0}, Diag(0.01, 0.01));
+  open.Update(RoomScan({1.0, 1.0, 0.0}, 6, 4));
+  open.AddVisual(kT0, {5.0, 3.0, 0.0}, Diag(0.05, 0.03));
+  EXPECT_FALSE(open.suspect());
+  open.Update(RoomScan({5.0, 3.0, 0.0}, 10, 4));
+  EXPECT_GT(open.map().size(), mapped);
+}
+
+TEST(FusedSlam, ScansKeepThePoseOnTheMapAndVisualFixesAnchorIt) {
+  // Laser and visual measurements share one EKF: after a consistent visual fix, scans of a
+  // 6 x 4 room hold the pose on the map while the odometry overestimates every step by 20 %.
+  FusedSlamOptions o;
+  FusedSlam f(o, {2.0, 1.5, 0.0}, Diag(0.01, 0.01));
+  f.Update(RoomScan({2.0, 1.5, 0.0}, 6, 4));
+  EXPECT_EQ(f.AddVisual(kT0, {2.02, 1.5, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kAccepted);
+  for (int k = 1; k <= 10; ++k) {
+    f.Predict(kT0 + k * 100000, {0.06, 0.0, 0.0});
+    f.Update(RoomScan({2.0 + 0.05 * k, 1.5, 0.0}, 6, 4));
+  }
+  EXPECT_NEAR(f.pose().x_m, 2.5, 0.03);
+  EXPECT_NEAR(f.pose().y_m, 1.5, 0.03);
+  EXPECT_EQ(f.accepted(), 1);
+}
+
+TEST(FusedSlam, InvalidInputThrows) {
+  FusedSlamOptions o;
+  FusedSlam f(o);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(f.AddVisual(kT0, {nan, 0, 0}, Diag(0.1, 0.1)), std::invalid_argument);
+  Eigen::Matrix3d bad = Diag(0.1, 0.1);
+  bad(1, 1) = -1;
+  EXPECT_THROW(f.AddVisual(kT0, {0, 0, 0}, bad), std::invalid_argument);
+  bad(1, 1) = nan;
+  EXPECT_THROW(f.AddVisual(kT0, {0, 0, 0}, bad), std::invalid_argument);
+  EXPECT_THROW(f.Predict(kT0, {nan, 0, 0}), std::invalid_argument);
+  o.gate_chi2 = 0;
+  EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
+  o = {};
+  o.map_min_fit = 1.5;
+  EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
+  o = {};
+  o.relocalize_after = -1;
+  EXPECT_THROW(o.Validate(), std::invalid_argument);
+  EXPECT_EQ(std::string(VisualOutcomeName(VisualOutcome::kRelocalized)), "relocalized");
+}
+
+}  // namespace
+}  // namespace snapnav::nav
