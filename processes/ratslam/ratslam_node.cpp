@@ -250,7 +250,7 @@ void RatSlamNode::HandleOdometry(const odometry_t& msg) {
     return;
   }
   if (const std::string problem = glue::OdometryProblem(msg, false); !problem.empty()) {
-    Reject("absurd odometry", problem);  // the pose cells would shift by millions of cells
+    Reject("absurd odometry", problem);  // as the other nodes: no experience a kilometre away
     return;
   }
   if (!std::isfinite(msg.delta_t_s) || msg.delta_t_s < 0) {
