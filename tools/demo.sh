@@ -5,9 +5,9 @@
 #  2. the place-cell memory: `launch config/deploy/demo.deploy --group explore` (gridgen renders
 #     the scene's grid, placecells explores it);
 #  3. the simulated lab in real time: `launch config/deploy/demo.deploy --group lab` (sim driven by
-#     the navigator, homing, landmarks, place cells, laser SLAM, dead reckoning, lcm-logger, and
-#     RatSLAM / fused SLAM when built); with --fault, one process is killed with SIGKILL half-way
-#     and the launcher restarts it;
+#     the navigator, homing, landmarks, place cells, laser SLAM, dead reckoning, RatSLAM, fused
+#     SLAM, the viewer's snapshots, lcm-logger); with --fault, one process is killed with SIGKILL
+#     half-way and the launcher restarts it;
 #  4. log-report turns the recording and the process logs into report.md, summary.json and PNGs;
 #     demo-report.md gathers everything, with the verdicts.
 set -euo pipefail
@@ -57,7 +57,7 @@ done
 [ -n "$FAULT_AT" ] || FAULT_AT=$(awk -v d="$DURATION" 'BEGIN { print d / 2 }')
 if [ -n "$FAULT" ]; then
   case "$FAULT" in
-    lcm-logger | sim) echo "demo: --fault $FAULT: pick a processing process (homing, laser-slam, landmarks, placecells, navigator, dead-reckoning)" >&2; exit 2 ;;
+    lcm-logger | sim) echo "demo: --fault $FAULT: pick a processing process (homing, laser-slam, landmarks, placecells, navigator, dead-reckoning, ratslam, fused-slam, viewer)" >&2; exit 2 ;;
   esac
 fi
 SIZES=100,65536,1048576
@@ -226,8 +226,14 @@ fi
   echo
   for f in "$OUT"/processes/*.log; do
     n=$(basename "$f" .log)
-    grep -E "^$n: (frames [0-9]|(surf|sift|vline), frames|localize, memory|scans [0-9]|mean update|published [0-9]|[0-9]+ drive|fixes accepted)" "$f" | sed 's/^/    /' || true
+    grep -E "^$n: (frames [0-9]|(surf|sift|vline), frames|localize, memory|scans [0-9]|mean update|published [0-9]|[0-9]+ drive|fixes accepted|[0-9]+ templates|visual measurements accepted|mean [0-9.e-]+ ms per scan|[0-9]+ snapshots)" "$f" | sed 's/^/    /' || true
   done
+  if [ -s "$OUT/viewer/viewer-final.png" ]; then
+    echo
+    echo "The viewer's last snapshot (\`viewer/viewer-final.png\`; one every 5 s of the run in \`viewer/\`):"
+    echo
+    echo "![the viewer at the end of the run](viewer/viewer-final.png)"
+  fi
   if [ -n "$FAULT" ]; then
     echo
     echo "## Fault: kill -9 $FAULT ${FAULT_AT} s into the run ($(echo "$fault_text" | head -1))"

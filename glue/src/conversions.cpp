@@ -54,9 +54,20 @@ Eigen::Matrix3d CovarianceOf(const pose_t& msg) {
 
 namespace snapnav::glue {
 
-std::string OdometryProblem(const odometry_t& m, bool cumulative) {
-  if (cumulative && !(std::isfinite(m.x_m) && std::isfinite(m.y_m) && std::isfinite(m.theta_rad))) {
+std::string OdometryStartProblem(const odometry_t& m) {
+  if (!(std::isfinite(m.x_m) && std::isfinite(m.y_m) && std::isfinite(m.theta_rad))) {
     return "cumulative pose is not finite";
+  }
+  if (std::abs(m.x_m) > kMaxPositionM || std::abs(m.y_m) > kMaxPositionM) {
+    return "cumulative position (" + std::to_string(m.x_m) + ", " + std::to_string(m.y_m) + ") m is beyond " +
+           std::to_string(kMaxPositionM) + " m";
+  }
+  return "";
+}
+
+std::string OdometryProblem(const odometry_t& m, bool cumulative) {
+  if (cumulative) {
+    if (std::string problem = OdometryStartProblem(m); !problem.empty()) return problem;
   }
   if (!(std::isfinite(m.delta_x_m) && std::isfinite(m.delta_y_m) && std::isfinite(m.delta_theta_rad))) {
     return "increment is not finite";

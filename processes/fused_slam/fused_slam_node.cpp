@@ -14,6 +14,7 @@
 #include "snapnav/fused_slam_status_t.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
+#include "snapnav/glue/message_clock.hpp"
 #include "snapnav/point_map_t.hpp"
 
 namespace snapnav::processes {
@@ -24,6 +25,20 @@ constexpr char kEstimator[] = "fused_slam";
 constexpr char kFrame[] = "map";
 
 bool Finite(double a, double b, double c) { return std::isfinite(a) && std::isfinite(b) && std::isfinite(c); }
+
+// Why a finite visual covariance with non-negative variances cannot be one, or "": it must be
+// positive semi-definite (up to rounding), a position std. dev. within glue::kMaxPositionM and a
+// heading std. dev. within glue::kMaxOdometryStepRad (larger ones overflow the filter's products).
+std::string CovarianceProblem(const Eigen::Matrix3d& r) {
+  const double max_xy = glue::kMaxPositionM * glue::kMaxPositionM;
+  const double max_theta = glue::kMaxOdometryStepRad * glue::kMaxOdometryStepRad;
+  if (r(0, 0) > max_xy || r(1, 1) > max_xy || r(2, 2) > max_theta) return "a variance beyond its bound";
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(0.5 * (r + r.transpose()), Eigen::EigenvaluesOnly);
+  if (eig.eigenvalues().minCoeff() < -1e-9 * std::max(1.0, eig.eigenvalues().maxCoeff())) {
+    return "not positive semi-definite";
+  }
+  return "";
+}
 
 double Ms(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
@@ -151,18 +166,43 @@ void FusedSlamNode::OnVisual(const pose_t& msg) {
 
 void FusedSlamNode::HandleOdometry(const odometry_t& msg) {
   ++odometry_;
-  if (!odometry_seen_) {
-    // The first message fixes the start; its increment is relative to a message never seen.
-    if (!Finite(msg.x_m, msg.y_m, msg.theta_rad)) {
-      Skip("non-finite odometry", "cumulative pose is not finite", true);
-      return;
-    }
-    odometry_seen_ = true;
-    if (!slam_ && config_.start == FusedStart::kOdometry) slam_.emplace(config_.options, glue::OdometryPose(msg));
+  // The first message fixes the start (its cumulative pose); its increment is relative to a
+  // message never seen. Later ones: the increment, within glue's bounds.
+  const std::string problem = odometry_seen_ ? glue::OdometryProblem(msg, false) : glue::OdometryStartProblem(msg);
+  if (!problem.empty()) {
+    const bool finite = odometry_seen_ ? Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)
+                                       : Finite(msg.x_m, msg.y_m, msg.theta_rad);
+    Skip(finite ? "absurd odometry" : "non-finite odometry", problem, true);
     return;
   }
-  if (!Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)) {
-    Skip("non-finite odometry", "increment is not finite", true);
+  // The filter keeps odometry by time for late visual measurements: times in order, and one
+  // absurd stamp cannot block it (glue::MessageClock).
+  switch (odometry_clock_.Check(msg.utime)) {
+    case glue::MessageClock::Verdict::kImplausible:
+      Skip("implausible utime", "odometry at utime " + std::to_string(msg.utime), true);
+      return;
+    case glue::MessageClock::Verdict::kBackInTime:
+      Skip("odometry back in time", "utime " + std::to_string(msg.utime) + " after " +
+                                        std::to_string(*odometry_clock_.last()), true);
+      return;
+    case glue::MessageClock::Verdict::kRestarted:
+      // The filter's odometry history is in the old time: start it again at its pose and
+      // covariance (its map starts afresh).
+      std::cerr << "fused-slam: odometry time restarted at utime " << msg.utime
+                << (slam_ ? "; the filter restarts at its pose, with a new map" : "") << "\n";
+      if (slam_) {
+        const nav::Pose2 pose = slam_->pose();
+        const Eigen::Matrix3d covariance = slam_->covariance();
+        slam_.emplace(config_.options, pose, covariance);
+      }
+      ++time_restarts_;
+      break;
+    case glue::MessageClock::Verdict::kAccepted:
+      break;
+  }
+  if (!odometry_seen_) {
+    odometry_seen_ = true;
+    if (!slam_ && config_.start == FusedStart::kOdometry) slam_.emplace(config_.options, glue::OdometryPose(msg));
     return;
   }
   if (!slam_) {
@@ -205,8 +245,17 @@ void FusedSlamNode::HandleScan(const laser_scan_t& msg) {
 
 void FusedSlamNode::HandleVisual(const pose_t& msg) {
   ++visual_;
+  if (!glue::PlausibleUtime(msg.utime)) {  // the filter takes time differences with it
+    Skip("implausible utime", "visual pose at utime " + std::to_string(msg.utime), true);
+    return;
+  }
   if (!Finite(msg.x_m, msg.y_m, msg.theta_rad)) {
     Skip("non-finite visual pose", "x_m, y_m or theta_rad is not finite", true);
+    return;
+  }
+  if (std::abs(msg.x_m) > glue::kMaxPositionM || std::abs(msg.y_m) > glue::kMaxPositionM) {
+    // A relocalisation there would build the map beyond its integer cells.
+    Skip("absurd visual pose", "(" + std::to_string(msg.x_m) + ", " + std::to_string(msg.y_m) + ") m", true);
     return;
   }
   const Eigen::Matrix3d r = glue::CovarianceOf(msg);
@@ -216,6 +265,10 @@ void FusedSlamNode::HandleVisual(const pose_t& msg) {
   }
   if (r.isZero()) {
     Skip("visual pose without covariance", "", false);  // pose_t: all zero = unknown
+    return;
+  }
+  if (const std::string problem = CovarianceProblem(r); !problem.empty()) {
+    Skip("bad visual covariance", problem, true);
     return;
   }
   const nav::Pose2 z = glue::FromPoseMsg(msg);
@@ -319,7 +372,9 @@ void FusedSlamNode::Report(std::ostream& out) const {
   out << "fused-slam: scans " << scans_ << ", updates " << updates_ << ", odometry " << odometry_ << ", visual "
       << visual_ << " (used " << visual_used_ << "), poses published " << poses_published_ << ", maps published "
       << maps_published_ << ", statuses published " << statuses_published_ << ", skipped " << skipped_total
-      << ", internal errors " << internal_errors_ << "\n";
+      << ", internal errors " << internal_errors_;
+  if (time_restarts_ > 0) out << ", odometry time restarts " << time_restarts_;
+  out << "\n";
   if (slam_) {
     const nav::FusedSlam& f = *slam_;
     out << "fused-slam: visual measurements accepted " << f.accepted() << ", rejected " << f.rejected()

@@ -22,6 +22,10 @@
 //
 // Order: messages are processed in arrival order. A visual measurement arrives late (the view and
 // the query take ~70 ms): it is carried forward by the odometry since its utime (max_fix_age_s).
+// Odometry older than the last accepted is skipped (counted); after 5 in a row its time restarts
+// (glue::MessageClock: a clock jump, a second log) and so does the filter, at its pose and
+// covariance with a new map (its odometry history is in the old time). Utimes beyond 0..2^62 us,
+// odometry increments beyond glue's bounds and positions beyond glue::kMaxPositionM are skipped.
 // The placecells process should localize without its distance filter (or with a wide one), so
 // that its fixes do not follow a lost filter's prediction.
 
@@ -33,6 +37,7 @@
 
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/message_clock.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/fused_slam.hpp"
 #include "snapnav/odometry_t.hpp"
@@ -101,6 +106,8 @@ class FusedSlamNode {
   FusedSlamConfig config_;
   std::optional<nav::FusedSlam> slam_;
   bool odometry_seen_ = false;
+  glue::MessageClock odometry_clock_;  // odometry times in order; restarts after a run of older ones
+  int64_t time_restarts_ = 0;
   int8_t last_outcome_ = -1;
   double last_mahalanobis2_ = 0, last_fit_ = 0;
   int64_t scans_ = 0, updates_ = 0, odometry_ = 0, visual_ = 0, visual_used_ = 0;

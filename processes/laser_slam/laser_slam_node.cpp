@@ -150,8 +150,8 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
   ++odometry_;
   if (!odometry_seen_) {
     // The first message fixes the start; its increment is relative to a message never seen.
-    if (!Finite(msg.x_m, msg.y_m, msg.theta_rad)) {
-      Skip("non-finite odometry", "cumulative pose is not finite", true);
+    if (const std::string problem = glue::OdometryStartProblem(msg); !problem.empty()) {
+      Skip(Finite(msg.x_m, msg.y_m, msg.theta_rad) ? "absurd odometry" : "non-finite odometry", problem, true);
       return;
     }
     odometry_seen_ = true;

@@ -11,6 +11,7 @@
 #include "snapnav/experience_map_t.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/message_clock.hpp"
 
 namespace snapnav::processes {
 namespace {
@@ -229,10 +230,14 @@ void RatSlamNode::OnOdometry(const odometry_t& msg) {
 
 void RatSlamNode::HandleOdometry(const odometry_t& msg) {
   ++odometry_;
+  if (!glue::PlausibleUtime(msg.utime)) {  // the map and stats intervals take time differences
+    Reject("implausible utime", "odometry at utime " + std::to_string(msg.utime));
+    return;
+  }
   if (!odometry_seen_) {
     // The first message fixes the start; its increment is relative to a message never seen.
-    if (!Finite(msg.x_m, msg.y_m, msg.theta_rad)) {
-      Reject("non-finite odometry", "cumulative pose is not finite");
+    if (const std::string problem = glue::OdometryStartProblem(msg); !problem.empty()) {
+      Reject(Finite(msg.x_m, msg.y_m, msg.theta_rad) ? "absurd odometry" : "non-finite odometry", problem);
       return;
     }
     odometry_seen_ = true;
@@ -242,6 +247,10 @@ void RatSlamNode::HandleOdometry(const odometry_t& msg) {
   }
   if (!Finite(msg.delta_x_m, msg.delta_y_m, msg.delta_theta_rad)) {
     Reject("non-finite odometry", "increment is not finite");
+    return;
+  }
+  if (const std::string problem = glue::OdometryProblem(msg, false); !problem.empty()) {
+    Reject("absurd odometry", problem);  // as the other nodes: no experience a kilometre away
     return;
   }
   if (!std::isfinite(msg.delta_t_s) || msg.delta_t_s < 0) {
@@ -258,6 +267,10 @@ void RatSlamNode::HandleOdometry(const odometry_t& msg) {
 
 void RatSlamNode::HandleFrame(const omni_frame_t& frame) {
   ++frames_;
+  if (!glue::PlausibleUtime(frame.utime)) {
+    Reject("implausible utime", "frame at utime " + std::to_string(frame.utime));
+    return;
+  }
   const std::optional<cv::Mat> panorama = frames_to_panoramas_.Convert(frame);
   if (!panorama) {
     Reject(frames_to_panoramas_.reason(), frames_to_panoramas_.detail());
@@ -296,7 +309,7 @@ void RatSlamNode::AfterMessage(int64_t utime) {
     PublishExperienceMap(utime);
   }
   const double stats_us = config_.stats_interval_s * 1e6;
-  if (stats_us > 0 && slam_ && (!last_stats_utime_ || utime - *last_stats_utime_ >= stats_us)) {
+  if (stats_us > 0 && slam_ && (!last_stats_utime_ || utime - *last_stats_utime_ >= stats_us || utime < *last_stats_utime_)) {
     if (last_stats_utime_) PrintStats(log_, utime);
     last_stats_utime_ = utime;
   }

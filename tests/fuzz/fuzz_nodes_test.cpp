@@ -3,7 +3,8 @@
 // times, wrong sizes and counts, and random byte mutations of a valid message. For every one:
 // no crash; nothing the node publishes holds a NaN or an infinity; a non-finite value in a field
 // the node uses is counted (the bus's per-channel rejected / handler-error counts, with the
-// reason); and after all of them a valid message is still processed.
+// reason); and after all of them a valid message is still processed. Nodes whose first odometry
+// message fixes the start pose get every mutation of that first message on a fresh node too.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -14,6 +15,7 @@
 #include <iostream>
 #include <limits>
 #include <map>
+#include <memory>
 #include <random>
 #include <set>
 #include <sstream>
@@ -24,12 +26,14 @@
 
 #include "../placecells/test_lab.hpp"
 #include "dead_reckoning_node.hpp"
+#include "fused_slam_node.hpp"
 #include "fuzz_samples.hpp"
 #include "homing_node.hpp"
 #include "landmarks_node.hpp"
 #include "laser_slam_node.hpp"
 #include "navigator_node.hpp"
 #include "placecells_node.hpp"
+#include "ratslam_node.hpp"
 #include "snapnav/glue/codec.hpp"
 
 namespace snapnav::fuzz {
@@ -414,6 +418,38 @@ odometry_t Odometry(int64_t utime) {
   return o;
 }
 
+// The first odometry message fixes the start pose: every mutation of it on a fresh node (made by
+// `make` on the harness's bus), then `valid` (messages that give an output on `channel`) must still
+// work, and nothing published may be non-finite. A non-finite cumulative pose must be counted.
+void FuzzFirstOdometry(const std::string& node, const std::set<std::string>& outputs,
+                       const std::string& odometry_channel, const std::string& channel,
+                       const std::function<std::shared_ptr<void>(glue::Bus&)>& make,
+                       const std::function<void(Harness&, int64_t)>& valid) {
+  int counted = 0;
+  for (const auto& mu : OdometryMutations()) {
+    Harness h(outputs);
+    const auto held = make(h.bus);
+    odometry_t m = Odometry(h.Clock());
+    mu.apply(m);
+    h.Send(odometry_channel, m);
+    for (const auto& [ch, p] : h.Take()) EXPECT_EQ(OutputProblem(ch, p), "") << node << ": first odometry " << mu.name;
+    const bool was_counted = h.bus.total_errors() > 0;
+    counted += was_counted;
+    if (mu.non_finite && (mu.field == "x_m" || mu.field == "y_m" || mu.field == "theta_rad")) {
+      EXPECT_TRUE(was_counted) << node << ": first odometry " << mu.name << " taken silently";
+    }
+    valid(h, h.Clock());
+    int got = 0;
+    for (const auto& [ch, p] : h.Take()) {
+      EXPECT_EQ(OutputProblem(ch, p), "") << node << ": after first odometry " << mu.name;
+      got += ch == channel;
+    }
+    EXPECT_GT(got, 0) << node << ": nothing on " << channel << " after first odometry " << mu.name;
+  }
+  std::cerr << node << ": first odometry message: " << OdometryMutations().size() << " mutations, " << counted
+            << " counted, valid messages afterwards processed\n";
+}
+
 // ---------------------------------------------------------------- the nodes
 TEST(FuzzNodes, DeadReckoning) {
   const auto config = DeadReckoningConfig::FromIni(Config("dead_reckoning.ini", {}), "");
@@ -460,6 +496,21 @@ TEST(FuzzNodes, LaserSlam) {
   ExpectStillWorks(h, "laser-slam", [&](int64_t t) { h.Send(config.scan_channel, scan(t)); }, config.pose_channel);
   PrintCounts(h, "laser-slam");
   node.Report(std::cerr);
+}
+
+TEST(FuzzNodes, LaserSlamFirstOdometry) {
+  const auto config = LaserSlamConfig::FromIni(Config("laser_slam.ini", {{"laser_slam", "map_every_n_scans", "1"}}), "");
+  FuzzFirstOdometry(
+      "laser-slam", {config.pose_channel, config.map_channel}, config.odometry_channel, config.pose_channel,
+      [&](glue::Bus& bus) { return std::make_shared<LaserSlamNode>(bus, config); },
+      [&](Harness& h, int64_t t) {
+        laser_scan_t s = SampleLaserScan(181);
+        s.utime = t;
+        h.Send(config.scan_channel, s);
+        h.Send(config.odometry_channel, Odometry(t + 1000));
+        s.utime = t + 2000;
+        h.Send(config.scan_channel, s);
+      });
 }
 
 TEST(FuzzNodes, Landmarks) {
@@ -574,6 +625,114 @@ TEST_F(FuzzPlaceCells, ExploreAndLocalize) {
                    localize.match_channel);
   PrintCounts(h, "placecells (localize)");
   node.Report(std::cerr);
+}
+
+TEST(FuzzNodes, RatSlam) {
+  // Poses on frames and odometry, the experience map on every message: every path publishes.
+  const auto config = RatSlamConfig::FromIni(
+      Config("ratslam.ini", {{"node", "pose_on", "both"}, {"node", "experience_map_interval_s", "0.001"}}), "");
+  std::ostringstream log;
+  const std::set<std::string> outputs = {config.pose_channel, config.experience_map_channel};
+  FuzzFirstOdometry(
+      "ratslam", outputs, config.odometry_channel, config.pose_channel,
+      [&](glue::Bus& bus) { return std::make_shared<RatSlamNode>(bus, config, log); },
+      [&](Harness& h, int64_t t) {
+        h.Send(config.odometry_channel, Odometry(t));
+        h.Send(config.omni_channel, ValidFrame(t + 1000));
+      });
+  Harness h(outputs);
+  RatSlamNode node(h.bus, config, log);
+  h.Send(config.odometry_channel, Odometry(h.Clock()));
+  h.Send(config.omni_channel, ValidFrame(h.Clock()));
+  FuzzChannel(h, "ratslam", config.omni_channel, ValidFrame(0), FrameMutations(), kMirror);
+  FuzzChannel(h, "ratslam", config.odometry_channel, SampleOdometry(), OdometryMutations(),
+              {"delta_x_m", "delta_y_m", "delta_theta_rad", "delta_t_s"});
+  ExpectStillWorks(h, "ratslam", [&](int64_t t) { h.Send(config.omni_channel, ValidFrame(t)); }, config.pose_channel);
+  ExpectStillWorks(h, "ratslam", [&](int64_t t) { h.Send(config.odometry_channel, Odometry(t)); },
+                   config.experience_map_channel);
+  PrintCounts(h, "ratslam");
+  node.Report(std::cerr);
+  EXPECT_EQ(node.internal_errors(), 0);
+}
+
+TEST(FuzzNodes, FusedSlam) {
+  // The map and a status after every scan: every output path publishes.
+  const auto ini = [](const char* start) {
+    return Config("fused_slam.ini", {{"fused_slam", "map_every_n_scans", "1"},
+                                     {"fused_slam", "status_every_n_scans", "1"},
+                                     {"fused_slam", "start", start}});
+  };
+  const auto config = FusedSlamConfig::FromIni(ini("odometry"), "");
+  const std::set<std::string> outputs = {config.pose_channel, config.map_channel, config.status_channel};
+  auto scan = [](int64_t t) {
+    laser_scan_t s = SampleLaserScan(181);
+    s.utime = t;
+    return s;
+  };
+  auto visual = [](int64_t t) {
+    pose_t p = SamplePose();  // near the sample odometry's cumulative pose (1, 2)
+    p.x_m = 1.0;
+    p.y_m = 2.0;
+    p.theta_rad = 0.3;
+    p.utime = t;
+    return p;
+  };
+  FuzzFirstOdometry(
+      "fused-slam", outputs, config.odometry_channel, config.pose_channel,
+      [&](glue::Bus& bus) { return std::make_shared<FusedSlamNode>(bus, config); },
+      [&](Harness& h, int64_t t) {
+        h.Send(config.odometry_channel, Odometry(t));
+        h.Send(config.scan_channel, scan(t + 1000));
+        h.Send(config.visual_channel, visual(t + 2000));
+      });
+  {
+    Harness h(outputs);
+    FusedSlamNode node(h.bus, config);
+    h.Send(config.odometry_channel, Odometry(h.Clock()));
+    h.Send(config.scan_channel, scan(h.Clock()));
+    auto odometry_before = [&](int64_t t) { h.Send(config.odometry_channel, Odometry(t - 1000)); };
+    FuzzChannel(h, "fused-slam", config.odometry_channel, SampleOdometry(), OdometryMutations(),
+                {"delta_x_m", "delta_y_m", "delta_theta_rad"});
+    FuzzChannel(h, "fused-slam", config.scan_channel, SampleLaserScan(181), ScanMutations(),
+                {"sensor_x_m", "sensor_y_m", "sensor_theta_rad", "angle_min_rad", "angle_increment_rad", "range_min_m",
+                 "range_max_m"},
+                odometry_before);
+    FuzzChannel(h, "fused-slam", config.visual_channel, visual(0), PoseMutations(),
+                {"x_m", "y_m", "theta_rad", "covariance[0]", "covariance[1]", "covariance[4]", "covariance[8]"},
+                odometry_before);
+    ExpectStillWorks(h, "fused-slam", [&](int64_t t) {
+      odometry_before(t);
+      h.Send(config.scan_channel, scan(t));
+    }, config.pose_channel);
+    ExpectStillWorks(h, "fused-slam", [&](int64_t t) {
+      odometry_before(t);
+      h.Send(config.visual_channel, visual(t));
+    }, config.status_channel);
+    PrintCounts(h, "fused-slam");
+    node.Report(std::cerr);
+    EXPECT_EQ(node.internal_errors(), 0);
+  }
+  // start = visual: the first visual measurement starts the filter; fuzz it on fresh nodes.
+  const auto vconfig = FusedSlamConfig::FromIni(ini("visual"), "");
+  for (const auto& mu : PoseMutations()) {
+    Harness h(outputs);
+    FusedSlamNode node(h.bus, vconfig);
+    h.Send(vconfig.odometry_channel, Odometry(h.Clock()));
+    pose_t first = visual(h.Clock());
+    mu.apply(first);
+    h.Send(vconfig.visual_channel, first);
+    const int64_t t = h.Clock();
+    h.Send(vconfig.odometry_channel, Odometry(t));
+    h.Send(vconfig.visual_channel, visual(t));
+    h.Send(vconfig.scan_channel, scan(t + 1000));
+    int poses = 0;
+    for (const auto& [ch, p] : h.Take()) {
+      EXPECT_EQ(OutputProblem(ch, p), "") << "fused-slam (start = visual): first visual " << mu.name;
+      poses += ch == vconfig.pose_channel;
+    }
+    EXPECT_GT(poses, 0) << "fused-slam (start = visual): nothing after first visual " << mu.name;
+    EXPECT_EQ(node.internal_errors(), 0) << "first visual " << mu.name;
+  }
 }
 
 TEST(FuzzNodes, Navigator) {

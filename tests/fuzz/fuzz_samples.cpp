@@ -15,6 +15,47 @@ drive_command_t SampleDriveCommand() {
   return m;
 }
 
+experience_map_t SampleExperienceMap() {
+  experience_map_t m{};
+  m.utime = 1700000000000000;
+  m.estimator = "ratslam";
+  m.frame = "map";
+  m.templates = 2;
+  m.loop_closures = 1;
+  m.current_experience = 1;
+  m.robot_x_m = 1.1;
+  m.robot_y_m = 0.2;
+  m.robot_theta_rad = 0.3;
+  m.nexperiences = 2;
+  m.x_m = {0, 1};
+  m.y_m = {0, 0.2};
+  m.theta_rad = {0, 0.3};
+  m.view_template = {0, 1};
+  m.nlinks = 2;
+  m.link_from = {0, 1};
+  m.link_to = {1, 0};
+  m.link_loop_closure = {0, 1};
+  return m;
+}
+
+fused_slam_status_t SampleFusedSlamStatus() {
+  fused_slam_status_t m{};
+  m.utime = 1700000000000000;
+  m.state = fused_slam_status_t::TRACKING;
+  m.last_outcome = fused_slam_status_t::ACCEPTED;
+  m.last_mahalanobis2 = 1.5;
+  m.scans = 100;
+  m.visual_accepted = 20;
+  m.visual_rejected = 1;
+  m.map_points = 500;
+  m.last_fit = 0.9;
+  m.x_m = 3.5;
+  m.y_m = 3.0;
+  m.theta_rad = 0.1;
+  m.position_sigma_m = 0.01;
+  return m;
+}
+
 homing_vector_t SampleHomingVector() {
   homing_vector_t m{};
   m.utime = 1700000000000000;
@@ -197,7 +238,8 @@ std::vector<TypeCase> AllTypes() {
   return {Case(SampleDriveCommand()), Case(SampleHomingVector()),    Case(SampleLandmarkSet()),
           Case(SampleLaserScan()),    Case(SampleNavigatorStatus()), Case(SampleOdometry()),
           Case(SampleOmniFrame()),    Case(SamplePlaceCellMatch()),  Case(SamplePointMap()),
-          Case(SamplePose()),         Case(SampleRoute())};
+          Case(SamplePose()),         Case(SampleRoute()),           Case(SampleExperienceMap()),
+          Case(SampleFusedSlamStatus())};
 }
 
 // "" when the published payload decodes and holds only finite numbers; else what is wrong.
@@ -246,6 +288,19 @@ std::string OutputProblem(const std::string& channel, const std::string& payload
     return bad(AllFinite({m->waypoint_x_m, m->waypoint_y_m, m->distance_to_waypoint_m, m->heading_error_rad, m->x_m,
                           m->y_m, m->theta_rad, m->position_sigma_m, m->linear_velocity_mps, m->angular_velocity_radps}),
                "navigator_status_t");
+  }
+  if (*fp == static_cast<uint64_t>(experience_map_t::getHash())) {
+    const auto m = glue::Decode<experience_map_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->robot_x_m, m->robot_y_m, m->robot_theta_rad}) && AllFinite(m->x_m) &&
+                   AllFinite(m->y_m) && AllFinite(m->theta_rad),
+               "experience_map_t");
+  }
+  if (*fp == static_cast<uint64_t>(fused_slam_status_t::getHash())) {
+    const auto m = glue::Decode<fused_slam_status_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->last_mahalanobis2, m->last_fit, m->x_m, m->y_m, m->theta_rad, m->position_sigma_m}),
+               "fused_slam_status_t");
   }
   return channel + ": unexpected output type";
 }

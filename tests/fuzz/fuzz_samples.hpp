@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "snapnav/drive_command_t.hpp"
+#include "snapnav/experience_map_t.hpp"
+#include "snapnav/fused_slam_status_t.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/laser_scan_t.hpp"
@@ -22,6 +24,8 @@
 namespace snapnav::fuzz {
 
 drive_command_t SampleDriveCommand();
+experience_map_t SampleExperienceMap();
+fused_slam_status_t SampleFusedSlamStatus();
 homing_vector_t SampleHomingVector();
 landmark_set_t SampleLandmarkSet();
 laser_scan_t SampleLaserScan(int beams = 16);
@@ -45,7 +49,7 @@ std::vector<TypeCase> AllTypes();
 
 // "" when a payload a node published decodes and holds only finite numbers (the output types:
 // pose_t, point_map_t, landmark_set_t, homing_vector_t, place_cell_match_t, drive_command_t,
-// navigator_status_t); else what is wrong.
+// navigator_status_t, experience_map_t, fused_slam_status_t); else what is wrong.
 std::string OutputProblem(const std::string& channel, const std::string& payload);
 
 }  // namespace snapnav::fuzz

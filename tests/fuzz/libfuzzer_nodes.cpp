@@ -1,6 +1,7 @@
 // libFuzzer target (SNAPNAV_LIBFUZZER=ON, clang): the nodes without images (dead-reckoning,
-// laser-slam, navigator) on one memq:// bus; the first byte picks the channel, the rest is the
-// payload. Whatever arrives, no crash, and nothing published holds a NaN or an infinity.
+// laser-slam, navigator, fused-slam) on one memq:// bus; the first byte picks the channel, the
+// rest is the payload. Whatever arrives, no crash, and nothing published holds a NaN or an
+// infinity.
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -8,6 +9,7 @@
 #include <string>
 
 #include "dead_reckoning_node.hpp"
+#include "fused_slam_node.hpp"
 #include "fuzz_samples.hpp"
 #include "laser_slam_node.hpp"
 #include "navigator_node.hpp"
@@ -23,6 +25,7 @@ struct Nodes {
   std::unique_ptr<processes::DeadReckoningNode> dr;
   std::unique_ptr<processes::LaserSlamNode> slam;
   std::unique_ptr<processes::NavigatorNode> navigator;
+  std::unique_ptr<processes::FusedSlamNode> fused;
   Nodes() {
     const std::string dir = SNAPNAV_CONFIG_DIR;
     bus.SubscribeRaw(".*", [this](const void* d, size_t n) {
@@ -42,6 +45,8 @@ struct Nodes {
         bus, processes::LaserSlamConfig::FromIni(glue::IniFile::Load(dir + "/laser_slam.ini"), ""));
     navigator = std::make_unique<processes::NavigatorNode>(
         bus, processes::NavigatorConfig::FromIni(glue::IniFile::Load(dir + "/navigator.ini"), ""));
+    fused = std::make_unique<processes::FusedSlamNode>(
+        bus, processes::FusedSlamConfig::FromIni(glue::IniFile::Load(dir + "/fused_slam.ini"), ""));
   }
 };
 

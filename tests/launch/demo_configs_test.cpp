@@ -3,6 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 #include <set>
 
 #include "navigator_node.hpp"
@@ -28,16 +32,60 @@ TEST(DemoConfigs, PlaceCellExplorationKeepsEveryGridView) {
   EXPECT_EQ(c.min_travel_m, 0);
 }
 
+TEST(DemoConfigs, PlaceCellLocalizationGivesGlobalFixes) {
+  // One instance for the navigator and fused-slam: without the distance filter (config/fused_slam.ini).
+  const auto c = processes::PlaceCellsConfig::FromIni(glue::IniFile::Load(kDemoDir / "placecells.ini"), "");
+  EXPECT_EQ(c.mode, processes::PlaceCellsMode::kLocalize);
+  EXPECT_FALSE(c.localizer.filter.enabled);
+}
+
 TEST(DemoConfigs, Navigator) {
   EXPECT_NO_THROW(processes::NavigatorConfig::FromIni(glue::IniFile::Load(kDemoDir / "navigator.ini"), ""));
 }
 
 TEST(DemoConfigs, EveryDemoIniIsKnown) {
-  const std::set<std::string> known{"sim.ini", "placecells_explore.ini", "navigator.ini"};
+  const std::set<std::string> known{"sim.ini", "placecells_explore.ini", "placecells.ini", "navigator.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kDemoDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();
     }
+  }
+}
+
+// Each variant is its base config with the keys whose line says `demo:` changed: the same sections
+// and keys, and every other value the base's (so a change to the base cannot be missed here).
+TEST(DemoConfigs, VariantsDifferFromTheirBaseOnlyInDemoKeys) {
+  const std::filesystem::path base_dir = SNAPNAV_CONFIG_DIR;
+  const std::vector<std::pair<std::string, std::string>> variants = {{"sim.ini", "sim.ini"},
+                                                                     {"placecells_explore.ini", "placecells.ini"},
+                                                                     {"placecells.ini", "placecells.ini"},
+                                                                     {"navigator.ini", "navigator.ini"}};
+  for (const auto& [variant, base] : variants) {
+    const auto v = glue::IniFile::Load(kDemoDir / variant);
+    const auto b = glue::IniFile::Load(base_dir / base);
+    std::vector<std::string> lines;
+    {
+      std::ifstream in(kDemoDir / variant);
+      for (std::string line; std::getline(in, line);) lines.push_back(line);
+    }
+    EXPECT_EQ(v.Sections(), b.Sections()) << variant;
+    int demo_keys = 0;
+    for (const auto& section : b.Sections()) {
+      EXPECT_EQ(v.Keys(section), b.Keys(section)) << variant << " [" << section << "]";
+      for (const auto& key : v.Keys(section)) {
+        if (!b.Has(section, key)) continue;
+        const int line = v.KeyLine(section, key);
+        const bool demo = line >= 1 && line <= static_cast<int>(lines.size()) &&
+                          lines[static_cast<size_t>(line - 1)].find("demo:") != std::string::npos;
+        demo_keys += demo;
+        if (!demo) {
+          EXPECT_EQ(v.GetString(section, key), b.GetString(section, key))
+              << variant << ":" << line << ": [" << section << "] " << key << " differs from " << base
+              << " without a `demo:` note";
+        }
+      }
+    }
+    EXPECT_GT(demo_keys, 0) << variant << ": no key marked demo:";
   }
 }
 

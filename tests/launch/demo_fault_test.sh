@@ -16,7 +16,8 @@ import json, re, sys
 s = json.load(open(sys.argv[1]))
 bad = []
 if s.get("process_homing_runs") != 2: bad.append("homing runs %s (want 2)" % s.get("process_homing_runs"))
-for name in ("sim", "lcm-logger", "dead-reckoning", "laser-slam", "placecells", "landmarks", "navigator"):
+for name in ("sim", "lcm-logger", "dead-reckoning", "laser-slam", "placecells", "landmarks", "navigator", "ratslam",
+             "fused-slam", "viewer"):
     if s.get("process_%s_runs" % name) != 1: bad.append("%s runs %s (want 1)" % (name, s.get("process_%s_runs" % name)))
 for ch in ("omni_frame", "laser_scan", "odometry", "pose_ground_truth", "drive_command", "pose_laser_slam"):
     p, r = s.get("delivery_%s_published" % ch), s.get("delivery_%s_recorded" % ch)

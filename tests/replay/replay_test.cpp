@@ -97,9 +97,11 @@ TEST_F(ReplayTest, SameLogGivesByteIdenticalOutputsThroughEveryProcess) {
   EXPECT_GT(a.outputs, 100);
   EXPECT_EQ(a.outputs, b.outputs);
   EXPECT_EQ(a.damage_count, 0);
-  // Every process published: poses, map, landmark sets, homing vectors, place-cell matches, commands.
+  // Every process published: poses, maps, landmark sets, homing vectors, place-cell matches, commands,
+  // RatSLAM's pose and experience map, the fused pose, map and status.
   for (const char* ch : {"POSE_DEAD_RECKONING", "POSE_LASER_SLAM", "POINT_MAP", "LANDMARKS_SURF", "HOMING_VECTOR",
-                         "PLACE_CELL_MATCH", "DRIVE_COMMAND", "NAVIGATOR_STATUS"}) {
+                         "PLACE_CELL_MATCH", "DRIVE_COMMAND", "NAVIGATOR_STATUS", "POSE_RATSLAM", "EXPERIENCE_MAP",
+                         "POSE_EKF", "POINT_MAP_FUSED", "FUSED_SLAM_STATUS"}) {
     EXPECT_GT(a.outputs_by_channel.count(ch) ? a.outputs_by_channel.at(ch) : 0, 0) << ch << "\n" << log1.str();
   }
   const std::string out_a = ReadFile(*dir_ / "a.lcmlog"), out_b = ReadFile(*dir_ / "b.lcmlog");
@@ -116,16 +118,23 @@ TEST_F(ReplayTest, SameLogGivesByteIdenticalOutputsThroughEveryProcess) {
   ASSERT_GT(mem_a.size(), 1000u);
   EXPECT_TRUE(mem_a == mem_b) << "place-cell memories differ";
 
-  // Localizing in that memory (placecells -> navigator: fixes, commands) is as repeatable.
+  // Localizing in that memory (placecells -> navigator and fused-slam: fixes, commands, fused poses)
+  // is as repeatable; the place cells without their distance filter, as fused-slam wants them.
   auto localize = [&](const std::string& out) {
     ReplayOptions o = Options(out);
-    o.sets = {"placecells:placecells.memory_file=" + (*dir_ / "a.mem").string()};
-    o.only = {"placecells", "navigator"};
+    o.sets = {"placecells:placecells.memory_file=" + (*dir_ / "a.mem").string(),
+              "placecells:distance_filter.enabled=false"};
+    o.only = {"placecells", "navigator", "fused-slam"};
     std::ostringstream log;
     return RunReplay(o, log);
   };
   const ReplayResult c = localize("c.lcmlog"), d = localize("d.lcmlog");
-  EXPECT_GT(c.outputs_by_channel.count("POSE_PLACE_CELLS") ? c.outputs_by_channel.at("POSE_PLACE_CELLS") : 0, 0);
+  auto count = [](const ReplayResult& r, const char* ch) {
+    return r.outputs_by_channel.count(ch) ? r.outputs_by_channel.at(ch) : 0;
+  };
+  EXPECT_GT(count(c, "POSE_PLACE_CELLS"), 0);
+  // A fused pose per scan, and one per visual measurement: more than without the place cells.
+  EXPECT_GT(count(c, "POSE_EKF"), count(a, "POSE_EKF"));
   EXPECT_TRUE(ReadFile(*dir_ / "c.lcmlog") == ReadFile(*dir_ / "d.lcmlog")) << "localization outputs differ";
 }
 

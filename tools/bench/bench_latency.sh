@@ -48,6 +48,10 @@ fi
 
 FUSED=0
 [ -x "$BIN/fused-slam" ] && FUSED=1
+# The place cells localize without their distance filter: global fixes, as fused-slam takes them
+# (config/fused_slam.ini) and as the demo runs them.
+PLACECELLS_INI="$OUT/placecells_global.ini"
+sed 's/^enabled = true/enabled = false/' "$ROOT/config/placecells.ini" >"$PLACECELLS_INI"
 OUTPUTS="HOMING_VECTOR,POSE_PLACE_CELLS,POSE_EKF@POSE_PLACE_CELLS"
 echo "bench latency: $RUNS runs of $DURATION s: sim (real time) -> homing, placecells$([ $FUSED = 1 ] && echo ', fused-slam') -> latency-probe"
 [ $FUSED = 1 ] || echo "bench latency: fused-slam is not built: POSE_EKF gets no messages (the probe listens for it all the same)"
@@ -59,7 +63,7 @@ for run in $(seq "$RUNS"); do
   probe_pid=$!; pids+=("$probe_pid")
   "$BIN/homing" --home-first 2>"$OUT/homing-$run.log" &
   pids+=($!)
-  "$BIN/placecells" --memory "$MEMORY" 2>"$OUT/placecells-$run.log" &
+  "$BIN/placecells" --config "$PLACECELLS_INI" --memory "$MEMORY" 2>"$OUT/placecells-$run.log" &
   pids+=($!)
   if [ $FUSED = 1 ]; then
     "$BIN/fused-slam" 2>"$OUT/fused-slam-$run.log" &

@@ -3,11 +3,13 @@
 #include <ostream>
 
 #include "dead_reckoning_node.hpp"
+#include "fused_slam_node.hpp"
 #include "homing_node.hpp"
 #include "landmarks_node.hpp"
 #include "laser_slam_node.hpp"
 #include "navigator_node.hpp"
 #include "placecells_node.hpp"
+#include "ratslam_node.hpp"
 #include "replay.hpp"
 
 namespace snapnav::replay {
@@ -65,6 +67,20 @@ const std::vector<NodeEntry>& ReplayRegistry() {
          config.Print(c.config_out);
          c.outputs = {config.drive_command_channel, config.status_channel};
          return c.Hold<NavigatorNode>(&NavigatorNode::Report, nullptr, c.bus, config);
+       }},
+      {"ratslam", "ratslam.ini",
+       [](NodeContext& c) {
+         const auto config = RatSlamConfig::FromIni(c.ini, c.channel_prefix);
+         config.Print(c.config_out);
+         c.outputs = {config.pose_channel, config.experience_map_channel};
+         return c.Hold<RatSlamNode>(&RatSlamNode::Report, nullptr, c.bus, config, c.log);
+       }},
+      {"fused-slam", "fused_slam.ini",
+       [](NodeContext& c) {
+         const auto config = FusedSlamConfig::FromIni(c.ini, c.channel_prefix);
+         config.Print(c.config_out);
+         c.outputs = {config.pose_channel, config.map_channel, config.status_channel};
+         return c.Hold<FusedSlamNode>(&FusedSlamNode::Report, nullptr, c.bus, config);
        }},
   };
   return entries;

@@ -32,9 +32,17 @@ namespace snapnav::glue {
 // radians between two odometry messages); they would overflow a covariance to infinity.
 inline constexpr double kMaxOdometryStepM = 1000.0;
 inline constexpr double kMaxOdometryStepRad = 100.0;
+// Positions farther than this from the origin are garbage too (1000 km): a map built from such a
+// start would overflow its integer cells [m].
+inline constexpr double kMaxPositionM = 1e6;
 
 // Why an odometry message cannot be used, or "" when it can: its increment must be finite and
-// within the bounds above, and with `cumulative` its cumulative pose must be finite too.
+// within the bounds above, and with `cumulative` its cumulative pose must pass
+// OdometryStartProblem too.
 std::string OdometryProblem(const odometry_t& msg, bool cumulative);
+// Why the cumulative pose of an odometry message cannot be a start pose, or "" when it can: it
+// must be finite, its position within kMaxPositionM. (The first message of a stream fixes the
+// start; its increment is relative to a message never seen.)
+std::string OdometryStartProblem(const odometry_t& msg);
 
 }  // namespace snapnav::glue
