@@ -2,6 +2,10 @@
 // payloads or throwing handlers counted instead of crashing.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdlib>
+#include <thread>
+
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/lcm_url.hpp"
 #include "snapnav/pose_t.hpp"
@@ -85,6 +89,32 @@ TEST(Bus, CurrentMessageInfoInsideHandler) {
   HandleAll(bus);
   EXPECT_EQ(channel, "TEST_BUS_INFO");
   EXPECT_EQ(size, static_cast<size_t>(p.getEncodedSize()));
+}
+
+// LCM keeps a subscription's messages only up to its queue capacity while the handlers lag: the
+// default (LCM's 30) drops the rest of a burst, the odometry capacity keeps 20 s of 50 Hz. UDP
+// multicast only (memq:// has no queue limit), so it runs in the private network namespace of the
+// ctest bus_queue_capacity_private_bus (SNAPNAV_PRIVATE_BUS set), and skips elsewhere.
+TEST(BusPrivate, QueueCapacityBoundsWhatALaggingSubscriberKeeps) {
+  if (!std::getenv("SNAPNAV_PRIVATE_BUS")) GTEST_SKIP() << "needs the private bus: ctest -R bus_queue_capacity";
+  Bus bus("udpm://239.255.76.67:7691?ttl=0&recv_buf_size=4194304");
+  int small = 0, large = 0;
+  bus.Subscribe<pose_t>("TEST_BUS_QUEUE", [&](const pose_t&) { ++small; });
+  bus.Subscribe<pose_t>("TEST_BUS_QUEUE", [&](const pose_t&) { ++large; }, Bus::kOdometryQueueCapacity);
+  for (int i = 0; i < 500; ++i) bus.Publish("TEST_BUS_QUEUE", SamplePose(i));
+  // The subscriber lags: nothing is handled until every message has been received.
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  while (bus.HandleOnce(200)) {
+  }
+  // The default keeps its capacity (and the one message LCM's receive thread holds besides).
+  EXPECT_GE(small, Bus::kDefaultQueueCapacity);
+  EXPECT_LE(small, Bus::kDefaultQueueCapacity + 1);
+  EXPECT_EQ(large, 500);
+}
+
+TEST(Bus, QueueCapacityMustBePositive) {
+  Bus bus("memq://");
+  EXPECT_THROW(bus.Subscribe<pose_t>("TEST_BUS_QUEUE", [](const pose_t&) {}, 0), std::invalid_argument);
 }
 
 TEST(Bus, MissingLogFileIsExplained) {

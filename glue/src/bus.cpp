@@ -2,6 +2,7 @@
 
 #include <iomanip>
 #include <iostream>
+#include <stdexcept>
 
 #include "snapnav/glue/lcm_url.hpp"
 #include "snapnav/glue/shutdown.hpp"
@@ -38,12 +39,16 @@ void Bus::PublishRaw(const std::string& channel, const void* data, size_t size) 
   ++stats_[channel].published;
 }
 
-void Bus::SubscribeRaw(const std::string& channel, std::function<void(const void*, size_t)> handler) {
+void Bus::SubscribeRaw(const std::string& channel, std::function<void(const void*, size_t)> handler,
+                       int queue_capacity) {
+  if (queue_capacity < 1) throw std::invalid_argument("subscription to '" + channel + "': queue capacity must be >= 1");
   auto sub = std::make_unique<Subscription>();
   sub->bus = this;
   sub->handler = std::move(handler);
-  if (!lcm_.subscribe(channel, &Subscription::OnMessage, sub.get())) {
-    throw std::runtime_error("cannot subscribe to channel '" + channel + "'");
+  lcm::Subscription* lcm_sub = lcm_.subscribe(channel, &Subscription::OnMessage, sub.get());
+  if (!lcm_sub) throw std::runtime_error("cannot subscribe to channel '" + channel + "'");
+  if (lcm_sub->setQueueCapacity(queue_capacity) != 0) {
+    throw std::runtime_error("cannot set the queue capacity of channel '" + channel + "'");
   }
   subscriptions_.push_back(std::move(sub));
 }

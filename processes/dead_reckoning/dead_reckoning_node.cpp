@@ -30,7 +30,7 @@ void DeadReckoningConfig::Print(std::ostream& out) const {
 
 DeadReckoningNode::DeadReckoningNode(glue::Bus& bus, const DeadReckoningConfig& config)
     : bus_(bus), config_(config) {
-  bus_.Subscribe(config_.odometry_channel, &DeadReckoningNode::OnOdometry, this);
+  bus_.Subscribe(config_.odometry_channel, &DeadReckoningNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
 }
 
 void DeadReckoningNode::Reject(const std::string& reason, const std::string& detail) {

@@ -170,7 +170,7 @@ NavigatorNode::NavigatorNode(glue::Bus& bus, const NavigatorConfig& config)
     follower_.SetRoute(*route, config_.route_first_waypoint);
     ++routes_;
   }
-  bus_.Subscribe(config_.odometry_channel, &NavigatorNode::OnOdometry, this);
+  bus_.Subscribe(config_.odometry_channel, &NavigatorNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.pose_channel, &NavigatorNode::OnPose, this);
   bus_.Subscribe(config_.homing_vector_channel, &NavigatorNode::OnHomingVector, this);
   bus_.Subscribe(config_.route_channel, &NavigatorNode::OnRoute, this);

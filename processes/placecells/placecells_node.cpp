@@ -183,7 +183,7 @@ PlaceCellsNode::PlaceCellsNode(glue::Bus& bus, const PlaceCellsConfig& config, s
     log_ << "placecells: warning: " << config_.memory_file << " holds no cells: nothing will be localized\n";
   }
   bus_.Subscribe(config_.input_channel(), &PlaceCellsNode::OnFrame, this);
-  bus_.Subscribe(config_.odometry_channel, &PlaceCellsNode::OnOdometry, this);
+  bus_.Subscribe(config_.odometry_channel, &PlaceCellsNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   if (config_.mode == PlaceCellsMode::kExplore) {
     bus_.Subscribe(config_.explore_pose_channel, &PlaceCellsNode::OnExplorePose, this);
   }

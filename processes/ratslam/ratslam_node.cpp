@@ -185,7 +185,7 @@ RatSlamNode::RatSlamNode(glue::Bus& bus, const RatSlamConfig& config, std::ostre
     : bus_(bus), config_(config), log_(log), frames_to_panoramas_(config.panorama, config.mirror) {
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
   bus_.Subscribe(config_.input_channel(), &RatSlamNode::OnFrame, this);
-  bus_.Subscribe(config_.odometry_channel, &RatSlamNode::OnOdometry, this);
+  bus_.Subscribe(config_.odometry_channel, &RatSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
 }
 
 int64_t RatSlamNode::rejected(const std::string& reason) const {

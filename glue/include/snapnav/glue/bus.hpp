@@ -61,25 +61,38 @@ class Bus {
   }
   void PublishRaw(const std::string& channel, const void* data, size_t size);
 
+  // LCM's own queue capacity per subscription [messages]: while the handlers lag further behind,
+  // LCM drops that channel's messages for this subscriber (with no counter). Subscriptions to
+  // small, high-rate messages (odometry at 50 Hz) pass a larger capacity.
+  static constexpr int kDefaultQueueCapacity = 30;
+  static constexpr int kOdometryQueueCapacity = 1000;  // 20 s of 50 Hz odometry (about 100 kB)
+
   // Subscribes a typed handler; `channel` is an exact name.
   template <class Msg>
-  void Subscribe(const std::string& channel, std::function<void(const Msg&)> handler) {
-    SubscribeRaw(channel, [this, handler = std::move(handler)](const void* data, size_t size) {
+  void Subscribe(const std::string& channel, std::function<void(const Msg&)> handler,
+                 int queue_capacity = kDefaultQueueCapacity) {
+    SubscribeRaw(
+        channel,
+        [this, handler = std::move(handler)](const void* data, size_t size) {
       std::string error;
       auto msg = Decode<Msg>(data, size, &error);
       if (!msg) {
         CountDecodeError(error);
         return;
       }
-      handler(*msg);
-    });
+          handler(*msg);
+        },
+        queue_capacity);
   }
   template <class Msg, class Obj>
-  void Subscribe(const std::string& channel, void (Obj::*method)(const Msg&), Obj* obj) {
-    Subscribe<Msg>(channel, std::function<void(const Msg&)>([obj, method](const Msg& m) { (obj->*method)(m); }));
+  void Subscribe(const std::string& channel, void (Obj::*method)(const Msg&), Obj* obj,
+                 int queue_capacity = kDefaultQueueCapacity) {
+    Subscribe<Msg>(channel, std::function<void(const Msg&)>([obj, method](const Msg& m) { (obj->*method)(m); }),
+                   queue_capacity);
   }
   // Subscribes a handler on the raw payload; `channel` may be a regex as in LCM.
-  void SubscribeRaw(const std::string& channel, std::function<void(const void*, size_t)> handler);
+  void SubscribeRaw(const std::string& channel, std::function<void(const void*, size_t)> handler,
+                    int queue_capacity = kDefaultQueueCapacity);
 
   // Handles at most one message; waits up to timeout_ms. Returns false on timeout
   // and at the end of a file:// log. Throws std::runtime_error when LCM itself fails.
