@@ -37,11 +37,21 @@ std::vector<Eigen::Vector2d> RoomScan(const Pose2& robot, double w, double h) {
   return points;
 }
 
+// Options with no uncertainty of the laser's pose relative to its own map at the start: the fused
+// covariance is then the start's alone (the map's offset from the world), and the visual updates
+// are plain Kalman updates of that offset.
+FusedSlamOptions PlainOptions() {
+  FusedSlamOptions o;
+  o.laser.initial_sigma_xy_m = 0;
+  o.laser.initial_sigma_theta_rad = 0;
+  return o;
+}
+
 TEST(FusedSlam, ConsistentVisualMeasurementPullsADriftedPoseBack) {
   // Drifted prediction at x = 1.2 (sigma 0.1 m, 0.05 rad); a visual fix at the truth x = 1.0
   // (sigma 0.05 m, 0.03 rad). S_xx = 0.01 + 0.0025 = 0.0125: d2 = 0.2^2 / 0.0125 = 3.2, accepted;
   // K_xx = 0.01 / 0.0125 = 0.8: x = 1.2 - 0.8 * 0.2 = 1.04, var = 0.01 * 0.0025 / 0.0125 = 0.002.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
   const VisualUpdate v = f.AddVisual(kT0, {1.0, 0.0, 0.0}, Diag(0.05, 0.03));
   EXPECT_EQ(v.outcome, VisualOutcome::kAccepted);
@@ -62,7 +72,7 @@ TEST(FusedSlam, ConsistentVisualMeasurementPullsADriftedPoseBack) {
 
 TEST(FusedSlam, VisualMeasurementBelowTheSigmaFloorIsFloored) {
   // A fix claiming 1 mm is taken as min_fix_sigma_xy_m = 0.05 m: the same update as above.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
   EXPECT_EQ(f.AddVisual(kT0, {1.0, 0.0, 0.0}, Diag(0.001, 0.03)).outcome, VisualOutcome::kAccepted);
   EXPECT_NEAR(f.pose().x_m, 1.04, 1e-9);
@@ -70,7 +80,7 @@ TEST(FusedSlam, VisualMeasurementBelowTheSigmaFloorIsFloored) {
 
 TEST(FusedSlam, OutlierIsGatedOut) {
   // 1.8 m off: d2 = 1.8^2 / 0.0125 = 259.2 > 11.34: rejected, the pose does not move.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
   const VisualUpdate v = f.AddVisual(kT0, {3.0, 0.0, 0.0}, Diag(0.05, 0.03));
   EXPECT_EQ(v.outcome, VisualOutcome::kRejected);
@@ -91,7 +101,7 @@ TEST(FusedSlam, OutlierIsGatedOut) {
 TEST(FusedSlam, KidnappingIsRecoveredAfterAgreeingRejections) {
   // The filter believes it is at (1, 1) heading 0 with 2 cm; the robot was carried to (29, 1).
   // It drives 0.1 m per step; the visual fixes say (29 + 0.1 k, 1) with 0.05 m.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   o.relocalize_after = 4;
   FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
   int64_t t = kT0;
