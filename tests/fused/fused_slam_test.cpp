@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 namespace snapnav::nav {
 namespace {
 
@@ -240,6 +242,39 @@ TEST(FusedSlam, ScansKeepThePoseOnTheMapAndVisualFixesAnchorIt) {
   EXPECT_NEAR(f.pose().x_m, 2.5, 0.03);
   EXPECT_NEAR(f.pose().y_m, 1.5, 0.03);
   EXPECT_EQ(f.accepted(), 1);
+}
+
+TEST(FusedSlam, ConsistentFixesPullAMapThatIsOffBackAndTheLaserStaysOnIt) {
+  // The start is 0.1 m off in x (sigma 0.1 m): the room's map, built from it, is 0.1 m off the
+  // world. Fixes at the truth (sigma 0.05 m) update the offset of every map cell the scan sees:
+  // the fused pose moves to the truth, the laser's pose in its own map does not move, and the
+  // cells' covariances shrink but stay positive however many fixes come.
+  FusedSlamOptions o;
+  FusedSlam f(o, {2.1, 1.5, 0.0}, Diag(0.1, 0.05));
+  f.Update(RoomScan({2.0, 1.5, 0.0}, 6, 4));
+  const Pose2 laser = f.laser().pose();
+  EXPECT_NEAR(f.pose().x_m, 2.1, 1e-3);
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_EQ(f.AddVisual(kT0, {2.0, 1.5, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kAccepted) << k;
+  }
+  // Each cell: prior 0.01 m^2, ten fixes of ~0.0026 m^2: 0.1 m * 100 / (100 + 10 / 0.0026) is left.
+  EXPECT_NEAR(f.pose().x_m, 2.0, 0.01);
+  EXPECT_NEAR(f.pose().y_m, 1.5, 0.01);
+  EXPECT_EQ(f.laser().pose().x_m, laser.x_m);
+  EXPECT_EQ(f.laser().pose().y_m, laser.y_m);
+  EXPECT_LT(f.covariance()(0, 0), 0.001);
+  const auto wall = f.MapOffsetAt({0.1, 1.5});  // the left wall as the map has it
+  ASSERT_TRUE(wall.has_value());
+  EXPECT_NEAR(wall->offset.x(), 0.1, 0.02);
+  for (int k = 0; k < 300; ++k) f.AddVisual(kT0, {2.0, 1.5, 0.0}, Diag(0.05, 0.03));
+  EXPECT_NEAR(f.pose().x_m, 2.0, 0.002);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(f.robot_offset_covariance());
+  EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
+  EXPECT_GT(f.covariance().diagonal().minCoeff(), 0.0);
+  // An outlier is gated out and moves nothing.
+  const Pose2 before = f.pose();
+  EXPECT_EQ(f.AddVisual(kT0, {3.5, 1.5, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kRejected);
+  EXPECT_EQ(f.pose().x_m, before.x_m);
 }
 
 TEST(FusedSlam, InvalidInputThrows) {
