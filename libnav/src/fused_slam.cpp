@@ -26,10 +26,26 @@ double Mahalanobis2(const Eigen::Vector3d& y, const Eigen::Matrix3d& p, const Ei
   return y.dot(ldlt.solve(y));
 }
 
-Eigen::Matrix3d InitialCovariance(const LaserSlamOptions& o) {
-  const double sxy = o.initial_sigma_xy_m * o.initial_sigma_xy_m, st = o.initial_sigma_theta_rad * o.initial_sigma_theta_rad;
-  return Eigen::Vector3d(sxy, sxy, st).asDiagonal();
+Eigen::Matrix3d Diagonal(double sigma_xy, double sigma_theta) {
+  return Eigen::Vector3d(sigma_xy * sigma_xy, sigma_xy * sigma_xy, sigma_theta * sigma_theta).asDiagonal();
 }
+
+// Carries a rigid map offset (t at `from`, phi) to `to`: t + phi J (to - from), J a quarter turn.
+Eigen::Matrix3d Lever(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Identity();
+  a(0, 2) = -(to.y() - from.y());
+  a(1, 2) = to.x() - from.x();
+  return a;
+}
+
+// The rotation of a pose covariance by `r` (x, y turned, the heading kept).
+Eigen::Matrix3d Rotate(const Eigen::Matrix2d& r, const Eigen::Matrix3d& c) {
+  Eigen::Matrix3d j = Eigen::Matrix3d::Identity();
+  j.topLeftCorner<2, 2>() = r;
+  return j * c * j.transpose();
+}
+
+Eigen::Matrix3d Symmetric(const Eigen::Matrix3d& c) { return 0.5 * (c + c.transpose()); }
 
 }  // namespace
 
@@ -60,23 +76,39 @@ void FusedSlamOptions::Validate() const {
   Require(relocalize_max_fit_loss >= 0 && relocalize_max_fit_loss <= 1, "relocalize_max_fit_loss must be in [0, 1]");
   Require(suspect_after >= 0, "suspect_after must be >= 0 (0: never)");
   Require(map_min_fit >= 0 && map_min_fit <= 1, "map_min_fit must be in [0, 1]");
-  Require(map_cell_m >= 0 && std::isfinite(map_cell_m), "map_cell_m must be >= 0 (0: off)");
+  Require(map_cell_m > 0 && std::isfinite(map_cell_m), "map_cell_m must be positive");
+  Require(start_sigma_xy_m >= 0 && start_sigma_theta_rad >= 0 && std::isfinite(start_sigma_xy_m) &&
+              std::isfinite(start_sigma_theta_rad),
+          "start sigmas must be >= 0");
   Require(map_drift_xy_m >= 0 && map_drift_theta_rad >= 0 && std::isfinite(map_drift_xy_m) &&
               std::isfinite(map_drift_theta_rad),
           "map drift must be >= 0");
-  Require(laser_sigma_xy_m >= 0 && laser_sigma_theta_rad >= 0 && std::isfinite(laser_sigma_xy_m) &&
-              std::isfinite(laser_sigma_theta_rad),
-          "laser sigmas must be >= 0");
 }
 
 FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start)
-    : FusedSlam(options, start, InitialCovariance(options.laser)) {}
+    : FusedSlam(options, start, Diagonal(options.start_sigma_xy_m, options.start_sigma_theta_rad)) {}
 
 FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start, const Eigen::Matrix3d& covariance)
-    : options_(options), laser_((options.Validate(), options.laser), start) {
+    : options_(options), start_(start), laser_((options.Validate(), options.laser), Pose2{}) {
   Require(Finite(start) && covariance.allFinite(), "start pose or covariance is not finite");
-  laser_.ResetPose(start, covariance);
+  start_.theta_rad = WrapAngle(start_.theta_rad);
+  const double c = std::cos(start_.theta_rad), s = std::sin(start_.theta_rad);
+  start_rotation_ << c, -s, s, c;
   laser_.SetMapping(true, options_.map_min_fit);
+  // The map frame is the start's: its uncertainty in the world is the offset of everything seen first.
+  u_cov_ = Rotate(start_rotation_.transpose(), Symmetric(covariance));
+  Refresh();
+}
+
+void FusedSlam::Refresh() {
+  const Pose2& m = laser_.pose();
+  const Eigen::Vector2d p(m.x_m, m.y_m);
+  const Eigen::Matrix3d a = Lever(u_at_, p);
+  const Eigen::Vector3d u = a * u_;
+  const Pose2 corrected{m.x_m - u.x(), m.y_m - u.y(), WrapAngle(m.theta_rad - u.z())};
+  pose_ = start_.Compose(corrected);
+  pose_.theta_rad = WrapAngle(pose_.theta_rad);
+  covariance_ = Rotate(start_rotation_, Symmetric(laser_.covariance() + a * u_cov_ * a.transpose()));
 }
 
 void FusedSlam::Predict(int64_t utime, const Pose2& delta) {
@@ -91,6 +123,7 @@ void FusedSlam::Predict(int64_t utime, const Pose2& delta) {
   while (!history_.empty() && history_.front().first < keep_from) history_.pop_front();
   const int64_t window_from = utime_ - static_cast<int64_t>(std::llround(options_.relocalize_window_s * 1e6));
   while (!rejected_window_.empty() && rejected_window_.front().utime < window_from) rejected_window_.pop_front();
+  Refresh();
 }
 
 bool FusedSlam::suspect() const {
@@ -103,50 +136,80 @@ uint64_t FusedSlam::CellKey(const Eigen::Vector2d& p) const {
   return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
 }
 
+Eigen::Vector2d FusedSlam::CellCenter(const Eigen::Vector2d& p) const {
+  const double c = options_.map_cell_m;
+  return {(std::floor(p.x() / c) + 0.5) * c, (std::floor(p.y() / c) + 0.5) * c};
+}
+
 namespace {
 
-constexpr size_t kMapSamples = 64;  // scan points looked at for the map uncertainty and the relocalisation fit
+constexpr size_t kMapSamples = 64;  // scan points looked at for the map offset and the relocalisation fit
 constexpr double kCoverageM = 1.0;  // a scan point is judged by the map if a map point is this close [m]
 constexpr double kMinJudged = 0.3;  // the fits are compared when this share of the points is judged at both poses
 
 }  // namespace
 
-bool FusedSlam::MapCovariance(const Pose2& pose, const std::vector<Eigen::Vector2d>& points,
-                              Eigen::Matrix3d* out) const {
-  const size_t stride = std::max<size_t>(1, points.size() / kMapSamples);
-  Eigen::Matrix3d sum = Eigen::Matrix3d::Zero();
+bool FusedSlam::SeenOffset(const Pose2& m, Eigen::Vector3d* u, Eigen::Matrix3d* cov,
+                           std::vector<std::pair<uint64_t, double>>* cells) const {
+  std::vector<std::pair<uint64_t, double>> seen;
   int n = 0;
-  for (size_t i = 0; i < points.size(); i += stride) {
-    const auto it = map_covariance_.find(CellKey(pose.Transform(points[i])));
-    if (it == map_covariance_.end()) continue;
-    sum += it->second;
+  for (const auto& point : last_points_) {
+    const uint64_t key = CellKey(m.Transform(point));
+    if (!cells_.count(key)) continue;
     ++n;
+    auto it = std::find_if(seen.begin(), seen.end(), [key](const auto& e) { return e.first == key; });
+    if (it == seen.end()) {
+      seen.emplace_back(key, 1.0);
+    } else {
+      it->second += 1.0;
+    }
   }
+  if (cells) cells->clear();
   if (n == 0) return false;
-  *out = sum / n;
+  const Eigen::Vector2d p(m.x_m, m.y_m);
+  u->setZero();
+  cov->setZero();
+  for (auto& [key, w] : seen) {
+    w /= n;
+    const MapOffset& c = cells_.at(key);
+    const Eigen::Matrix3d a = Lever(c.center, p);
+    *u += w * (a * c.offset);
+    *cov += w * (a * c.covariance * a.transpose());
+  }
+  *cov = Symmetric(*cov);
+  if (cells) *cells = std::move(seen);
   return true;
 }
 
-void FusedSlam::RecordMapCovariance(const Pose2& pose, const std::vector<Eigen::Vector2d>& points,
-                                    const Eigen::Matrix3d& covariance) {
-  const size_t stride = std::max<size_t>(1, points.size() / kMapSamples);
-  for (size_t i = 0; i < points.size(); i += stride) map_covariance_.emplace(CellKey(pose.Transform(points[i])), covariance);
-}
-
-std::optional<Eigen::Matrix3d> FusedSlam::MapCovarianceAt(const Eigen::Vector2d& p) const {
-  if (options_.map_cell_m <= 0) return std::nullopt;
-  const auto it = map_covariance_.find(CellKey(p));
-  if (it == map_covariance_.end()) return std::nullopt;
+std::optional<MapOffset> FusedSlam::MapOffsetAt(const Eigen::Vector2d& p) const {
+  const auto it = cells_.find(CellKey(start_.Inverse().Transform(p)));
+  if (it == cells_.end()) return std::nullopt;
   return it->second;
 }
 
-double FusedSlam::ScanFit(const Pose2& pose, double* judged) const {
+std::vector<Eigen::Vector2d> FusedSlam::WorldMapPoints() const {
+  std::vector<Eigen::Vector2d> out;
+  out.reserve(laser_.map().size());
+  for (const auto& q : laser_.map().points()) {
+    Eigen::Vector2d corrected = q;
+    const auto it = cells_.find(CellKey(q));
+    if (it != cells_.end()) {
+      const Eigen::Vector3d& o = it->second.offset;
+      const Eigen::Vector2d r = q - it->second.center;
+      corrected = q - o.head<2>() - o.z() * Eigen::Vector2d(-r.y(), r.x());
+    }
+    out.push_back(start_.Transform(corrected));
+  }
+  return out;
+}
+
+double FusedSlam::ScanFit(const Pose2& m, double* judged) const {
   *judged = 0;
   if (last_points_.empty()) return 0;
   const double near = 2 * options_.laser.point_sigma_m;
   int covered = 0, close = 0;
   for (const auto& p : last_points_) {
-    const Eigen::Vector2d w = pose.Transform(p);
+    const Eigen::Vector2d w = m.Transform(p);
     const int i = laser_.map().NearestIndex(w, kCoverageM);
     if (i < 0) continue;  // the map has nothing there: no evidence either way
     ++covered;
@@ -158,48 +221,56 @@ double FusedSlam::ScanFit(const Pose2& pose, double* judged) const {
 
 LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_robot) {
   {
-    // A sample of the scan, for judging a relocalisation.
+    // A sample of the scan, for the map offset and for judging a relocalisation.
     last_points_.clear();
     const size_t stride = std::max<size_t>(1, points_robot.size() / kMapSamples);
     for (size_t i = 0; i < points_robot.size(); i += stride) last_points_.push_back(points_robot[i]);
   }
   laser_.SetMapping(!suspect(), options_.map_min_fit);
   const bool map_empty = laser_.map().size() == 0;
-  const bool map_uncertainty = options_.map_cell_m > 0;
-  // The scan's own error: ICP's covariance is far too certain (one scan against the map).
-  const double sxy = options_.laser_sigma_xy_m, st = options_.laser_sigma_theta_rad;
-  const Eigen::Matrix3d own = Eigen::Vector3d(sxy * sxy, sxy * sxy, st * st).asDiagonal();
-  Eigen::Matrix3d map_p = Eigen::Matrix3d::Zero();
-  const bool anchored = map_uncertainty && MapCovariance(pose(), points_robot, &map_p);
-  const Eigen::Matrix3d prior = covariance();
-  laser_.SetMeasurementInflation(own + map_p);
-  const LaserSlamUpdate u = laser_.Update(points_robot);
-  if (anchored && u.measured) {
-    // Matched to the map, the pose is not more certain than the map plus the scan's own error
-    // (nor than it was before).
-    Eigen::Matrix3d p = covariance();
-    bool raised = false;
-    for (int i = 0; i < 3; ++i) {
-      const double floor = std::min(prior(i, i), map_p(i, i) + own(i, i));
-      if (p(i, i) < floor) {
-        p(i, i) = floor;
-        raised = true;
-      }
-    }
-    if (raised) laser_.ResetPose(pose(), p);
+  const LaserSlamUpdate u = laser_.Update(points_robot);  // the laser SLAM, as it runs alone
+  const Pose2& m = laser_.pose();
+  const Eigen::Vector2d p(m.x_m, m.y_m);
+  // The robot's offset: the seen cells' (or, where none has one yet, carried with the robot).
+  Eigen::Vector3d seen_u;
+  Eigen::Matrix3d seen_cov;
+  if (SeenOffset(m, &seen_u, &seen_cov, &seen_)) {
+    u_ = seen_u;
+    u_cov_ = seen_cov;
+  } else {
+    const Eigen::Matrix3d a = Lever(u_at_, p);
+    u_ = a * u_;
+    u_cov_ = Symmetric(a * u_cov_ * a.transpose());
   }
+  u_at_ = p;
   // A scan kept out of the map (as LaserSlam::SetMapping decides).
   const bool unmapped = !map_empty && (suspect() || u.fit < options_.map_min_fit);
   if (unmapped) ++unmapped_scans_;
-  if (map_uncertainty && !unmapped) {
-    // The parts this scan maps first are as certain as the pose now, less the drift of the map
-    // over the distance explored since the last scan.
+  if (!unmapped) {
+    // Cells this scan reaches first are mapped from the robot's pose: its offset, carried to them,
+    // and one more scan's drift.
     const double d = travelled_since_scan_m_;
-    const double gxy = options_.map_drift_xy_m * options_.map_drift_xy_m * d;
-    const double gt = options_.map_drift_theta_rad * options_.map_drift_theta_rad * d;
-    RecordMapCovariance(pose(), points_robot, covariance() + Eigen::Matrix3d(Eigen::Vector3d(gxy, gxy, gt).asDiagonal()));
+    const Eigen::Matrix3d drift = Diagonal(options_.map_drift_xy_m * std::sqrt(d), options_.map_drift_theta_rad * std::sqrt(d));
+    bool added = false;
+    for (const auto& point : last_points_) {
+      const Eigen::Vector2d q = m.Transform(point);
+      const uint64_t key = CellKey(q);
+      if (cells_.count(key)) continue;
+      MapOffset c;
+      c.center = CellCenter(q);
+      const Eigen::Matrix3d a = Lever(p, c.center);
+      c.offset = a * u_;
+      c.covariance = Symmetric(a * u_cov_ * a.transpose() + drift);
+      cells_.emplace(key, c);
+      added = true;
+    }
+    if (added && SeenOffset(m, &seen_u, &seen_cov, &seen_)) {
+      u_ = seen_u;
+      u_cov_ = seen_cov;
+    }
   }
   travelled_since_scan_m_ = 0;
+  Refresh();
   return u;
 }
 
@@ -234,7 +305,7 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
           "visual covariance has a negative variance");
   VisualUpdate v;
   // The measurement's covariance, symmetric, its variances floored.
-  Eigen::Matrix3d r = 0.5 * (r_in + r_in.transpose());
+  Eigen::Matrix3d r = Symmetric(r_in);
   const double fp = options_.min_fix_sigma_xy_m, fh = options_.min_fix_sigma_theta_rad;
   const Eigen::Vector3d floor(fp * fp, fp * fp, fh * fh);
   for (int i = 0; i < 3; ++i) r(i, i) += std::max(0.0, floor(i) - r(i, i));
@@ -246,14 +317,56 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   }
   v.measurement = z;
   v.measurement_covariance = r;
-  v.mahalanobis2 = Mahalanobis2(Difference(z, pose()), covariance(), r);
+  // In the map frame the fix measures the map's offset at the robot: m - z.
+  const Pose2& m = laser_.pose();
+  const Eigen::Vector2d p(m.x_m, m.y_m);
+  const Pose2 zm = start_.Inverse().Compose(z);
+  const Eigen::Matrix3d rm = Rotate(start_rotation_.transpose(), r) + laser_.covariance();
+  const Eigen::Matrix3d a = Lever(u_at_, p);
+  const Eigen::Vector3d u = a * u_;
+  const Eigen::Matrix3d uc = Symmetric(a * u_cov_ * a.transpose());
+  const Eigen::Vector3d measured(m.x_m - zm.x_m, m.y_m - zm.y_m, WrapAngle(m.theta_rad - zm.theta_rad));
+  Eigen::Vector3d y = measured - u;
+  y.z() = WrapAngle(y.z());
+  const Eigen::LDLT<Eigen::Matrix3d> s(Symmetric(uc + rm));
+  v.mahalanobis2 = y.dot(s.solve(y));
   if (v.mahalanobis2 <= options_.gate_chi2) {
-    laser_.UpdatePose(z, r);
+    u_at_ = p;
+    if (seen_.empty()) {
+      // No map cell under the robot (just relocalised, no scan yet): the robot's offset alone.
+      const Eigen::Matrix3d k = s.solve(uc).transpose();  // uc S^-1 (both symmetric)
+      u_ = u + k * y;
+      u_.z() = WrapAngle(u_.z());
+      u_cov_ = Symmetric(uc - k * uc);
+    } else {
+      // Every cell the last scan saw measures the map's offset at the robot as well: each gets
+      // its own Kalman update (its offset carried to the robot, innovation and gain its own), and
+      // the robot's offset is their mean again, as after a scan.
+      u_.setZero();
+      u_cov_.setZero();
+      for (const auto& [key, w] : seen_) {
+        MapOffset& c = cells_.at(key);
+        const Eigen::Matrix3d ac = Lever(c.center, p);
+        Eigen::Vector3d yc = measured - ac * c.offset;
+        yc.z() = WrapAngle(yc.z());
+        const Eigen::Matrix3d oa = c.covariance * ac.transpose();
+        const Eigen::LDLT<Eigen::Matrix3d> sc(Symmetric(ac * oa + rm));
+        const Eigen::Matrix3d kc = sc.solve(oa.transpose()).transpose();  // O A^T S_c^-1
+        c.offset += kc * yc;
+        c.offset.z() = WrapAngle(c.offset.z());
+        c.covariance = Symmetric(c.covariance - kc * oa.transpose());
+        u_ += w * (ac * c.offset);
+        u_cov_ += w * (ac * c.covariance * ac.transpose());
+      }
+      u_.z() = WrapAngle(u_.z());
+      u_cov_ = Symmetric(u_cov_);
+    }
     ++accepted_;
     consecutive_rejections_ = 0;
     hypothesis_.reset();
     hypothesis_count_ = 0;
     v.outcome = VisualOutcome::kAccepted;
+    Refresh();
     return v;
   }
   ++rejected_;
@@ -285,26 +398,50 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
     relocalize = false;  // a small disagreement (a drifted map), not a kidnapping: the laser keeps the pose
     ++small_disagreements_;
   }
+  // The laser's pose there: the world pose in the map frame plus the map's offset there (the
+  // cells the last scan would see from it; none: an unmapped part, no offset).
+  const Pose2 hm = start_.Inverse().Compose(h.pose);
+  Pose2 target{hm.x_m + u.x(), hm.y_m + u.y(), WrapAngle(hm.theta_rad + u.z())};
+  Eigen::Vector3d there_u = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d there_cov = Eigen::Matrix3d::Zero();
+  std::vector<std::pair<uint64_t, double>> there_cells;
+  const bool mapped_there = SeenOffset(target, &there_u, &there_cov, &there_cells);
+  target = {hm.x_m + there_u.x(), hm.y_m + there_u.y(), WrapAngle(hm.theta_rad + there_u.z())};
   if (relocalize && options_.relocalize_max_fit_loss < 1) {
     double judged_here = 0, judged_there = 0;
-    const double here = ScanFit(pose(), &judged_here), there = ScanFit(h.pose, &judged_there);
+    const double here = ScanFit(m, &judged_here), there = ScanFit(target, &judged_there);
     if (judged_here >= kMinJudged && judged_there >= kMinJudged && there < here - options_.relocalize_max_fit_loss) {
       relocalize = false;
       ++refused_relocalizations_;
     }
   }
   if (relocalize) {
-    Eigen::Matrix3d p = h.covariance;
+    Eigen::Matrix3d pw = h.covariance;
     const double sxy = options_.relocalize_sigma_xy_m, st = options_.relocalize_sigma_theta_rad;
     const Eigen::Vector3d wide(sxy * sxy, sxy * sxy, st * st);
-    for (int i = 0; i < 3; ++i) p(i, i) = std::max(p(i, i), wide(i));
-    laser_.ResetPose(h.pose, p);
+    for (int i = 0; i < 3; ++i) pw(i, i) = std::max(pw(i, i), wide(i));
+    const Eigen::Matrix3d pm = Rotate(start_rotation_.transpose(), Symmetric(pw));
+    if (mapped_there) {
+      // The laser searches its map there with the wide covariance; the map's offset there is known.
+      laser_.ResetPose(target, pm);
+      u_cov_ = there_cov;
+    } else {
+      // No map there: the laser starts a new part of its map as it starts the first (its own
+      // initial uncertainty), and that part is off the world by the relocalised pose's error.
+      const double ixy = options_.laser.initial_sigma_xy_m, ith = options_.laser.initial_sigma_theta_rad;
+      laser_.ResetPose(target, Diagonal(ixy, ith));
+      u_cov_ = pm;
+    }
+    u_ = there_u;
+    u_at_ = {target.x_m, target.y_m};
+    seen_ = std::move(there_cells);
     ++relocalizations_;
     consecutive_rejections_ = 0;
     rejected_window_.clear();
     hypothesis_.reset();
     hypothesis_count_ = 0;
     v.outcome = VisualOutcome::kRelocalized;
+    Refresh();
   }
   return v;
 }

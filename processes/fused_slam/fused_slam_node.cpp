@@ -73,11 +73,11 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.relocalize_min_distance_m = ini.GetDouble(s, "relocalize_min_distance_m");
   o.relocalize_min_heading_rad = ini.GetDouble(s, "relocalize_min_heading_deg") / kDegPerRad;
   o.suspect_after = ini.GetInt(s, "suspect_after");
+  o.start_sigma_xy_m = ini.GetDouble(s, "start_sigma_xy_m");
+  o.start_sigma_theta_rad = ini.GetDouble(s, "start_sigma_theta_deg") / kDegPerRad;
   o.map_cell_m = ini.GetDouble(s, "map_cell_m");
   o.map_drift_xy_m = ini.GetDouble(s, "map_drift_xy_m");
   o.map_drift_theta_rad = ini.GetDouble(s, "map_drift_theta_deg") / kDegPerRad;
-  o.laser_sigma_xy_m = ini.GetDouble(s, "laser_sigma_xy_m");
-  o.laser_sigma_theta_rad = ini.GetDouble(s, "laser_sigma_theta_deg") / kDegPerRad;
   o.map_min_fit = ini.GetDouble(s, "map_min_fit");
   c.map_every_n_scans = ini.GetInt(s, "map_every_n_scans");
   c.status_every_n_scans = ini.GetInt(s, "status_every_n_scans");
@@ -108,9 +108,9 @@ void FusedSlamConfig::Print(std::ostream& out) const {
       << "\nrelocalize_max_fit_loss = " << o.relocalize_max_fit_loss
       << "\nrelocalize_min_distance_m = " << o.relocalize_min_distance_m
       << "\nrelocalize_min_heading_deg = " << o.relocalize_min_heading_rad * kDegPerRad
-      << "\nsuspect_after = " << o.suspect_after << "\nmap_cell_m = " << o.map_cell_m
+      << "\nsuspect_after = " << o.suspect_after << "\nstart_sigma_xy_m = " << o.start_sigma_xy_m
+      << "\nstart_sigma_theta_deg = " << o.start_sigma_theta_rad * kDegPerRad << "\nmap_cell_m = " << o.map_cell_m
       << "\nmap_drift_xy_m = " << o.map_drift_xy_m << "\nmap_drift_theta_deg = " << o.map_drift_theta_rad * kDegPerRad
-      << "\nlaser_sigma_xy_m = " << o.laser_sigma_xy_m << "\nlaser_sigma_theta_deg = " << o.laser_sigma_theta_rad * kDegPerRad
       << "\nmap_min_fit = " << o.map_min_fit
       << "\nmap_every_n_scans = " << map_every_n_scans << "\nstatus_every_n_scans = " << status_every_n_scans << "\n";
 }
@@ -319,7 +319,7 @@ void FusedSlamNode::PublishPose(int64_t utime, const nav::Pose2& pose) {
 }
 
 void FusedSlamNode::PublishMap(int64_t utime) {
-  const std::vector<Eigen::Vector2d>& points = slam_->map().points();
+  const std::vector<Eigen::Vector2d> points = slam_->WorldMapPoints();
   point_map_t m{};
   m.utime = utime;
   m.estimator = kEstimator;

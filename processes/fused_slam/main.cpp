@@ -14,11 +14,13 @@ int Main(int argc, char** argv) {
   glue::CommonFlags common;
   common.config = SNAPNAV_CONFIG_DIR "/fused_slam.ini";
   glue::Flags flags("fused-slam",
-                    "Fused visual + laser SLAM (thesis 1.2, 5, 6.3.3): the laser SLAM's EKF on the robot pose (odometry\n"
-                    "prediction, ICP scan updates against a point map) with the place cells' pose and covariance as a\n"
-                    "second measurement behind a Mahalanobis (chi-square, 3 dof) gate. Visual measurements that are\n"
-                    "rejected but agree with each other relocalise the filter (a kidnapping); while they are rejected\n"
-                    "scans add no points to the map. The frame is the place memory's. Publishes the fused pose_t on\n"
+                    "Fused visual + laser SLAM (thesis 1.2, 5, 6.3.3): the laser SLAM (EKF on the robot pose, odometry\n"
+                    "prediction, ICP scan updates against a point map) runs unaltered in its own map frame; the place\n"
+                    "cells' poses and covariances, behind a Mahalanobis (chi-square, 3 dof) gate, estimate that map's\n"
+                    "offset from the world in every map cell, and the fused pose is the laser's corrected by it.\n"
+                    "Visual measurements that are rejected but agree with each other relocalise the filter (a\n"
+                    "kidnapping); optionally (suspect_after) scans add no points to the map while they are rejected.\n"
+                    "The frame is the place memory's. Publishes the fused pose_t on\n"
                     "every scan (its utime) and every visual measurement (that measurement's utime), the map every\n"
                     "n-th scan and a fused_slam_status_t; counts in the report at exit. Run placecells without its\n"
                     "distance filter so that its fixes do not follow a lost filter.");

@@ -200,7 +200,8 @@ TEST(FusedSlamNode, PublishesAPosePerScanAndPerVisualMeasurementWithTheirUtimes)
 // relocalize_after of them; the map is protected meanwhile.
 TEST(FusedSlamNode, RelocalisesAfterAgreeingRejectedVisualMeasurements) {
   glue::Bus bus("memq://");
-  const FusedSlamConfig config = ShippedConfig("F2_");
+  FusedSlamConfig config = ShippedConfig("F2_");
+  config.options.suspect_after = 1;  // the map protection (off in the shipped config) on
   FusedSlamNode node(bus, config);
   Collector got(bus, "F2_");
   std::mt19937 rng(5);
@@ -257,8 +258,10 @@ TEST(FusedSlamNode, StartsAtTheFirstVisualFixWhenConfiguredSo) {
   ASSERT_EQ(got.poses.size(), 2u);
   EXPECT_NEAR(got.poses.back().x_m, 2.0, 1e-6);
   EXPECT_NEAR(got.poses.back().theta_rad, 0.5, 1e-6);
-  // The start covariance is the fix's, floored by min_fix_sigma_xy_m.
-  EXPECT_NEAR(got.poses.front().covariance[0], config.options.min_fix_sigma_xy_m * config.options.min_fix_sigma_xy_m, 1e-9);
+  // The start covariance is the fix's, floored by min_fix_sigma_xy_m (the map's offset from the
+  // world), plus the laser's initial uncertainty relative to its own map.
+  const double floor = config.options.min_fix_sigma_xy_m, laser = config.options.laser.initial_sigma_xy_m;
+  EXPECT_NEAR(got.poses.front().covariance[0], floor * floor + laser * laser, 1e-9);
 }
 
 TEST(FusedSlamNode, BadInputIsCountedByReasonNeverACrash) {

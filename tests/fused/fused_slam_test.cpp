@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 namespace snapnav::nav {
 namespace {
 
@@ -37,11 +39,21 @@ std::vector<Eigen::Vector2d> RoomScan(const Pose2& robot, double w, double h) {
   return points;
 }
 
+// Options with no uncertainty of the laser's pose relative to its own map at the start: the fused
+// covariance is then the start's alone (the map's offset from the world), and the visual updates
+// are plain Kalman updates of that offset.
+FusedSlamOptions PlainOptions() {
+  FusedSlamOptions o;
+  o.laser.initial_sigma_xy_m = 0;
+  o.laser.initial_sigma_theta_rad = 0;
+  return o;
+}
+
 TEST(FusedSlam, ConsistentVisualMeasurementPullsADriftedPoseBack) {
   // Drifted prediction at x = 1.2 (sigma 0.1 m, 0.05 rad); a visual fix at the truth x = 1.0
   // (sigma 0.05 m, 0.03 rad). S_xx = 0.01 + 0.0025 = 0.0125: d2 = 0.2^2 / 0.0125 = 3.2, accepted;
   // K_xx = 0.01 / 0.0125 = 0.8: x = 1.2 - 0.8 * 0.2 = 1.04, var = 0.01 * 0.0025 / 0.0125 = 0.002.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
   const VisualUpdate v = f.AddVisual(kT0, {1.0, 0.0, 0.0}, Diag(0.05, 0.03));
   EXPECT_EQ(v.outcome, VisualOutcome::kAccepted);
@@ -62,7 +74,7 @@ TEST(FusedSlam, ConsistentVisualMeasurementPullsADriftedPoseBack) {
 
 TEST(FusedSlam, VisualMeasurementBelowTheSigmaFloorIsFloored) {
   // A fix claiming 1 mm is taken as min_fix_sigma_xy_m = 0.05 m: the same update as above.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
   EXPECT_EQ(f.AddVisual(kT0, {1.0, 0.0, 0.0}, Diag(0.001, 0.03)).outcome, VisualOutcome::kAccepted);
   EXPECT_NEAR(f.pose().x_m, 1.04, 1e-9);
@@ -70,7 +82,7 @@ TEST(FusedSlam, VisualMeasurementBelowTheSigmaFloorIsFloored) {
 
 TEST(FusedSlam, OutlierIsGatedOut) {
   // 1.8 m off: d2 = 1.8^2 / 0.0125 = 259.2 > 11.34: rejected, the pose does not move.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   FusedSlam f(o, {1.2, 0.0, 0.0}, Diag(0.1, 0.05));
   const VisualUpdate v = f.AddVisual(kT0, {3.0, 0.0, 0.0}, Diag(0.05, 0.03));
   EXPECT_EQ(v.outcome, VisualOutcome::kRejected);
@@ -91,7 +103,7 @@ TEST(FusedSlam, OutlierIsGatedOut) {
 TEST(FusedSlam, KidnappingIsRecoveredAfterAgreeingRejections) {
   // The filter believes it is at (1, 1) heading 0 with 2 cm; the robot was carried to (29, 1).
   // It drives 0.1 m per step; the visual fixes say (29 + 0.1 k, 1) with 0.05 m.
-  FusedSlamOptions o;
+  FusedSlamOptions o = PlainOptions();
   o.relocalize_after = 4;
   FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
   int64_t t = kT0;
@@ -230,6 +242,39 @@ TEST(FusedSlam, ScansKeepThePoseOnTheMapAndVisualFixesAnchorIt) {
   EXPECT_NEAR(f.pose().x_m, 2.5, 0.03);
   EXPECT_NEAR(f.pose().y_m, 1.5, 0.03);
   EXPECT_EQ(f.accepted(), 1);
+}
+
+TEST(FusedSlam, ConsistentFixesPullAMapThatIsOffBackAndTheLaserStaysOnIt) {
+  // The start is 0.1 m off in x (sigma 0.1 m): the room's map, built from it, is 0.1 m off the
+  // world. Fixes at the truth (sigma 0.05 m) update the offset of every map cell the scan sees:
+  // the fused pose moves to the truth, the laser's pose in its own map does not move, and the
+  // cells' covariances shrink but stay positive however many fixes come.
+  FusedSlamOptions o;
+  FusedSlam f(o, {2.1, 1.5, 0.0}, Diag(0.1, 0.05));
+  f.Update(RoomScan({2.0, 1.5, 0.0}, 6, 4));
+  const Pose2 laser = f.laser().pose();
+  EXPECT_NEAR(f.pose().x_m, 2.1, 1e-3);
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_EQ(f.AddVisual(kT0, {2.0, 1.5, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kAccepted) << k;
+  }
+  // Each cell: prior 0.01 m^2, ten fixes of ~0.0026 m^2: 0.1 m * 100 / (100 + 10 / 0.0026) is left.
+  EXPECT_NEAR(f.pose().x_m, 2.0, 0.01);
+  EXPECT_NEAR(f.pose().y_m, 1.5, 0.01);
+  EXPECT_EQ(f.laser().pose().x_m, laser.x_m);
+  EXPECT_EQ(f.laser().pose().y_m, laser.y_m);
+  EXPECT_LT(f.covariance()(0, 0), 0.001);
+  const auto wall = f.MapOffsetAt({0.1, 1.5});  // the left wall as the map has it
+  ASSERT_TRUE(wall.has_value());
+  EXPECT_NEAR(wall->offset.x(), 0.1, 0.02);
+  for (int k = 0; k < 300; ++k) f.AddVisual(kT0, {2.0, 1.5, 0.0}, Diag(0.05, 0.03));
+  EXPECT_NEAR(f.pose().x_m, 2.0, 0.002);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(f.robot_offset_covariance());
+  EXPECT_GT(eig.eigenvalues().minCoeff(), 0.0);
+  EXPECT_GT(f.covariance().diagonal().minCoeff(), 0.0);
+  // An outlier is gated out and moves nothing.
+  const Pose2 before = f.pose();
+  EXPECT_EQ(f.AddVisual(kT0, {3.5, 1.5, 0.0}, Diag(0.05, 0.03)).outcome, VisualOutcome::kRejected);
+  EXPECT_EQ(f.pose().x_m, before.x_m);
 }
 
 TEST(FusedSlam, InvalidInputThrows) {

@@ -36,9 +36,10 @@ void PrintCompareOptions(std::ostream& out, const CompareConfigPaths& paths, con
       << "[fused_slam] gate_chi2 " << f.gate_chi2 << ", agree_chi2 " << f.agree_chi2 << ", relocalize_after "
       << f.relocalize_after << " within " << f.relocalize_window_s << " s (max fit loss " << f.relocalize_max_fit_loss
       << "), relocalize sigma " << f.relocalize_sigma_xy_m << " m / " << f.relocalize_sigma_theta_rad
-      << " rad, fix sigma floor " << f.min_fix_sigma_xy_m << " m / " << f.min_fix_sigma_theta_rad << " rad, laser sigma "
-      << f.laser_sigma_xy_m << " m / " << f.laser_sigma_theta_rad << " rad, map cells " << f.map_cell_m
-      << " m, suspect_after " << f.suspect_after << ", map_min_fit " << f.map_min_fit << "\n";
+      << " rad, fix sigma floor " << f.min_fix_sigma_xy_m << " m / " << f.min_fix_sigma_theta_rad << " rad, start sigma "
+      << f.start_sigma_xy_m << " m / " << f.start_sigma_theta_rad << " rad, map offset cells " << f.map_cell_m
+      << " m (drift " << f.map_drift_xy_m << " m / " << f.map_drift_theta_rad << " rad per sqrt m)"
+      << ", suspect_after " << f.suspect_after << ", map_min_fit " << f.map_min_fit << "\n";
 }
 
 }  // namespace snapnav::eval

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Dense>
 #include <opencv2/imgproc.hpp>
 
 #include "homing_eval.hpp"
@@ -224,6 +225,16 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     ++fused_result.updates;
     fused_result.poses.push_back(fused.pose());
     out.fused_sigma.push_back(fused.covariance().diagonal().cwiseMax(0.0).cwiseSqrt());
+    out.fused_covariance.push_back(fused.covariance());
+    {
+      const double c = std::cos(fused.map_frame().theta_rad), sn = std::sin(fused.map_frame().theta_rad);
+      const Eigen::Vector3d& u = fused.robot_offset();
+      const Eigen::Matrix3d& uc = fused.robot_offset_covariance();
+      Eigen::Matrix3d j = Eigen::Matrix3d::Identity();
+      j.topLeftCorner<2, 2>() << c, -sn, sn, c;
+      out.fused_map_offset.push_back(j * u);
+      out.fused_map_offset_sigma.push_back((j * uc * j.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt());
+    }
     if (ratslam) ratslam_result.poses.push_back(ratslam->pose());
     scan_pending = true;
   };
@@ -376,12 +387,29 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   for (MethodResult* m : {&dr, &laser, &ratslam_result, &fused_result}) {
     if (m->ran) Measure(m, out.truth, options.rpe_delta_m, split);
   }
+  {
+    // NEES of fused SLAM against the truth.
+    double sum = 0;
+    int within = 0, n = 0;
+    for (size_t i = 0; i < fused_result.poses.size() && i < out.truth.size() && i < out.fused_covariance.size(); ++i) {
+      const Eigen::Vector3d e(fused_result.poses[i].x_m - out.truth[i].x_m, fused_result.poses[i].y_m - out.truth[i].y_m,
+                              nav::WrapAngle(fused_result.poses[i].theta_rad - out.truth[i].theta_rad));
+      const Eigen::LDLT<Eigen::Matrix3d> ldlt(out.fused_covariance[i]);
+      const double nees = e.dot(ldlt.solve(e));
+      if (!std::isfinite(nees)) continue;
+      sum += nees;
+      within += nees <= 7.81 ? 1 : 0;
+      ++n;
+    }
+    out.fused_nees_mean = n ? sum / n : kNaN;
+    out.fused_nees_within_95 = n ? static_cast<double>(within) / n : kNaN;
+  }
   if (out.kidnapped) {
     out.recovery_s = RecoveryTime(out.time_s, fused_result.error_m, out.kidnap_at_s, options.recovery_error_m,
                                   options.recovery_hold_s, &out.first_under_s);
   }
   out.methods = {dr, laser, ratslam_result, fused_result};
-  out.map = fused.map().points();
+  out.map = fused.WorldMapPoints();
   out.visual_accepted = fused.accepted();
   out.visual_rejected = fused.rejected();
   out.relocalizations = fused.relocalizations();
@@ -475,6 +503,8 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
   k.push_back({"relocalizations", static_cast<double>(run.relocalizations)});
   k.push_back({"relocalizations_refused", static_cast<double>(run.relocalizations_refused)});
   k.push_back({"unmapped_scans", static_cast<double>(run.unmapped_scans)});
+  k.push_back({"fused_slam_nees_mean", run.fused_nees_mean});
+  k.push_back({"fused_slam_nees_within_95", run.fused_nees_within_95});
   k.push_back({"visual_fix_error_mean_m", run.visual_error_mean_m});
   k.push_back({"visual_fix_error_median_m", run.visual_error_median_m});
   k.push_back({"place_cells_ms_per_view", run.ms_per_view});
@@ -579,7 +609,10 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
     for (const auto& m : run.methods) {
       if (m.ran) csv << "," << m.name << "_x_m," << m.name << "_y_m," << m.name << "_theta_rad";
     }
-    csv << ",fused_slam_sigma_x_m,fused_slam_sigma_y_m,fused_slam_sigma_theta_rad\n" << std::setprecision(9);
+    csv << ",fused_slam_sigma_x_m,fused_slam_sigma_y_m,fused_slam_sigma_theta_rad,fused_slam_map_offset_x_m,"
+           "fused_slam_map_offset_y_m,fused_slam_map_offset_theta_rad,fused_slam_map_offset_sigma_x_m,"
+           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad\n"
+        << std::setprecision(9);
     for (size_t i = 0; i < run.truth.size(); ++i) {
       csv << run.utime[i] << "," << run.time_s[i] << "," << run.truth[i].x_m << "," << run.truth[i].y_m << ","
           << run.truth[i].theta_rad;
@@ -587,7 +620,11 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
         if (m.ran) csv << "," << m.poses[i].x_m << "," << m.poses[i].y_m << "," << m.poses[i].theta_rad;
       }
       const Eigen::Vector3d sigma = i < run.fused_sigma.size() ? run.fused_sigma[i] : Eigen::Vector3d::Constant(kNaN);
-      csv << "," << sigma.x() << "," << sigma.y() << "," << sigma.z() << "\n";
+      csv << "," << sigma.x() << "," << sigma.y() << "," << sigma.z();
+      const Eigen::Vector3d nan3 = Eigen::Vector3d::Constant(kNaN);
+      const Eigen::Vector3d o = i < run.fused_map_offset.size() ? run.fused_map_offset[i] : nan3;
+      const Eigen::Vector3d os = i < run.fused_map_offset_sigma.size() ? run.fused_map_offset_sigma[i] : nan3;
+      csv << "," << o.x() << "," << o.y() << "," << o.z() << "," << os.x() << "," << os.y() << "," << os.z() << "\n";
     }
   }
   {

@@ -117,6 +117,14 @@ struct CompareRun {
   std::vector<nav::Pose2> truth;      // at every scan, scene frame
   std::vector<MethodResult> methods;  // CompareMethodNames() order
   std::vector<Eigen::Vector3d> fused_sigma;  // fused SLAM's std. dev. of x [m], y [m], theta [rad] at every scan
+  std::vector<Eigen::Matrix3d> fused_covariance;  // ... its covariance (scene frame)
+  // Fused SLAM's estimate of its laser map's offset from the world at the robot (x, y in the scene
+  // frame's axes [m], heading [rad]) and the std. devs., at every scan.
+  std::vector<Eigen::Vector3d> fused_map_offset, fused_map_offset_sigma;
+  // Consistency of fused SLAM's covariance: the mean normalised estimation error squared
+  // (e^T P^-1 e over x, y, theta at every scan; 3 for a consistent filter) and the share of scans
+  // where it is within the chi-square 95 % bound (7.81).
+  double fused_nees_mean = 0, fused_nees_within_95 = 0;
   std::vector<Eigen::Vector2d> map;   // fused SLAM's map at the end
   int memory_cells = 0;
   // Visual measurements of fused SLAM.

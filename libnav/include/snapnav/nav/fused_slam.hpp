@@ -6,26 +6,52 @@
 // see (a corridor's axis) and recovers from a kidnapping where the laser alone is ambiguous
 // (the two symmetric halves of a corridor).
 //
-// Frame: the filter's frame is the place memory's (the world, or scene, frame): a visual
-// measurement is a pose in that frame, and the map is built in it. The filter starts at a pose
-// given in that frame; in the simulator the odometry's cumulative pose starts at the true start
-// pose, so the first odometry message's pose is such a start (see processes/fused_slam).
+// Frames. The laser part is nav::LaserSlam, run exactly as laser-only SLAM in its own map frame
+// (the start pose is its origin): its pose m follows ICP against its own map with the laser's
+// local precision, and nothing the camera says moves it (but for a relocalisation). The world
+// (place-memory) frame is the start pose composed with the map frame, minus the map's offset:
+// the map is built from the laser's own estimates, so it is off the world by an error that grows
+// while it is explored (a corridor bends with the heading drift) and that is the same on every
+// later visit. That error is not white noise per scan (the old scheme inflated each scan's R by
+// it, so the laser lost its local precision, and its covariance stopped growing while exploring):
+// it is estimated, per map cell, from the visual measurements.
+//
+// Map offset (map_cell_m cells of the map frame). Every cell holds an offset o = (t, phi): the
+// map there is shifted by t and turned by phi about the cell's centre c with respect to the
+// world, with a covariance O. A cell gets its offset when a scan point first falls in it: the
+// robot's offset then, carried rigidly from the robot to c (a heading offset moves far cells
+// more), its covariance plus the map's drift over the distance travelled since the previous
+// scan (map_drift_*): cells mapped from a pose matched to a part mapped just before inherit its
+// uncertainty plus the drift of one more scan, so the uncertainty grows along an exploration and
+// stays where the laser matches parts mapped long ago. The robot's offset u (at its position p)
+// is, after every scan, the mean of the offsets of the cells the scan's points fall in, each
+// carried to p (u = mean A_c(p) o_c, A_c(p) = [I, J (p - c); 0, 1]); between scans it is carried
+// with the robot. The world pose is start (+) (m - u), its covariance P_m + U (the laser's, relative
+// to the map, and the offset's), turned into the world frame.
 //
 // Visual measurements, in order:
 //   1. stale: older than max_fix_age_s before the latest odometry -> dropped (counted);
 //   2. late: carried forward to the latest odometry by the odometry increments since its
 //      utime (with their motion noise added to its covariance), as nav::PoseTracker does;
-//   3. gate: innovation y = z - x (angle wrapped), S = P + R, d2 = y^T S^-1 y; d2 <= gate_chi2
-//      (chi-square, 3 degrees of freedom; 11.34 is the 99 % point) -> EKF update (accepted);
+//   3. gate: in the map frame a fix z measures the offset, m - z, with covariance R + P_m;
+//      y = (m - z) - u (angle wrapped), S = U + R + P_m, d2 = y^T S^-1 y (the same as the
+//      innovation of the world pose); d2 <= gate_chi2 (chi-square, 3 degrees of freedom; 11.34 is
+//      the 99 % point) -> accepted: every cell the last scan saw measures the offset at the robot
+//      too and gets its own Kalman update (innovation y_c = (m - z) - A_c o_c, S_c = A_c O_c A_c^T
+//      + R + P_m, K_c = O_c A_c^T S_c^-1), and u is their mean again (no cell under the robot,
+//      just relocalised: u alone, K = U S^-1); the laser's pose and map stay as they are;
 //   4. otherwise rejected. The rejected measurements of the last relocalize_window_s are kept,
 //      carried forward by odometry like the filter. When a rejected measurement agrees with at
 //      least relocalize_after - 1 of them (pairwise d2 <= agree_chi2) and their fused pose still
-//      fails the gate against the filter, the filter relocalises: its pose becomes that fused
-//      pose and its covariance theirs widened to at least relocalize_sigma_*; the map stays (it
-//      is in the world frame). Outliers in between (aliasing, occlusion) do not break the
-//      evidence, and they rarely agree with each other once carried by odometry. A kidnapped
-//      robot (the laser pose consistently wrong) thus recovers after relocalize_after visual
-//      measurements; so does a filter the laser led astray.
+//      fails the gate against the filter, the filter relocalises: the laser's pose jumps so that
+//      the world pose is that fused pose (the offset of the cells there kept); their covariance,
+//      widened to at least relocalize_sigma_*, becomes the laser's where the map has cells there
+//      (ICP searches it; the robot's offset is theirs), else the robot's offset's (the laser
+//      starts a new part of its map with its initial covariance, and that part is off the world
+//      by the relocalised pose's error); the map stays (it is still right where it was built). Outliers in
+//      between (aliasing, occlusion) do not break the evidence, and they rarely agree with each
+//      other once carried by odometry. A kidnapped robot (the laser pose consistently wrong) thus
+//      recovers after relocalize_after visual measurements; so does a filter the laser led astray.
 //      No relocalisation for a jump shorter than relocalize_min_distance_m (and a turn smaller
 //      than relocalize_min_heading_rad): that is a map that drifted while it was built, and
 //      jumping off it only corrupts it. No relocalisation either when the last scan fits the map
@@ -36,17 +62,10 @@
 // rejected visual measurements) scans do not add points to the map, nor does a scan whose ICP
 // fit is below map_min_fit.
 //
-// Map uncertainty (map_cell_m > 0): a scan matched to the map measures the pose relative to the
-// map, and the map is only as certain as the poses it was built from. Every map_cell_m cell the
-// scan points reach gets, when first mapped, the filter's covariance then plus the map's drift over
-// the distance explored since the previous scan (map_drift_*); a later scan's
-// measurement covariance R is ICP's plus the mean recorded covariance of the cells its points fall
-// in (LaserSlam::SetMeasurementInflation), and the scan does not make the filter more certain than
-// that (the variances after the update are at least the smaller of the prediction's and the
-// map's). So while the robot explores (a corridor whose axis the laser cannot see, heading drift
-// building up) the filter keeps the uncertainty it really has and the visual measurements weigh
-// in; back in a part mapped with a certain pose, the laser dominates again. map_cell_m = 0: the
-// laser measurement as LaserSlam makes it (the ICP covariance, far too certain for fusion).
+// Where the laser sees its map well and the map was built from a certain pose (a room seen from
+// the start), the offsets stay as certain as the start (start_sigma_*) and the fixes, centimetres
+// off, move the world pose by micrometres: fused SLAM is then the laser SLAM. Where the map drifts
+// (a corridor), the offsets' uncertainty grows with it and the fixes hold the world pose.
 
 #include <cstdint>
 #include <deque>
@@ -84,16 +103,16 @@ struct FusedSlamOptions {
   // parts). 1: never refuse.
   double relocalize_max_fit_loss = 0.2;
   int suspect_after = 1;              // this many consecutive rejections: no points join the map; 0: never
-  double map_cell_m = 1.0;            // map uncertainty cells [m]; 0: off (see above)
-  // The map's drift while exploring: a cell mapped first gets the filter's covariance plus this
-  // std. dev. per square root of the metres travelled since the previous scan (the variance grows
-  // with the distance explored) [m, rad over 1 m].
+  // The start pose's uncertainty in the world frame: the offset of the map first seen from it
+  // [m, rad] (FusedSlam(options, start, covariance) takes a covariance instead).
+  double start_sigma_xy_m = 0.001;
+  double start_sigma_theta_rad = 0.000175;
+  double map_cell_m = 1.0;            // map offset cells [m] (see above)
+  // The map's drift while exploring: a cell mapped first gets the offset covariance of the robot
+  // plus this std. dev. per square root of the metres travelled since the previous scan [m, rad
+  // over 1 m].
   double map_drift_xy_m = 0.05;
   double map_drift_theta_rad = 0.0087;
-  // Added to every scan measurement's covariance (the error of one scan against the map) [m, rad];
-  // 0: ICP's own covariance. It also weakens the laser where the map is certain.
-  double laser_sigma_xy_m = 0;
-  double laser_sigma_theta_rad = 0;
   // A scan with an ICP fit below this adds no points [0-1]; 0: off. Off by default: where the
   // map has nothing yet (just relocalised into an unexplored part) every fit is poor, and the map
   // could never grow there.
@@ -117,31 +136,45 @@ struct VisualUpdate {
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
 };
 
+// A map cell's offset from the world (see the header comment), in the map frame.
+struct MapOffset {
+  Eigen::Vector2d center;                      // the cell's centre [m]
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // t [m], phi [rad] about the centre
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+};
+
 class FusedSlam {
  public:
-  // Starts at `start` (place-memory frame) with the laser options' initial covariance.
+  // Starts at `start` (place-memory frame), its uncertainty start_sigma_*.
   explicit FusedSlam(const FusedSlamOptions& options, const Pose2& start = {});
-  // ... or with a given covariance (e.g. a visual fix's, widened). Throws std::invalid_argument on
-  // invalid options or a non-finite start.
+  // ... or with a given uncertainty of the start (e.g. a visual fix's, widened). Throws
+  // std::invalid_argument on invalid options or a non-finite start.
   FusedSlam(const FusedSlamOptions& options, const Pose2& start, const Eigen::Matrix3d& covariance);
 
-  // EKF prediction from one odometry increment (robot frame of the previous reading) ending at
-  // utime; kept max_fix_age_s for late visual measurements. Throws std::invalid_argument on a
-  // non-finite increment.
+  // Odometry increment (robot frame of the previous reading) ending at utime: the laser's EKF
+  // prediction; kept max_fix_age_s for late visual measurements. Throws std::invalid_argument on
+  // a non-finite increment.
   void Predict(int64_t utime, const Pose2& odometry_delta);
-  // EKF update from one scan (points in the robot frame); the map grows unless protected.
+  // One scan (points in the robot frame): the laser's EKF update; the map grows unless protected,
+  // new map cells get their offsets, and the robot's offset is the seen cells'.
   LaserSlamUpdate Update(const std::vector<Eigen::Vector2d>& points_robot);
   // A visual pose measurement taken at utime (place-memory frame) with its covariance. Throws
   // std::invalid_argument on a non-finite pose or covariance or a negative variance.
   VisualUpdate AddVisual(int64_t utime, const Pose2& z, const Eigen::Matrix3d& covariance);
 
-  const Pose2& pose() const { return laser_.pose(); }
-  const Eigen::Matrix3d& covariance() const { return laser_.covariance(); }
+  // The fused pose and its covariance in the place-memory (world) frame.
+  const Pose2& pose() const { return pose_; }
+  const Eigen::Matrix3d& covariance() const { return covariance_; }
   // The filter's pose at an earlier time: the current pose moved back by the odometry since then
   // (nullopt when utime is older than the odometry kept).
   std::optional<Pose2> PoseAt(int64_t utime) const;
+  // The laser's map, in its own frame (the laser's frame: start pose at the origin).
   const PointGridMap& map() const { return laser_.map(); }
+  // The map's points in the world frame: each moved by its cell's offset (unmapped cells: none).
+  std::vector<Eigen::Vector2d> WorldMapPoints() const;
+  // The laser SLAM inside, in its own frame.
   const LaserSlam& laser() const { return laser_; }
+  const Pose2& map_frame() const { return start_; }  // world pose of the laser's origin
   const FusedSlamOptions& options() const { return options_; }
   int64_t utime() const { return utime_; }  // of the latest odometry
 
@@ -159,8 +192,12 @@ class FusedSlam {
   // The fused pose (and covariance) of the latest rejected measurement and those agreeing with it;
   // none once a measurement is accepted or after relocalising.
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> hypothesis() const;
-  // The recorded covariance of the map cell holding p (map_cell_m > 0), if it was mapped.
-  std::optional<Eigen::Matrix3d> MapCovarianceAt(const Eigen::Vector2d& p) const;
+  // The robot's map offset (map frame, at the robot) and its covariance.
+  const Eigen::Vector3d& robot_offset() const { return u_; }
+  const Eigen::Matrix3d& robot_offset_covariance() const { return u_cov_; }
+  // The offset of the map cell holding the world point p, if a scan has reached it.
+  std::optional<MapOffset> MapOffsetAt(const Eigen::Vector2d& p) const;
+  size_t map_offset_cells() const { return cells_.size(); }
 
  private:
   struct Hypothesis {
@@ -170,21 +207,33 @@ class FusedSlam {
   // z, r carried from utime to the latest odometry; false when older than the history.
   bool CarryForward(int64_t utime, Pose2* z, Eigen::Matrix3d* r) const;
   uint64_t CellKey(const Eigen::Vector2d& p) const;
-  // Fraction of the last scan's sample within 2 point_sigma_m of the map at `pose`, among the points near mapped parts
-  // (`judged`: their share of the sample).
-  double ScanFit(const Pose2& pose, double* judged) const;
-  // Mean recorded covariance over a sample of the points at `pose`; false when none is recorded.
-  bool MapCovariance(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, Eigen::Matrix3d* out) const;
-  // Cells the points reach at `pose` that have no record get `covariance`.
-  void RecordMapCovariance(const Pose2& pose, const std::vector<Eigen::Vector2d>& points,
-                           const Eigen::Matrix3d& covariance);
+  Eigen::Vector2d CellCenter(const Eigen::Vector2d& p) const;
+  // Fraction of the last scan's sample within 2 point_sigma_m of the map at the map-frame pose
+  // `m`, among the points near mapped parts (`judged`: their share of the sample).
+  double ScanFit(const Pose2& m, double* judged) const;
+  // The mean offset, carried to m's position, of the cells the last scan's sample falls in at
+  // the map-frame pose m; false when none has an offset. `cells` (optional) gets them with their
+  // share of the sample.
+  bool SeenOffset(const Pose2& m, Eigen::Vector3d* u, Eigen::Matrix3d* cov,
+                  std::vector<std::pair<uint64_t, double>>* cells) const;
+  // World pose and covariance from the laser's and the robot's offset.
+  void Refresh();
 
   FusedSlamOptions options_;
+  Pose2 start_;                 // world pose of the laser's (map frame's) origin
+  Eigen::Matrix2d start_rotation_;
   LaserSlam laser_;
+  Pose2 pose_;                  // world
+  Eigen::Matrix3d covariance_;  // world
+  // The robot's offset (map frame) at u_at_ (the robot's map-frame position when it was set).
+  Eigen::Vector3d u_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d u_cov_ = Eigen::Matrix3d::Zero();
+  Eigen::Vector2d u_at_ = Eigen::Vector2d::Zero();
+  std::unordered_map<uint64_t, MapOffset> cells_;     // map cell -> its offset
+  std::vector<std::pair<uint64_t, double>> seen_;     // cells the last scan saw, with their share
   std::deque<std::pair<int64_t, Pose2>> history_;  // odometry increments (end utime, delta), oldest first
   int64_t utime_ = 0;
   bool have_time_ = false;
-  std::unordered_map<uint64_t, Eigen::Matrix3d> map_covariance_;  // map cell -> covariance when first mapped
   struct Rejected {
     int64_t utime;
     Pose2 pose;
