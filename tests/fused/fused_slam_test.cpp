@@ -46,6 +46,8 @@ FusedSlamOptions PlainOptions() {
   FusedSlamOptions o;
   o.laser.initial_sigma_xy_m = 0;
   o.laser.initial_sigma_theta_rad = 0;
+  o.suspect_after = 1;  // map protection on (off by default), as these cases count on it
+  o.map_cell_m = 1.0;
   return o;
 }
 
@@ -208,6 +210,7 @@ TEST(FusedSlam, MapIsProtectedWhileSuspect) {
   // A 6 x 4 m room: the first scan builds the map. While a rejected visual fix makes the filter
   // suspect, a scan seen from elsewhere (the robot was carried off) adds no points.
   FusedSlamOptions o;
+  o.suspect_after = 1;  // map protection is off by default
   FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.01, 0.01));
   f.Update(RoomScan({1.0, 1.0, 0.0}, 6, 4));
   const size_t mapped = f.map().size();

@@ -102,12 +102,12 @@ struct FusedSlamOptions {
   // near mapped parts at both poses; not judged when either pose sees less than 30 % mapped
   // parts). 1: never refuse.
   double relocalize_max_fit_loss = 0.2;
-  int suspect_after = 1;              // this many consecutive rejections: no points join the map; 0: never
+  int suspect_after = 0;              // this many consecutive rejections: no points join the map; 0: never
   // The start pose's uncertainty in the world frame: the offset of the map first seen from it
   // [m, rad] (FusedSlam(options, start, covariance) takes a covariance instead).
   double start_sigma_xy_m = 0.001;
   double start_sigma_theta_rad = 0.000175;
-  double map_cell_m = 1.0;            // map offset cells [m] (see above)
+  double map_cell_m = 2.0;            // map offset cells [m] (see above)
   // The map's drift while exploring: a cell mapped first gets the offset covariance of the robot
   // plus this std. dev. per square root of the metres travelled since the previous scan [m, rad
   // over 1 m].
