@@ -489,7 +489,7 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchHeading(const Pose2& around, 
 }
 
 std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, const Eigen::Matrix3d& covariance,
-                                                         double window_rad, double window_xy_m,
+                                                         double window_rad, double window_xy_m, bool prior_on,
                                                          const std::vector<Eigen::Vector2d>& points,
                                                          size_t stride) const {
   const double cell = options_.lookup_cell_m > 0 ? options_.lookup_cell_m : options_.map_resolution_m;
@@ -498,7 +498,7 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
   const int nxy = static_cast<int>(std::floor(window_xy_m / cell + 1e-9));
   const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
   const Eigen::Matrix3d info = (covariance + Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal().toDenseMatrix()).inverse();
-  const double prior = 0.5 * options_.search_prior_weight;
+  const double prior = prior_on ? 0.5 * options_.search_prior_weight : 0.0;
   std::vector<Eigen::Vector2d> rotated;
   rotated.reserve(points.size() / stride + 1);
   const int sign = options_.search_order_reversed ? -1 : 1;
@@ -686,7 +686,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     std::vector<Candidate> candidates;
     if (correlative && options_.search_window_max_rad >= step) {
       const double window_xy = std::min(options_.search_window_xy_m, options_.search_sigmas * sigma_xy);
-      candidates = SearchPoses(pose_, covariance_, window, window_xy, points, stride);
+      candidates = SearchPoses(pose_, covariance_, window, window_xy, true, points, stride);
       ++u.searches;
     } else if (window >= step) {
       candidates = SearchHeading(pose_, window, 0.0, points, stride);
@@ -700,7 +700,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       // Poor fit: search the whole window, and positions around the prediction, then align again.
       const std::vector<Candidate> again_candidates =
           correlative ? SearchPoses(pose_, covariance_, options_.search_window_max_rad, options_.search_window_xy_m,
-                                    points, stride)
+                                    false, points, stride)
                       : SearchHeading(pose_, options_.search_window_max_rad, options_.match_distance_start_m / 2,
                                       points, stride);
       Pose2 again_start = pose_;

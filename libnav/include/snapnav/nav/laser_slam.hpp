@@ -194,7 +194,9 @@ struct LaserSlamOptions {
   // A scan is this much older than its utime (a laser on a slow serial line stamps it when it has
   // arrived: CSAIL's SICK, its odometry pose half a scan interval ahead of the scan). The scan is
   // matched at its utime minus this, odometry interpolated (LaserSlam's timed Predict / Update).
-  double scan_latency_s = 0.1;
+  // 0 (the default): stamped at acquisition, as laser-hokuyo and the simulator do; a latency set
+  // for such a laser puts pose() that much odometry ahead of the truth.
+  double scan_latency_s = 0;
   double recovery_fit = 0.6;
   // The update should sit where the scan fits: when the updated pose scores (against the map,
   // every point) more than this fraction below the ICP pose, the prediction was off by more than
@@ -279,9 +281,10 @@ class LaserSlam {
   std::vector<Candidate> SearchHeading(const Pose2& around, double window_rad, double shift_m,
                                        const std::vector<Eigen::Vector2d>& points, size_t stride) const;
   // The correlative search around `around` (covariance `covariance`) within +-window_rad and
-  // +-window_xy_m (the prior included in the scores).
+  // +-window_xy_m (with `prior`, the prior included in the scores; the recovery after a poor fit
+  // searches without it: the prediction was wrong, whatever its covariance says).
   std::vector<Candidate> SearchPoses(const Pose2& around, const Eigen::Matrix3d& covariance, double window_rad,
-                                     double window_xy_m, const std::vector<Eigen::Vector2d>& points,
+                                     double window_xy_m, bool prior, const std::vector<Eigen::Vector2d>& points,
                                      size_t stride) const;
   // Sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest map point.
   double KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
