@@ -1,13 +1,13 @@
 // bench-slam: our laser SLAM against MRPT's icp-slam, measured in one run on MRPT's Malaga loop
 // (Debian's mrpt-common): the rawlog is imported as log-import does into an LCM log, our
-// LaserSlam (the [laser_slam] options of --config, default the shipped config/laser_slam.ini) runs over it --runs times (median ms per scan, as eval-slam
-// times it: LaserSlam::Update), icp-slam runs --icp-runs times on the same rawlog (median of
-// its own per-scan timing, eval/icp_slam.hpp), and the trajectories are compared (RMS
-// difference of the positions at the same scans after SE(2) alignment). Then scans per second
-// on 681-beam scans (the simulated Hokuyo URG-04LX of config/sim.ini driving a scene's route).
-// Goals (issue): icp-slam/ours time ratio >= 2, RMS difference <= 0.05 m, >= 500 scans/s at
-// 681 beams on one core (the snapnav script pins it with taskset -c 0). Writes bench.json and
-// bench.md into --out.
+// LaserSlam (the [laser_slam] options of --config, default the shipped config/laser_slam.ini)
+// runs over it --runs times (median ms per scan, as eval-slam times it: LaserSlam::Update),
+// icp-slam runs --icp-runs times on the same rawlog (median of its own per-scan timing,
+// eval/icp_slam.hpp), and the trajectories are compared (RMS difference of the positions at the
+// same scans after SE(2) alignment). Then scans per second on 681-beam scans (the simulated
+// Hokuyo URG-04LX of config/sim.ini driving a scene's route). Goals (issue): icp-slam/ours time
+// ratio >= 2, RMS difference <= 0.05 m, >= 500 scans/s at 681 beams on one core (the snapnav
+// script pins it with taskset -c 0). Writes bench.json and bench.md into --out.
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -25,11 +25,11 @@
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
 #include "slam_sim.hpp"
-#include "snapnav/plot/plot.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/plot/plot.hpp"
 
 namespace {
 
@@ -255,7 +255,8 @@ int Main(int argc, char** argv) {
             << "-beam laser of " << sim_config_path << ")\n";
   const eval::SimulatedSlamLog sim = eval::SimulateSlamLog(sim_options);
   eval::SlamRun sim_run;
-  const double sim_ms = OurMsPerScan(sim.log, slam_options, runs, std::to_string(sim.log.beams) + "-beam scans", &sim_run);
+  const double sim_ms =
+      OurMsPerScan(sim.log, slam_options, runs, std::to_string(sim.log.beams) + "-beam scans", &sim_run);
   const double sim_scans_per_s = 1000.0 / std::max(sim_ms, 1e-9);
 
   const bool ratio_met = ratio >= kGoalTimeRatio;
@@ -294,8 +295,9 @@ int Main(int argc, char** argv) {
   for (const std::string& o : config.overrides) overrides += (overrides.empty() ? "" : "; ") + o;
   json << std::fixed << std::setprecision(4) << "{\n  \"rawlog\": " << JsonString(rawlog)
        << ",\n  \"laser_slam_config\": " << JsonString(config.path)
-       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"runs\": " << runs
-       << ",\n  \"icp_runs\": " << icp_runs << ",\n  \"laser_slam_ms_per_scan\": " << ours_ms
+       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans
+       << ",\n  \"beams\": " << log.beams << ",\n  \"runs\": " << runs << ",\n  \"icp_runs\": " << icp_runs
+       << ",\n  \"laser_slam_ms_per_scan\": " << ours_ms
        << ",\n  \"laser_slam_scans_per_s\": " << 1000 / std::max(ours_ms, 1e-9)
        << ",\n  \"icp_slam_ms_per_scan\": " << theirs_ms << ",\n  \"icp_slam_wall_ms_per_scan\": " << theirs_wall_ms
        << ",\n  \"icp_slam_config\": " << JsonString(icp.config) << ",\n  \"icp_slam_scans\": " << icp.poses.size()
@@ -307,16 +309,20 @@ int Main(int argc, char** argv) {
        << ",\n  \"icp_slam_dense_vs_laser_slam_rms_m\": " << (dense ? dense_cmp->difference.rmse_m : -1)
        << ",\n  \"icp_slam_dense_map_consistency_m\": " << (dense ? dense_consistency->median_m : -1)
        << ",\n  \"icp_slam_dense_ms_per_scan\": " << (dense ? dense->ms_per_scan() : -1)
-       << ",\n  \"laser_slam_ms_per_scan_runs\": [" << [&] {
-            std::ostringstream v;
-            for (size_t i = 0; i < ours_runs.size(); ++i) v << (i ? ", " : "") << ours_runs[i];
-            return v.str();
-          }() << "]"
-       << ",\n  \"icp_slam_ms_per_scan_runs\": [" << [&] {
-            std::ostringstream v;
-            for (size_t i = 0; i < icp_ms.size(); ++i) v << (i ? ", " : "") << icp_ms[i];
-            return v.str();
-          }() << "]"
+       << ",\n  \"laser_slam_ms_per_scan_runs\": [" <<
+      [&] {
+        std::ostringstream v;
+        for (size_t i = 0; i < ours_runs.size(); ++i) v << (i ? ", " : "") << ours_runs[i];
+        return v.str();
+      }()
+       << "]"
+       << ",\n  \"icp_slam_ms_per_scan_runs\": [" <<
+      [&] {
+        std::ostringstream v;
+        for (size_t i = 0; i < icp_ms.size(); ++i) v << (i ? ", " : "") << icp_ms[i];
+        return v.str();
+      }()
+       << "]"
        << ",\n  \"sim_scene\": " << JsonString(sim.scene_name) << ",\n  \"sim_beams\": " << sim.log.beams
        << ",\n  \"sim_scans\": " << sim.log.scans << ",\n  \"sim_laser_slam_ms_per_scan\": " << sim_ms
        << ",\n  \"sim_laser_slam_scans_per_s\": " << sim_scans_per_s

@@ -119,8 +119,8 @@ int Main(int argc, char** argv) {
   for (const std::string& o : config.overrides) overrides += (overrides.empty() ? "" : "; ") + o;
   json << std::fixed << std::setprecision(4) << "{\n  \"log\": " << JsonString(log_path)
        << ",\n  \"laser_slam_config\": " << JsonString(config.path)
-       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides)
-       << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
+       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans
+       << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
        << ",\n  \"rejected\": " << log.rejected << ",\n  \"log_damaged_places\": " << log.damaged_places
        << ",\n  \"log_damaged_bytes\": " << log.damaged_bytes << ",\n  \"laser_slam_ms_per_scan\": " << ms_per_scan
        << ",\n  \"map_points\": " << run.map.size() << ",\n  \"thesis_slam_ms_per_scan\": " << thesis_run.ms_per_scan();
@@ -241,12 +241,10 @@ int Main(int argc, char** argv) {
             [&](auto& o) { o.search_sigmas += x(-0.5, 0.5); });
         add(n, "turn_noise_rad_per_rad x" + Fixed(x(0.8, 1.2), 1),
             [&](auto& o) { o.turn_noise_rad_per_rad *= x(0.8, 1.2); });
-        add(n, "update_score_margin x" + Fixed(x(0.6, 1.4), 1),
-            [&](auto& o) { o.update_score_margin *= x(0.6, 1.4); });
+        add(n, "update_score_margin x" + Fixed(x(0.6, 1.4), 1), [&](auto& o) { o.update_score_margin *= x(0.6, 1.4); });
         if (options.matcher == nav::ScanMatcher::kCorrelative) {
           add(n, "search_sigma_m x" + Fixed(x(0.8, 1.2), 1), [&](auto& o) { o.search_sigma_m *= x(0.8, 1.2); });
-          add(n, "search_window_xy_m x" + Fixed(x(0.8, 1.2), 1),
-              [&](auto& o) { o.search_window_xy_m *= x(0.8, 1.2); });
+          add(n, "search_window_xy_m x" + Fixed(x(0.8, 1.2), 1), [&](auto& o) { o.search_window_xy_m *= x(0.8, 1.2); });
           add(n, "search_prior_weight x" + Fixed(x(0.5, 2), 1), [&](auto& o) { o.search_prior_weight *= x(0.5, 2); });
         }
         // Tiny perturbations.
@@ -254,7 +252,8 @@ int Main(int argc, char** argv) {
             [&](auto& o) { o.search_step_rad *= x(0.9996, 1.0004); });
         add(p, "initial_sigma_theta_deg x" + Fixed(x(0.99, 1.01), 2),
             [&](auto& o) { o.initial_sigma_theta_rad *= x(0.99, 1.01); });
-        add(p, "match_distance_m x" + Fixed(x(0.999, 1.001), 3), [&](auto& o) { o.match_distance_m *= x(0.999, 1.001); });
+        add(p, "match_distance_m x" + Fixed(x(0.999, 1.001), 3),
+            [&](auto& o) { o.match_distance_m *= x(0.999, 1.001); });
       }
       add(p, "search order reversed (ties resolved the other way)", [](auto& o) { o.search_order_reversed = true; });
       std::map<std::string, std::vector<double>> ates;  // by group, and "all"
@@ -287,9 +286,9 @@ int Main(int argc, char** argv) {
                   << Fixed(sorted.front(), 4) << " m, median " << Fixed(median, 4) << " m, max "
                   << Fixed(sorted.back(), 4) << " m\n";
         const std::string k = group == "all" ? "sweep" : "sweep_" + group;
-        json << ",\n  \"" << k << "_runs\": " << sorted.size() << ",\n  \"" << k << "_ate_rmse_min_m\": " << sorted.front()
-             << ",\n  \"" << k << "_ate_rmse_median_m\": " << median << ",\n  \"" << k
-             << "_ate_rmse_max_m\": " << sorted.back();
+        json << ",\n  \"" << k << "_runs\": " << sorted.size() << ",\n  \"" << k
+             << "_ate_rmse_min_m\": " << sorted.front() << ",\n  \"" << k << "_ate_rmse_median_m\": " << median
+             << ",\n  \"" << k << "_ate_rmse_max_m\": " << sorted.back();
       }
       std::ofstream(out / "sweep.md") << md.str();
     }
@@ -322,8 +321,8 @@ int Main(int argc, char** argv) {
     std::ofstream csv(out / "scans.csv");
     csv << "scan,utime,points,matches,fit,searches,recoveries,stale_odometry,widened,measured,"
            "predicted_x_m,predicted_y_m,predicted_theta_rad,predicted_sigma_xy_m,predicted_sigma_theta_deg,"
-           "measured_x_m,measured_y_m,measured_theta_rad,measured_sigma_x_m,measured_sigma_y_m,measured_sigma_theta_deg,"
-           "x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad\n"
+           "measured_x_m,measured_y_m,measured_theta_rad,measured_sigma_x_m,measured_sigma_y_m,"
+           "measured_sigma_theta_deg,x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.updates.size(); ++i) {
       const nav::LaserSlamUpdate& u = run.updates[i];
@@ -333,8 +332,8 @@ int Main(int argc, char** argv) {
           << u.recoveries << "," << u.stale_odometry << "," << u.widened << "," << u.measured << "," << u.predicted.x_m
           << "," << u.predicted.y_m << "," << u.predicted.theta_rad << ","
           << std::sqrt(std::max(u.predicted_covariance(0, 0), u.predicted_covariance(1, 1))) << ","
-          << std::sqrt(u.predicted_covariance(2, 2)) * deg << "," << u.measurement.x_m << "," << u.measurement.y_m << ","
-          << u.measurement.theta_rad << "," << std::sqrt(u.measurement_covariance(0, 0)) << ","
+          << std::sqrt(u.predicted_covariance(2, 2)) * deg << "," << u.measurement.x_m << "," << u.measurement.y_m
+          << "," << u.measurement.theta_rad << "," << std::sqrt(u.measurement_covariance(0, 0)) << ","
           << std::sqrt(u.measurement_covariance(1, 1)) << "," << std::sqrt(u.measurement_covariance(2, 2)) * deg << ","
           << s.x_m << "," << s.y_m << "," << s.theta_rad << "," << u.start.x_m << "," << u.start.y_m << ","
           << u.start.theta_rad << "\n";

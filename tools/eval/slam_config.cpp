@@ -16,7 +16,8 @@ nav::LaserSlamOptions LoadLaserSlamOptions(const LaserSlamConfigChoice& choice) 
   for (const std::string& o : choice.overrides) {
     const size_t eq = o.find('=');
     if (eq == std::string::npos || eq == 0) {
-      throw glue::ConfigError("override '" + o + "': expected KEY=VALUE (a key of [laser_slam] in " + choice.path + ")");
+      throw glue::ConfigError("override '" + o + "': expected KEY=VALUE (a key of [laser_slam] in " + choice.path +
+                              ")");
     }
     const auto trim = [](std::string s) {
       const size_t b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
