@@ -776,8 +776,16 @@ void LaserSlam::ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
       !covariance.allFinite()) {
     throw std::invalid_argument("laser slam: reset pose or covariance is not finite");
   }
+  const Pose2 old = pose_;
   pose_ = {pose.x_m, pose.y_m, WrapAngle(pose.theta_rad)};
   covariance_ = 0.5 * (covariance + covariance.transpose());
+  // The jump is no motion: the poses the odometry models keep move with it (else the next scan
+  // takes the jump for the last scan-to-scan motion, and odometry below stale_fraction of it for
+  // stale, and predicts the jump again at every scan).
+  const auto carry = [&](const Pose2& p) { return pose_.Compose(old.Between(p)); };
+  if (last_scan_pose_) last_scan_pose_ = carry(*last_scan_pose_);
+  if (stale_since_) stale_since_ = carry(*stale_since_);
+  scan_pose_ = carry(scan_pose_);
 }
 
 void LaserSlam::SetMapping(bool add_points, double min_fit) {
