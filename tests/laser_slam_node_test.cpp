@@ -33,18 +33,25 @@ const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translatio
                                                                     {"rotation_noise_rad_per_rad", "0.4"},
                                                                     {"rotation_noise_rad_per_m", "0.0052"},
                                                                     {"initial_sigma_xy_m", "0.01"},
-                                                                    {"initial_sigma_theta_deg", "0.5729578"},
+                                                                    {"initial_sigma_theta_deg", "0.5"},
                                                                     {"metric", "point_to_point"},
                                                                     {"match_distance_m", "0.2"},
-                                                                    {"match_distance_start_m", "0.5"},
+                                                                    {"match_distance_start_m", "0.6"},
                                                                     {"robust_scale_m", "0.05"},
                                                                     {"max_range_m", "0"},
-                                                                    {"search_sigmas", "3"},
+                                                                    {"search_sigmas", "3.5"},
                                                                     {"search_window_max_deg", "30"},
                                                                     {"search_step_deg", "0.5"},
+                                                                    {"matcher", "correlative"},
+                                                                    {"search_window_xy_m", "0.3"},
+                                                                    {"search_sigma_m", "0.05"},
+                                                                    {"search_prior_weight", "1"},
+                                                                    {"refine_starts", "3"},
+                                                                    {"scan_latency_s", "0"},
                                                                     {"recovery_fit", "0.6"},
                                                                     {"turn_noise_rad_per_rad", "1"},
                                                                     {"stale_odometry", "true"},
+                                                                    {"stale_fraction", "0.25"},
                                                                     {"update_score_margin", "0.05"},
                                                                     {"icp_iterations", "15"},
                                                                     {"icp_convergence_m", "0.0001"},
@@ -354,6 +361,11 @@ TEST(LaserSlamConfig, ShippedConfigHasTheLibnavDefaults) {
   EXPECT_DOUBLE_EQ(o.map_resolution_m, d.map_resolution_m);
   EXPECT_DOUBLE_EQ(o.add_distance_m, d.add_distance_m);
   EXPECT_EQ(o.scan_step, d.scan_step);
+  // Every key, as the config writes it.
+  std::ostringstream shipped, defaults;
+  PrintLaserSlamOptions(shipped, o);
+  PrintLaserSlamOptions(defaults, d);
+  EXPECT_EQ(shipped.str(), defaults.str());
   // Print writes what FromIni reads back.
   std::ostringstream printed;
   c.Print(printed);

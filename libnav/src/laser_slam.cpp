@@ -19,6 +19,14 @@ std::optional<IcpMetric> ParseIcpMetric(const std::string& name) {
   return std::nullopt;
 }
 
+const char* ScanMatcherName(ScanMatcher m) { return m == ScanMatcher::kHeading ? "heading" : "correlative"; }
+
+std::optional<ScanMatcher> ParseScanMatcher(const std::string& name) {
+  if (name == "heading") return ScanMatcher::kHeading;
+  if (name == "correlative") return ScanMatcher::kCorrelative;
+  return std::nullopt;
+}
+
 std::vector<Eigen::Vector2d> ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours, double max_gap_m) {
   std::vector<Eigen::Vector2d> normals(points.size(), Eigen::Vector2d::Zero());
   const int n = static_cast<int>(points.size());
@@ -286,6 +294,16 @@ void LaserSlamOptions::Validate() const {
   }
   if (!(turn_noise_rad_per_rad >= 0)) throw std::invalid_argument("laser slam: turn_noise_rad_per_rad must be >= 0");
   if (!(lookup_cell_m >= 0)) throw std::invalid_argument("laser slam: lookup_cell_m must be >= 0 (0: exact search)");
+  if (!(search_window_xy_m >= 0)) throw std::invalid_argument("laser slam: search_window_xy_m must be >= 0");
+  if (!(search_sigma_m > 0) || !(3 * search_sigma_m <= std::max(match_distance_start_m, add_distance_m))) {
+    throw std::invalid_argument("laser slam: search_sigma_m must be > 0 and at most match_distance_start_m / 3");
+  }
+  if (!(scan_latency_s >= 0 && scan_latency_s <= 10))
+    throw std::invalid_argument("laser slam: scan_latency_s must be in [0, 10]");
+  if (!(stale_fraction >= 0 && stale_fraction <= 1))
+    throw std::invalid_argument("laser slam: stale_fraction must be in [0, 1]");
+  if (refine_starts < 1) throw std::invalid_argument("laser slam: refine_starts must be >= 1");
+  if (!(search_prior_weight >= 0)) throw std::invalid_argument("laser slam: search_prior_weight must be >= 0");
 }
 
 LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
@@ -431,26 +449,121 @@ double LaserSlam::Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& p
   return score;
 }
 
-Pose2 LaserSlam::SearchHeading(const Pose2& around, double window_rad, double shift_m,
-                               const std::vector<Eigen::Vector2d>& points, size_t stride) const {
+std::vector<LaserSlam::Candidate> LaserSlam::Peaks(const std::vector<Candidate>& by_heading) {
+  std::vector<Candidate> peaks;
+  const size_t n = by_heading.size();
+  for (size_t i = 0; i < n; ++i) {
+    const double s = by_heading[i].score;
+    if ((i > 0 && by_heading[i - 1].score >= s) || (i + 1 < n && by_heading[i + 1].score > s)) continue;
+    peaks.push_back(by_heading[i]);
+  }
+  std::stable_sort(peaks.begin(), peaks.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.score > b.score; });
+  return peaks;
+}
+
+std::vector<LaserSlam::Candidate> LaserSlam::SearchHeading(const Pose2& around, double window_rad, double shift_m,
+                                                           const std::vector<Eigen::Vector2d>& points,
+                                                           size_t stride) const {
   const double step = options_.search_step_rad;
   const int n = static_cast<int>(std::ceil(window_rad / step));
   const int m = shift_m > 0 ? 1 : 0;
-  double best_score = -1;
-  Pose2 best = around;
-  // Headings outwards from the prediction (0, -1, +1, -2, ...): on a tie the nearer one stays.
-  for (int i = 0; i <= 2 * n; ++i) {
-    const int k = (i % 2 == 0) ? i / 2 : -(i + 1) / 2;
-    for (int dx = -m; dx <= m; ++dx) {
-      for (int dy = -m; dy <= m; ++dy) {
+  const int sign = options_.search_order_reversed ? -1 : 1;
+  // Per heading (from -n to n), the best of its positions; on a tie the first one stays.
+  std::vector<Candidate> by_heading;
+  for (int ik = -n; ik <= n; ++ik) {
+    const int k = sign * ik;
+    Candidate best{around, -1};
+    for (int ix = -m; ix <= m; ++ix) {
+      for (int iy = -m; iy <= m; ++iy) {
+        const int dx = sign * ix, dy = sign * iy;
         const Pose2 candidate{around.x_m + dx * shift_m, around.y_m + dy * shift_m, WrapAngle(around.theta_rad + k * step)};
         const double score = Score(candidate, points, stride);
-        if (score > best_score) {
-          best_score = score;
-          best = candidate;
+        if (score > best.score) best = {candidate, score};
+      }
+    }
+    by_heading.push_back(best);
+  }
+  if (sign < 0) std::reverse(by_heading.begin(), by_heading.end());
+  return Peaks(by_heading);
+}
+
+std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, const Eigen::Matrix3d& covariance,
+                                                         double window_rad, double window_xy_m, bool prior_on,
+                                                         const std::vector<Eigen::Vector2d>& points,
+                                                         size_t stride) const {
+  const double cell = options_.lookup_cell_m > 0 ? options_.lookup_cell_m : options_.map_resolution_m;
+  const double step = options_.search_step_rad;
+  const int nt = static_cast<int>(std::floor(window_rad / step + 1e-9));
+  const int nxy = static_cast<int>(std::floor(window_xy_m / cell + 1e-9));
+  const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
+  const Eigen::Matrix3d info = (covariance + Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal().toDenseMatrix()).inverse();
+  const double prior = prior_on ? 0.5 * options_.search_prior_weight : 0.0;
+  std::vector<Eigen::Vector2d> rotated;
+  rotated.reserve(points.size() / stride + 1);
+  const int sign = options_.search_order_reversed ? -1 : 1;
+  std::vector<Candidate> by_heading;
+  for (int ik = -nt; ik <= nt; ++ik) {
+    const double dt = sign * ik * step;
+    const double c = std::cos(around.theta_rad + dt), sn = std::sin(around.theta_rad + dt);
+    rotated.clear();
+    for (size_t i = 0; i < points.size(); i += stride) {
+      rotated.push_back(Rotate(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
+    }
+    Candidate best{around, -std::numeric_limits<double>::infinity()};
+    for (int ia = -nxy; ia <= nxy; ++ia) {
+      for (int ib = -nxy; ib <= nxy; ++ib) {
+        const Eigen::Vector2d shift(sign * ia * cell, sign * ib * cell);
+        double score = 0;
+        for (const Eigen::Vector2d& q0 : rotated) {
+          const Eigen::Vector2d q = q0 + shift;
+          const int j = map_.LookupIndex(q, reach);
+          if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+        }
+        const Eigen::Vector3d d(shift.x(), shift.y(), dt);
+        const double total = score - prior * d.dot(info * d);
+        if (total > best.score) {
+          best = {{around.x_m + shift.x(), around.y_m + shift.y(), WrapAngle(around.theta_rad + dt)}, total};
         }
       }
     }
+    by_heading.push_back(best);
+  }
+  if (sign < 0) std::reverse(by_heading.begin(), by_heading.end());
+  return Peaks(by_heading);
+}
+
+double LaserSlam::KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
+  const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
+  double score = 0;
+  const Rigid to_map(pose);
+  for (size_t i = 0; i < points.size(); i += stride) {
+    const Eigen::Vector2d q = to_map(points[i]);
+    const int j = map_.LookupIndex(q, reach);
+    if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+  }
+  return score;
+}
+
+LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
+                                     const std::vector<Eigen::Vector2d>& points,
+                                     const std::vector<Eigen::Vector2d>& normals, Pose2* start) const {
+  Icp best;
+  double best_score = -1;
+  const size_t n = std::min(candidates.size(), static_cast<size_t>(std::max(1, options_.refine_starts)));
+  for (size_t k = 0; k < n; ++k) {
+    Icp icp = Align(candidates[k].pose, points, normals);
+    if (!icp.ok) continue;
+    const double score = n > 1 ? KernelScore(icp.estimate, points, 1) : 0.0;
+    if (score > best_score) {
+      best_score = score;
+      best = icp;
+      *start = candidates[k].pose;
+    }
+  }
+  if (best_score < 0) {  // none aligned: the first, as it is
+    *start = candidates.empty() ? *start : candidates.front().pose;
+    best = Align(*start, points, normals);
   }
   return best;
 }
@@ -464,7 +577,50 @@ double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& poi
   return total > 0 ? static_cast<double>(near) / static_cast<double>(total) : 0.0;
 }
 
-LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points) {
+void LaserSlam::Predict(const Pose2& odometry_delta, int64_t end_utime) {
+  Predict(odometry_delta);
+  const int64_t start = last_odometry_utime_ ? std::min(*last_odometry_utime_, end_utime) : end_utime;
+  recent_odometry_.push_back({start, end_utime, odometry_delta});
+  last_odometry_utime_ = end_utime;
+}
+
+LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& points_robot) {
+  // Untimed: matched at the latest odometry; the timed increments so far are past.
+  recent_odometry_.clear();
+  odometry_since_scan_ = tail_.Compose(odometry_since_scan_);
+  tail_ = {};
+  const LaserSlamUpdate u = UpdateAtScan(points_robot);
+  scan_pose_ = pose_;
+  return u;
+}
+
+LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& points_robot, int64_t utime) {
+  // The odometry after the match time: the later part of each increment that ends after it.
+  const int64_t at = utime - static_cast<int64_t>(std::llround(options_.scan_latency_s * 1e6));
+  Pose2 tail;
+  for (const TimedIncrement& inc : recent_odometry_) {
+    if (inc.end_utime <= at) continue;
+    if (inc.start_utime >= at || inc.end_utime <= inc.start_utime) {
+      tail = tail.Compose(inc.delta);
+      continue;
+    }
+    const double before =
+        static_cast<double>(at - inc.start_utime) / static_cast<double>(inc.end_utime - inc.start_utime);
+    const Pose2 first{before * inc.delta.x_m, before * inc.delta.y_m, before * inc.delta.theta_rad};
+    tail = tail.Compose(first.Inverse().Compose(inc.delta));
+  }
+  recent_odometry_.clear();
+  // The motion between the two match times, and the pose at this one.
+  odometry_since_scan_ = tail_.Compose(odometry_since_scan_).Compose(tail.Inverse());
+  pose_ = pose_.Compose(tail.Inverse());
+  tail_ = tail;
+  const LaserSlamUpdate u = UpdateAtScan(points_robot);
+  scan_pose_ = pose_;
+  pose_ = pose_.Compose(tail_);
+  return u;
+}
+
+LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_points) {
   LaserSlamUpdate u;
   std::vector<Eigen::Vector2d> points;
   points.reserve(all_points.size() / static_cast<size_t>(options_.scan_step) + 1);
@@ -478,17 +634,38 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
   ++scans_;
   if (options_.stale_odometry && last_scan_pose_) {
     // (Increments between two equal odometry poses are zero up to rounding.)
-    const bool odometry_moved = std::hypot(odometry_since_scan_.x_m, odometry_since_scan_.y_m) > 1e-6 ||
-                                std::abs(odometry_since_scan_.theta_rad) > 1e-6;
-    if (!odometry_moved) {
-      // Stale (or the robot stopped: then the last motion is small and the scan corrects it).
-      if (!stale_since_) stale_since_ = *last_scan_pose_;
+    const double moved = std::hypot(odometry_since_scan_.x_m, odometry_since_scan_.y_m);
+    const double last_moved = std::hypot(last_motion_.x_m, last_motion_.y_m);
+    const bool frozen = moved <= 1e-6 && std::abs(odometry_since_scan_.theta_rad) <= 1e-6;
+    // A robot moving at last_moved per scan cannot stop within one scan interval: odometry whose
+    // translation falls below stale_fraction of it lags (CSAIL: 0.21 m, then 0.004, 0, 0, then 0.83).
+    const bool lagging =
+        options_.stale_fraction > 0 && last_moved >= kStaleMinMotionM && moved < options_.stale_fraction * last_moved;
+    if (frozen || lagging) {
+      // Stale (or the robot stopped: then the last motion is small, or the scan corrects it).
+      if (!stale_since_) {
+        stale_since_ = *last_scan_pose_;
+        odometry_since_stale_ = {};
+      }
+      odometry_since_stale_ = odometry_since_stale_.Compose(odometry_since_scan_);
+      // The prediction is the last motion instead of odometry's (from the pose after the last
+      // scan, as a filter built on this one may have moved it since); its covariance also covers
+      // what odometry said (the robot may have stopped).
+      pose_ = pose_.Compose(odometry_since_scan_.Inverse());
+      const double c = std::cos(pose_.theta_rad), sn = std::sin(pose_.theta_rad);
       PredictWithOdometry(options_.motion, last_motion_, &pose_, &covariance_);
+      const Eigen::Vector2d off =
+          Rotate(c, sn, {last_motion_.x_m - odometry_since_scan_.x_m, last_motion_.y_m - odometry_since_scan_.y_m});
+      const double off_theta = WrapAngle(last_motion_.theta_rad - odometry_since_scan_.theta_rad);
+      covariance_.topLeftCorner<2, 2>() += off * off.transpose();
+      covariance_(2, 2) += off_theta * off_theta;
       u.stale_odometry = true;
     } else if (stale_since_) {
-      // Odometry's increment covers the stale interval too: take out what the scans tracked.
+      // Odometry's increments over the stale interval and this one hold the whole motion since.
+      // Take out what the scans tracked meanwhile.
+      odometry_since_stale_ = odometry_since_stale_.Compose(odometry_since_scan_);
       const Pose2 tracked = stale_since_->Between(*last_scan_pose_);
-      pose_ = last_scan_pose_->Compose(tracked.Inverse().Compose(odometry_since_scan_));
+      pose_ = pose_.Compose(odometry_since_scan_.Inverse()).Compose(tracked.Inverse().Compose(odometry_since_stale_));
       stale_since_.reset();
     }
   }
@@ -501,22 +678,38 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& all_points
     Pose2 start = pose_;
     const double turn = std::max(std::abs(odometry_since_scan_.theta_rad), std::abs(previous_odometry_turn_rad_));
     covariance_(2, 2) += std::pow(options_.turn_noise_rad_per_rad * turn, 2);
+    u.predicted = pose_;
+    u.predicted_covariance = covariance_;
     const double window = std::min(options_.search_window_max_rad, options_.search_sigmas * std::sqrt(covariance_(2, 2)));
-    if (window >= step) {
-      start = SearchHeading(pose_, window, 0.0, points, stride);
+    const bool correlative = options_.matcher == ScanMatcher::kCorrelative;
+    const double sigma_xy = std::sqrt(std::max(covariance_(0, 0), covariance_(1, 1)));
+    std::vector<Candidate> candidates;
+    if (correlative && options_.search_window_max_rad >= step) {
+      const double window_xy = std::min(options_.search_window_xy_m, options_.search_sigmas * sigma_xy);
+      candidates = SearchPoses(pose_, covariance_, window, window_xy, true, points, stride);
+      ++u.searches;
+    } else if (window >= step) {
+      candidates = SearchHeading(pose_, window, 0.0, points, stride);
       ++u.searches;
     }
-    Icp icp = Align(start, points, normals);
+    if (candidates.empty()) candidates.push_back({pose_, 0});
+    Icp icp = RefineBest(candidates, points, normals, &start);
+    u.start = start;
     u.fit = icp.ok ? Fit(icp.estimate, points, 1) : 0.0;
     if (u.fit < options_.recovery_fit && options_.search_window_max_rad >= step) {
       // Poor fit: search the whole window, and positions around the prediction, then align again.
-      const Icp again = Align(SearchHeading(pose_, options_.search_window_max_rad, options_.match_distance_start_m / 2,
-                                            points, stride),
-                              points, normals);
+      const std::vector<Candidate> again_candidates =
+          correlative ? SearchPoses(pose_, covariance_, options_.search_window_max_rad, options_.search_window_xy_m,
+                                    false, points, stride)
+                      : SearchHeading(pose_, options_.search_window_max_rad, options_.match_distance_start_m / 2,
+                                      points, stride);
+      Pose2 again_start = pose_;
+      const Icp again = RefineBest(again_candidates, points, normals, &again_start);
       const double again_fit = again.ok ? Fit(again.estimate, points, 1) : 0.0;
       ++u.recoveries;
       if (again_fit > u.fit) {
         icp = again;
+        u.start = again_start;
         u.fit = again_fit;
         // The prediction was off by this much, whatever its covariance said: widen it so the
         // update does not pull the pose back towards it.
@@ -583,8 +776,16 @@ void LaserSlam::ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
       !covariance.allFinite()) {
     throw std::invalid_argument("laser slam: reset pose or covariance is not finite");
   }
+  const Pose2 old = pose_;
   pose_ = {pose.x_m, pose.y_m, WrapAngle(pose.theta_rad)};
   covariance_ = 0.5 * (covariance + covariance.transpose());
+  // The jump is no motion: the poses the odometry models keep move with it (else the next scan
+  // takes the jump for the last scan-to-scan motion, and odometry below stale_fraction of it for
+  // stale, and predicts the jump again at every scan).
+  const auto carry = [&](const Pose2& p) { return pose_.Compose(old.Between(p)); };
+  if (last_scan_pose_) last_scan_pose_ = carry(*last_scan_pose_);
+  if (stale_since_) stale_since_ = carry(*stale_since_);
+  scan_pose_ = carry(scan_pose_);
 }
 
 void LaserSlam::SetMapping(bool add_points, double min_fit) {

@@ -43,9 +43,22 @@ nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::
   o.search_sigmas = ini.GetDouble(s, "search_sigmas");
   o.search_window_max_rad = ini.GetDouble(s, "search_window_max_deg") / kDegPerRad;
   o.search_step_rad = ini.GetDouble(s, "search_step_deg") / kDegPerRad;
+  const std::string matcher = ini.GetString(s, "matcher");
+  const auto parsed_matcher = nav::ParseScanMatcher(matcher);
+  if (!parsed_matcher) {
+    throw glue::ConfigError(ini.origin() + ": [" + section + "] matcher = " + matcher +
+                            ": expected heading or correlative");
+  }
+  o.matcher = *parsed_matcher;
+  o.search_window_xy_m = ini.GetDouble(s, "search_window_xy_m");
+  o.search_sigma_m = ini.GetDouble(s, "search_sigma_m");
+  o.search_prior_weight = ini.GetDouble(s, "search_prior_weight");
+  o.refine_starts = ini.GetInt(s, "refine_starts");
+  o.scan_latency_s = ini.GetDouble(s, "scan_latency_s");
   o.recovery_fit = ini.GetDouble(s, "recovery_fit");
   o.turn_noise_rad_per_rad = ini.GetDouble(s, "turn_noise_rad_per_rad");
   o.stale_odometry = ini.GetBool(s, "stale_odometry");
+  o.stale_fraction = ini.GetDouble(s, "stale_fraction");
   o.update_score_margin = ini.GetDouble(s, "update_score_margin");
   o.icp_iterations = ini.GetInt(s, "icp_iterations");
   o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
@@ -73,11 +86,13 @@ void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& o) {
       << "\nmatch_distance_start_m = " << o.match_distance_start_m << "\nrobust_scale_m = " << o.robust_scale_m
       << "\nmax_range_m = " << o.max_range_m << "\nsearch_sigmas = " << o.search_sigmas
       << "\nsearch_window_max_deg = " << o.search_window_max_rad * kDegPerRad
-      << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nrecovery_fit = " << o.recovery_fit
+      << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nmatcher = " << nav::ScanMatcherName(o.matcher)
+      << "\nsearch_window_xy_m = " << o.search_window_xy_m << "\nsearch_sigma_m = " << o.search_sigma_m
+      << "\nsearch_prior_weight = " << o.search_prior_weight << "\nrefine_starts = " << o.refine_starts
+      << "\nscan_latency_s = " << o.scan_latency_s << "\nrecovery_fit = " << o.recovery_fit
       << "\nturn_noise_rad_per_rad = " << o.turn_noise_rad_per_rad
-      << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false")
-      << "\nupdate_score_margin = " << o.update_score_margin
-      << "\nicp_iterations = " << o.icp_iterations
+      << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false") << "\nstale_fraction = " << o.stale_fraction
+      << "\nupdate_score_margin = " << o.update_score_margin << "\nicp_iterations = " << o.icp_iterations
       << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
       << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
       << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step
@@ -166,7 +181,7 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
     return;
   }
   if (scans_ > 0 && msg.utime < last_scan_utime_) ++late_odometry_;  // applied anyway: arrival order
-  slam_->Predict(glue::OdometryDelta(msg));
+  slam_->Predict(glue::OdometryDelta(msg), msg.utime);
 }
 
 void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
@@ -186,7 +201,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
     Skip("no valid points", "", false);
   } else {
     const auto t0 = std::chrono::steady_clock::now();
-    const nav::LaserSlamUpdate u = slam_->Update(points);
+    const nav::LaserSlamUpdate u = slam_->Update(points, msg.utime);
     update_ms_total_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ++updates_;
     if (u.measured) ++measured_;

@@ -29,6 +29,7 @@ assert s["icp_slam_scans_paired"] >= 0.95 * s["scans"], s["icp_slam_scans_paired
 assert s["laser_slam_vs_icp_slam_rms_m"] <= 0.15, s["laser_slam_vs_icp_slam_rms_m"]
 assert s["icp_slam_ms_per_scan"] > 0 and s["icp_slam_wall_ms_per_scan"] >= s["icp_slam_ms_per_scan"]
 assert "icp_slam_ate_rmse_m" not in s  # no reference for the Malaga loop
+assert s["laser_slam_config"].endswith("config/laser_slam.ini"), s["laser_slam_config"]  # the shipped config
 PY
 test -s "$OUT/eval/trajectories.png"
 # Pairing: icp-slam's poses carry exactly the times of our scans 1..224.
@@ -50,6 +51,7 @@ for key in ("laser_slam_ms_per_scan", "icp_slam_ms_per_scan", "icp_slam_over_las
             "laser_slam_vs_icp_slam_rms_m", "sim_laser_slam_scans_per_s"):
     assert s[key] > 0, key
 assert s["sim_beams"] == 681, s["sim_beams"]
+assert s["laser_slam_config"].endswith("config/laser_slam.ini"), s["laser_slam_config"]
 assert s["icp_slam_scans_paired"] >= 0.95 * s["scans"], s["icp_slam_scans_paired"]
 assert s["laser_slam_vs_icp_slam_rms_m"] <= 0.15, s["laser_slam_vs_icp_slam_rms_m"]
 assert 0 < s["laser_slam_map_consistency_m"] < s["icp_slam_map_consistency_m"], s

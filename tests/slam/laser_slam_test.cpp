@@ -186,9 +186,15 @@ TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
   const Pose2 step{0.05, 0, 10.0 * M_PI / 180.0};  // per scan: 5 cm and 10 degrees
   std::vector<Pose2> truth = {start};
   for (int k = 0; k < 9; ++k) truth.push_back(truth.back().Compose(step));
-  for (const bool stale : {true, false}) {
+  // The model with either matcher; without it (the control), the heading matcher. No turn noise:
+  // it widens the search on the catch-up's large turn and then catches the double count too.
+  for (const auto& [stale, matcher] :
+       {std::pair{true, ScanMatcher::kCorrelative}, std::pair{true, ScanMatcher::kHeading},
+        std::pair{false, ScanMatcher::kHeading}}) {
     LaserSlamOptions options;
     options.stale_odometry = stale;
+    options.matcher = matcher;
+    options.turn_noise_rad_per_rad = 0;
     options.update_score_margin = 0;  // the model alone (the score check would catch the catch-up, too)
     LaserSlam slam(options, start);
     slam.Update(scan_at(truth[0]));
@@ -202,8 +208,8 @@ TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
     const Pose2& end = truth.back();
     const double heading_error = std::abs(WrapAngle(slam.pose().theta_rad - end.theta_rad)) * 180 / M_PI;
     const double position_error = std::hypot(slam.pose().x_m - end.x_m, slam.pose().y_m - end.y_m);
-    std::cout << (stale ? "with" : "without") << " the stale-odometry model: heading error " << heading_error
-              << " deg, position error " << position_error << " m\n";
+    std::cout << (stale ? "with" : "without") << " the stale-odometry model (" << ScanMatcherName(matcher)
+              << " matcher): heading error " << heading_error << " deg, position error " << position_error << " m\n";
     if (stale) {
       EXPECT_EQ(stale_scans, 4);
       EXPECT_LT(heading_error, 1.0);
@@ -212,6 +218,84 @@ TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
       EXPECT_EQ(stale_scans, 0);
       EXPECT_GT(heading_error, 5.0) << "the catch-up should fail without the model; the test would prove nothing";
     }
+  }
+}
+
+// The same freeze, but odometry creeps (1 % of the motion per scan) instead of stopping: below
+// stale_fraction of the last scan-to-scan motion, a moving robot cannot have stopped within one
+// scan, so those scans are stale too (CSAIL: 0.21 m per scan, then 0.004, 0, 0, then 0.83 m).
+TEST(LaserSlam, OdometryThatCreepsWhileTheRobotMovesIsStale) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const auto scan_at = [&](const Pose2& p) {
+    world.SetTruePose(p);
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
+                        {laser.mount_x_m, 0, 0});
+  };
+  const Pose2 start{2.0, 3.5, 0.3};
+  const Pose2 step{0.08, 0, 8.0 * M_PI / 180.0}, creep{0.0008, 0, 0};
+  std::vector<Pose2> truth = {start};
+  for (int k = 0; k < 9; ++k) truth.push_back(truth.back().Compose(step));
+  const Pose2 crept = creep.Compose(creep).Compose(creep).Compose(creep);
+  for (const double fraction : {0.25, 0.0}) {
+    LaserSlamOptions options;
+    options.stale_fraction = fraction;
+    options.update_score_margin = 0;
+    LaserSlam slam(options, start);
+    slam.Update(scan_at(truth[0]));
+    int stale_scans = 0;
+    for (int k = 1; k < static_cast<int>(truth.size()); ++k) {
+      // Odometry reports scans 1-2, creeps for scans 3-6 and catches up at scan 7.
+      if (k <= 2 || k >= 8) slam.Predict(step);
+      if (k >= 3 && k <= 6) slam.Predict(creep);
+      if (k == 7) slam.Predict(crept.Inverse().Compose(truth[2].Between(truth[7])));
+      stale_scans += slam.Update(scan_at(truth[static_cast<size_t>(k)])).stale_odometry;
+    }
+    const Pose2& end = truth.back();
+    const double heading_error = std::abs(WrapAngle(slam.pose().theta_rad - end.theta_rad)) * 180 / M_PI;
+    const double position_error = std::hypot(slam.pose().x_m - end.x_m, slam.pose().y_m - end.y_m);
+    std::cout << "stale_fraction " << fraction << ": " << stale_scans << " stale scans, heading error " << heading_error
+              << " deg, position error " << position_error << " m\n";
+    if (fraction > 0) {
+      EXPECT_EQ(stale_scans, 4);
+      EXPECT_LT(heading_error, 1.0);
+      EXPECT_LT(position_error, 0.05);
+    } else {
+      EXPECT_EQ(stale_scans, 0) << "creeping odometry is not frozen: only stale_fraction catches it";
+    }
+  }
+}
+
+// A relocalisation (ResetPose: fused SLAM after a kidnapping) is no motion: the scan after it is
+// not taken for stale odometry (its 8 cm are far below stale_fraction of a 1.8 m "motion"), and
+// the pose follows the scans from the new place.
+TEST(LaserSlam, ResetPoseIsNoMotionForTheOdometryModels) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const auto scan_at = [&](const Pose2& p) {
+    world.SetTruePose(p);
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
+                        {laser.mount_x_m, 0, 0});
+  };
+  const Pose2 step{0.08, 0, 0};
+  Pose2 truth{1.2, 1.0, 0.2};
+  LaserSlam slam({}, truth);
+  slam.Update(scan_at(truth));
+  for (int k = 0; k < 3; ++k) {
+    truth = truth.Compose(step);
+    slam.Predict(step);
+    ASSERT_FALSE(slam.Update(scan_at(truth)).stale_odometry);
+  }
+  truth = {3.0, 1.2, 0.3};  // carried 1.8 m
+  slam.ResetPose(truth, Eigen::Vector3d(0.01, 0.01, 0.001).asDiagonal());
+  for (int k = 0; k < 3; ++k) {
+    truth = truth.Compose(step);
+    slam.Predict(step);
+    const LaserSlamUpdate u = slam.Update(scan_at(truth));
+    EXPECT_FALSE(u.stale_odometry) << "scan " << k << " after the reset";
+    EXPECT_LT(std::hypot(slam.pose().x_m - truth.x_m, slam.pose().y_m - truth.y_m), 0.05) << "scan " << k;
   }
 }
 
@@ -302,6 +386,58 @@ TEST_P(LaserSlamMetric, StaysOnTheTruthWhereDeadReckoningDrifts) {
 INSTANTIATE_TEST_SUITE_P(BothMetrics, LaserSlamMetric,
                          ::testing::Values(IcpMetric::kPointToPoint, IcpMetric::kPointToLine),
                          [](const auto& info) { return std::string(IcpMetricName(info.param)); });
+
+// A laser that stamps its scans 0.1 s late (on arrival over a slow serial line; CSAIL's SICK):
+// the robot drives straight at 0.5 m/s, odometry (exact, every 0.05 s) runs up to each stamp.
+// With scan_latency_s = 0.1 each scan is matched at its stamp less the latency: scan_pose() is
+// the true pose when it was taken, and pose() that pose carried on by the odometry since (the
+// increments after the match time held back and put back after the update). Matched at its
+// stamp instead, each scan is placed (and mapped) 5 cm ahead of where it was taken: the map
+// shifts along the travel (in a turn, it smears).
+TEST(LaserSlam, ScanLatencyMatchesTheScanWhereItWasTaken) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const auto scan_at = [&](const Pose2& p) {
+    world.SetTruePose(p);
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
+                        {laser.mount_x_m, 0, 0});
+  };
+  const Pose2 start{1.0, 1.0, 0.0};
+  const double speed = 0.5, latency = 0.1;
+  const auto truth = [&](double t) { return start.Compose({speed * t, 0, 0}); };
+  const auto us = [](double t) { return static_cast<int64_t>(std::llround(t * 1e6)); };
+  for (const double option : {latency, 0.0}) {
+    LaserSlamOptions options;
+    options.scan_latency_s = option;
+    LaserSlam slam(options, start);
+    slam.Predict({0, 0, 0}, 0);  // the odometry clock starts with the robot at `start`
+    int odometry = 0;
+    double scan_error = 0, pose_error = 0;
+    for (int k = 0; k < 20; ++k) {
+      const double taken = 0.1 * k, stamped = taken + latency;
+      for (; 0.05 * (odometry + 1) <= stamped + 1e-9; ++odometry)
+        slam.Predict({speed * 0.05, 0, 0}, us(0.05 * (odometry + 1)));
+      const LaserSlamUpdate u = slam.Update(scan_at(truth(taken)), us(stamped));
+      if (k > 0) {
+        ASSERT_TRUE(u.measured) << "scan " << k;
+      }
+      const Pose2 at_scan = truth(taken), now = truth(stamped);
+      scan_error =
+          std::max(scan_error, std::hypot(slam.scan_pose().x_m - at_scan.x_m, slam.scan_pose().y_m - at_scan.y_m));
+      pose_error = std::max(pose_error, std::hypot(slam.pose().x_m - now.x_m, slam.pose().y_m - now.y_m));
+    }
+    std::cout << "scan_latency_s " << option << ": max error of scan_pose() " << scan_error << " m, of pose() "
+              << pose_error << " m\n";
+    if (option > 0) {
+      EXPECT_LT(scan_error, 0.01);
+      EXPECT_LT(pose_error, 0.01);
+    } else {
+      EXPECT_GT(scan_error, 0.03)
+          << "matched at its stamp, the scan should be placed ahead; the test would prove nothing";
+    }
+  }
+}
 
 TEST(LaserSlam, EmptyScansAreSkipped) {
   LaserSlam slam({}, {});

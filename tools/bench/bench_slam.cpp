@@ -1,13 +1,13 @@
 // bench-slam: our laser SLAM against MRPT's icp-slam, measured in one run on MRPT's Malaga loop
 // (Debian's mrpt-common): the rawlog is imported as log-import does into an LCM log, our
-// LaserSlam (default options) runs over it --runs times (median ms per scan, as eval-slam
-// times it: LaserSlam::Update), icp-slam runs --icp-runs times on the same rawlog (median of
-// its own per-scan timing, eval/icp_slam.hpp), and the trajectories are compared (RMS
-// difference of the positions at the same scans after SE(2) alignment). Then scans per second
-// on 681-beam scans (the simulated Hokuyo URG-04LX of config/sim.ini driving a scene's route).
-// Goals (issue): icp-slam/ours time ratio >= 2, RMS difference <= 0.05 m, >= 500 scans/s at
-// 681 beams on one core (the snapnav script pins it with taskset -c 0). Writes bench.json and
-// bench.md into --out.
+// LaserSlam (the [laser_slam] options of --config, default the shipped config/laser_slam.ini)
+// runs over it --runs times (median ms per scan, as eval-slam times it: LaserSlam::Update),
+// icp-slam runs --icp-runs times on the same rawlog (median of its own per-scan timing,
+// eval/icp_slam.hpp), and the trajectories are compared (RMS difference of the positions at the
+// same scans after SE(2) alignment). Then scans per second on 681-beam scans (the simulated
+// Hokuyo URG-04LX of config/sim.ini driving a scene's route). Goals (issue): icp-slam/ours time
+// ratio >= 2, RMS difference <= 0.05 m, >= 500 scans/s at 681 beams on one core (the snapnav
+// script pins it with taskset -c 0). Writes bench.json and bench.md into --out.
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
@@ -21,14 +21,15 @@
 #include "icp_slam.hpp"
 #include "importers.hpp"
 #include "report_text.hpp"
+#include "slam_config.hpp"
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
 #include "slam_sim.hpp"
-#include "snapnav/plot/plot.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/plot/plot.hpp"
 
 namespace {
 
@@ -53,10 +54,11 @@ std::string Spread(const std::vector<double>& v) {
 }
 
 // Median ms per scan of `runs` runs of our SLAM over `log`; the last run in *last.
-double OurMsPerScan(const eval::SlamLog& log, int runs, const std::string& what, eval::SlamRun* last) {
+double OurMsPerScan(const eval::SlamLog& log, const nav::LaserSlamOptions& options, int runs, const std::string& what,
+                    eval::SlamRun* last) {
   std::vector<double> ms;
   for (int r = 0; r < runs; ++r) {
-    *last = eval::RunSlam(log, nav::LaserSlamOptions{});
+    *last = eval::RunSlam(log, options);
     ms.push_back(last->ms_per_scan());
     std::cerr << "bench-slam: " << what << " run " << r + 1 << "/" << runs << ": " << Fixed(ms.back(), 3)
               << " ms/scan\n";
@@ -89,7 +91,17 @@ int Main(int argc, char** argv) {
   flags.AddString("sim-scene", &sim_scene, "scene the simulated robot drives (its route)");
   flags.AddDouble("sim-duration-s", &sim_duration_s, "simulated seconds (10 scans/s)");
   flags.AddString("out", &out_dir, "folder for bench.json, bench.md and the work files (default: a temporary folder)");
+  eval::LaserSlamConfigChoice config;
+  flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options our laser SLAM runs");
+  std::vector<std::string> sets;
+  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE (repeatable)");
   if (!flags.Parse(argc, argv)) return 0;
+  config.overrides = sets;
+  const nav::LaserSlamOptions slam_options = eval::LoadLaserSlamOptions(config);
+  std::cerr << "bench-slam: laser slam options of " << config.path;
+  for (const std::string& o : config.overrides) std::cerr << ", " << o;
+  std::cerr << ":\n";
+  eval::PrintLaserSlamOptions(std::cerr, slam_options);
   if (runs < 1 || icp_runs < 1) throw glue::FlagError("--runs and --icp-runs must be >= 1");
   if (!(sim_duration_s > 0)) throw glue::FlagError("--sim-duration-s must be positive");
   if (!fs::is_regular_file(rawlog)) {
@@ -129,7 +141,7 @@ int Main(int argc, char** argv) {
   eval::IcpSlamRun icp;
   for (int r = 0; r < std::max(runs, icp_runs); ++r) {
     if (r < runs) {
-      run = eval::RunSlam(log, nav::LaserSlamOptions{});
+      run = eval::RunSlam(log, slam_options);
       ours_runs.push_back(run.ms_per_scan());
       std::cerr << "bench-slam: laser slam run " << r + 1 << "/" << runs << ": " << Fixed(ours_runs.back(), 3)
                 << " ms/scan\n";
@@ -243,7 +255,8 @@ int Main(int argc, char** argv) {
             << "-beam laser of " << sim_config_path << ")\n";
   const eval::SimulatedSlamLog sim = eval::SimulateSlamLog(sim_options);
   eval::SlamRun sim_run;
-  const double sim_ms = OurMsPerScan(sim.log, runs, std::to_string(sim.log.beams) + "-beam scans", &sim_run);
+  const double sim_ms =
+      OurMsPerScan(sim.log, slam_options, runs, std::to_string(sim.log.beams) + "-beam scans", &sim_run);
   const double sim_scans_per_s = 1000.0 / std::max(sim_ms, 1e-9);
 
   const bool ratio_met = ratio >= kGoalTimeRatio;
@@ -278,9 +291,13 @@ int Main(int argc, char** argv) {
   std::cout << report.str() << std::flush;
 
   std::ofstream json(out / "bench.json");
+  std::string overrides;
+  for (const std::string& o : config.overrides) overrides += (overrides.empty() ? "" : "; ") + o;
   json << std::fixed << std::setprecision(4) << "{\n  \"rawlog\": " << JsonString(rawlog)
-       << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"runs\": " << runs
-       << ",\n  \"icp_runs\": " << icp_runs << ",\n  \"laser_slam_ms_per_scan\": " << ours_ms
+       << ",\n  \"laser_slam_config\": " << JsonString(config.path)
+       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans
+       << ",\n  \"beams\": " << log.beams << ",\n  \"runs\": " << runs << ",\n  \"icp_runs\": " << icp_runs
+       << ",\n  \"laser_slam_ms_per_scan\": " << ours_ms
        << ",\n  \"laser_slam_scans_per_s\": " << 1000 / std::max(ours_ms, 1e-9)
        << ",\n  \"icp_slam_ms_per_scan\": " << theirs_ms << ",\n  \"icp_slam_wall_ms_per_scan\": " << theirs_wall_ms
        << ",\n  \"icp_slam_config\": " << JsonString(icp.config) << ",\n  \"icp_slam_scans\": " << icp.poses.size()
@@ -292,16 +309,20 @@ int Main(int argc, char** argv) {
        << ",\n  \"icp_slam_dense_vs_laser_slam_rms_m\": " << (dense ? dense_cmp->difference.rmse_m : -1)
        << ",\n  \"icp_slam_dense_map_consistency_m\": " << (dense ? dense_consistency->median_m : -1)
        << ",\n  \"icp_slam_dense_ms_per_scan\": " << (dense ? dense->ms_per_scan() : -1)
-       << ",\n  \"laser_slam_ms_per_scan_runs\": [" << [&] {
-            std::ostringstream v;
-            for (size_t i = 0; i < ours_runs.size(); ++i) v << (i ? ", " : "") << ours_runs[i];
-            return v.str();
-          }() << "]"
-       << ",\n  \"icp_slam_ms_per_scan_runs\": [" << [&] {
-            std::ostringstream v;
-            for (size_t i = 0; i < icp_ms.size(); ++i) v << (i ? ", " : "") << icp_ms[i];
-            return v.str();
-          }() << "]"
+       << ",\n  \"laser_slam_ms_per_scan_runs\": [" <<
+      [&] {
+        std::ostringstream v;
+        for (size_t i = 0; i < ours_runs.size(); ++i) v << (i ? ", " : "") << ours_runs[i];
+        return v.str();
+      }()
+       << "]"
+       << ",\n  \"icp_slam_ms_per_scan_runs\": [" <<
+      [&] {
+        std::ostringstream v;
+        for (size_t i = 0; i < icp_ms.size(); ++i) v << (i ? ", " : "") << icp_ms[i];
+        return v.str();
+      }()
+       << "]"
        << ",\n  \"sim_scene\": " << JsonString(sim.scene_name) << ",\n  \"sim_beams\": " << sim.log.beams
        << ",\n  \"sim_scans\": " << sim.log.scans << ",\n  \"sim_laser_slam_ms_per_scan\": " << sim_ms
        << ",\n  \"sim_laser_slam_scans_per_s\": " << sim_scans_per_s

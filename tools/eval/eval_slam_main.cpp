@@ -18,6 +18,7 @@
 
 #include "icp_slam.hpp"
 #include "report_text.hpp"
+#include "slam_config.hpp"
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
 #include "snapnav/glue/app.hpp"
@@ -50,26 +51,45 @@ int Main(int argc, char** argv) {
                     "of corrected poses, paired with the log's scans by identical ranges. With --icp-slam, MRPT's\n"
                     "icp-slam runs beside it on the rawlog or CARMEN log the LCM log was imported from (work files\n"
                     "and the generated config in OUT/icp-slam/): time per scan, RMS difference from our trajectory\n"
-                    "(paired by scan time, after SE(2) alignment) and its ATE against the reference.");
+                    "(paired by scan time, after SE(2) alignment) and its ATE against the reference. The laser SLAM\n"
+                    "runs the [laser_slam] options of --config (default: the shipped config/laser_slam.ini), with\n"
+                    "--set overrides; the effective options are printed. The trajectory is each scan's pose.");
   flags.AddString("log", &log_path, "LCM log (required)");
   flags.AddString("reference", &reference_path, "reference trajectory: .csv or CARMEN log (.log, .clf, .gz)");
   flags.AddString("icp-slam", &icp_input,
                   "rawlog (.rawlog[.gz]) or CARMEN log the LCM log was imported from: run MRPT's icp-slam on it");
   flags.AddString("icp-slam-config", &icp_options.base_config, "icp-slam ini file the config is generated from");
   flags.AddString("icp-slam-bin", &icp_options.icp_slam, "the icp-slam program (name on PATH or path)");
-  flags.AddDouble("match-distance-m", &options.match_distance_m, "laser slam: match distance [m]");
-  flags.AddInt("icp-iterations", &options.icp_iterations, "laser slam: ICP iterations per scan");
-  flags.AddDouble("map-resolution-m", &options.map_resolution_m, "laser slam: map cell [m]");
-  flags.AddDouble("add-distance-m", &options.add_distance_m, "laser slam: new map point if nothing this close [m]");
-  flags.AddInt("scan-step", &options.scan_step, "laser slam: use every n-th beam");
+  eval::LaserSlamConfigChoice config;
+  flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options the laser slam runs");
+  std::vector<std::string> sets;
+  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE (repeatable)");
+  std::string match_distance, icp_iterations, map_resolution, add_distance, scan_step;
+  flags.AddString("match-distance-m", &match_distance, "laser slam: match distance [m] (= --set match_distance_m=V)");
+  flags.AddString("icp-iterations", &icp_iterations, "laser slam: ICP iterations per scan (= --set icp_iterations=V)");
+  flags.AddString("map-resolution-m", &map_resolution, "laser slam: map cell [m] (= --set map_resolution_m=V)");
+  flags.AddString("add-distance-m", &add_distance,
+                  "laser slam: new map point if nothing this close [m] (= --set add_distance_m=V)");
+  flags.AddString("scan-step", &scan_step, "laser slam: use every n-th beam (= --set scan_step=V)");
   bool sweep = false;
   flags.AddBool("sweep", &sweep,
-                "with --reference: also run the laser slam at neighbouring settings (each of seven options one step\n"
-                "down and up) and write the ATE of each and its min / median / max to sweep.md and sweep.csv");
+                "with --reference: also run the laser slam at neighbouring settings (each of ten options one step\n"
+                "down and up) and under tiny perturbations (search step, match distance, start heading sigma,\n"
+                "search order), and write the ATE of each and the min / median / max to sweep.md and sweep.csv");
   flags.AddString("out", &out_dir, "output folder (required)");
   if (!flags.Parse(argc, argv)) return 0;
   if (log_path.empty() || out_dir.empty()) throw glue::FlagError("--log LOG and --out DIR are required");
-  options.Validate();
+  eval::AddOverride(&config, "match_distance_m", match_distance);
+  eval::AddOverride(&config, "icp_iterations", icp_iterations);
+  eval::AddOverride(&config, "map_resolution_m", map_resolution);
+  eval::AddOverride(&config, "add_distance_m", add_distance);
+  eval::AddOverride(&config, "scan_step", scan_step);
+  config.overrides.insert(config.overrides.end(), sets.begin(), sets.end());
+  options = eval::LoadLaserSlamOptions(config);
+  std::cerr << "eval-slam: laser slam options of " << config.path;
+  for (const std::string& o : config.overrides) std::cerr << ", " << o;
+  std::cerr << ":\n";
+  eval::PrintLaserSlamOptions(std::cerr, options);
   if (!icp_input.empty() && !fs::is_regular_file(icp_input)) {
     throw glue::FlagError("--icp-slam " + icp_input + ": no such file");
   }
@@ -95,8 +115,12 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-slam: thesis configuration " << thesis_run.ms_per_scan() << " ms/scan\n";
 
   std::ostringstream json;
+  std::string overrides;
+  for (const std::string& o : config.overrides) overrides += (overrides.empty() ? "" : "; ") + o;
   json << std::fixed << std::setprecision(4) << "{\n  \"log\": " << JsonString(log_path)
-       << ",\n  \"scans\": " << log.scans << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
+       << ",\n  \"laser_slam_config\": " << JsonString(config.path)
+       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans
+       << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
        << ",\n  \"rejected\": " << log.rejected << ",\n  \"log_damaged_places\": " << log.damaged_places
        << ",\n  \"log_damaged_bytes\": " << log.damaged_bytes << ",\n  \"laser_slam_ms_per_scan\": " << ms_per_scan
        << ",\n  \"map_points\": " << run.map.size() << ",\n  \"thesis_slam_ms_per_scan\": " << thesis_run.ms_per_scan();
@@ -147,6 +171,18 @@ int Main(int argc, char** argv) {
     const auto dr_pairs = eval::PairWithReference(run.dead_reckoning, run, ref);
     if (slam_pairs.size() < 2) throw std::runtime_error("fewer than 2 scans of the log pair with the reference");
     const auto slam_ate = nav::ComputeAte(slam_pairs, nav::AlignSE2(slam_pairs));
+    {
+      // Every scan with a reference pose: where along the run the error arises.
+      std::ofstream csv(out / "reference_pairs.csv");
+      csv << "scan,utime,slam_x_m,slam_y_m,slam_theta_rad,ref_x_m,ref_y_m,ref_theta_rad\n" << std::setprecision(9);
+      for (size_t i = 0; i < run.slam.size(); ++i) {
+        const auto truth = ref.Find(run.ranges_key[i], run.utime[i]);
+        if (!truth) continue;
+        const nav::Pose2& e = run.slam[i];
+        csv << i << "," << run.utime[i] << "," << e.x_m << "," << e.y_m << "," << e.theta_rad << "," << truth->x_m
+            << "," << truth->y_m << "," << truth->theta_rad << "\n";
+      }
+    }
     const auto dr_ate = nav::ComputeAte(dr_pairs, nav::AlignSE2(dr_pairs));
     const auto thesis_pairs = eval::PairWithReference(thesis_run.slam, thesis_run, ref);
     const auto thesis_ate = nav::ComputeAte(thesis_pairs, nav::AlignSE2(thesis_pairs));
@@ -179,57 +215,82 @@ int Main(int argc, char** argv) {
                   Fixed(cmp->difference.rmse_m, 2) + " m";
     }
     if (sweep) {
-      // Sensitivity: the ATE at neighbouring settings, one option changed at a time.
+      // Sensitivity: the ATE at neighbouring settings (one option a step down and up), and under
+      // perturbations too small to matter (a result that flips under them is chance).
       struct Variant {
-        std::string name;
+        std::string group, name;
         nav::LaserSlamOptions options;
       };
-      std::vector<Variant> variants = {{"as configured", options}};
-      const auto add = [&](const std::string& name, auto change) {
+      std::vector<Variant> variants = {{"configured", "as configured", options}};
+      const auto add = [&](const std::string& group, const std::string& name, auto change) {
         nav::LaserSlamOptions o = options;
         change(o);
-        variants.push_back({name, o});
+        variants.push_back({group, name, o});
       };
-      for (const double f : {0.9, 1.1}) {
-        add("match_distance_m x" + Fixed(f, 1), [f](auto& o) { o.match_distance_m *= f; });
-        add("match_distance_start_m x" + Fixed(f - 0.1 * (f < 1 ? 1 : -1), 1),
-            [f](auto& o) { o.match_distance_start_m *= f < 1 ? 0.8 : 1.2; });
-        add("rotation_noise_rad_per_rad x" + Fixed(f < 1 ? 0.75 : 1.25, 2),
-            [f](auto& o) { o.motion.rotation_noise_rad_per_rad *= f < 1 ? 0.75 : 1.25; });
-        add("translation_noise_m_per_m x" + Fixed(f < 1 ? 0.8 : 1.2, 1),
-            [f](auto& o) { o.motion.translation_noise_m_per_m *= f < 1 ? 0.8 : 1.2; });
-        add("search_sigmas " + Fixed(options.search_sigmas + (f < 1 ? -0.5 : 0.5), 1),
-            [f](auto& o) { o.search_sigmas += f < 1 ? -0.5 : 0.5; });
-        add("turn_noise_rad_per_rad x" + Fixed(f < 1 ? 0.8 : 1.2, 1),
-            [f](auto& o) { o.turn_noise_rad_per_rad *= f < 1 ? 0.8 : 1.2; });
-        add("update_score_margin x" + Fixed(f < 1 ? 0.6 : 1.4, 1),
-            [f](auto& o) { o.update_score_margin *= f < 1 ? 0.6 : 1.4; });
+      const std::string n = "neighbour", p = "perturbation";
+      for (const bool up : {false, true}) {
+        const auto x = [up](double down_factor, double up_factor) { return up ? up_factor : down_factor; };
+        add(n, "match_distance_m x" + Fixed(x(0.9, 1.1), 1), [&](auto& o) { o.match_distance_m *= x(0.9, 1.1); });
+        add(n, "match_distance_start_m x" + Fixed(x(0.8, 1.2), 1),
+            [&](auto& o) { o.match_distance_start_m *= x(0.8, 1.2); });
+        add(n, "rotation_noise_rad_per_rad x" + Fixed(x(0.75, 1.25), 2),
+            [&](auto& o) { o.motion.rotation_noise_rad_per_rad *= x(0.75, 1.25); });
+        add(n, "translation_noise_m_per_m x" + Fixed(x(0.8, 1.2), 1),
+            [&](auto& o) { o.motion.translation_noise_m_per_m *= x(0.8, 1.2); });
+        add(n, "search_sigmas " + Fixed(options.search_sigmas + x(-0.5, 0.5), 1),
+            [&](auto& o) { o.search_sigmas += x(-0.5, 0.5); });
+        add(n, "turn_noise_rad_per_rad x" + Fixed(x(0.8, 1.2), 1),
+            [&](auto& o) { o.turn_noise_rad_per_rad *= x(0.8, 1.2); });
+        add(n, "update_score_margin x" + Fixed(x(0.6, 1.4), 1), [&](auto& o) { o.update_score_margin *= x(0.6, 1.4); });
+        if (options.matcher == nav::ScanMatcher::kCorrelative) {
+          add(n, "search_sigma_m x" + Fixed(x(0.8, 1.2), 1), [&](auto& o) { o.search_sigma_m *= x(0.8, 1.2); });
+          add(n, "search_window_xy_m x" + Fixed(x(0.8, 1.2), 1), [&](auto& o) { o.search_window_xy_m *= x(0.8, 1.2); });
+          add(n, "search_prior_weight x" + Fixed(x(0.5, 2), 1), [&](auto& o) { o.search_prior_weight *= x(0.5, 2); });
+        }
+        // Tiny perturbations.
+        add(p, "search_step_deg x" + Fixed(x(0.9996, 1.0004), 4),
+            [&](auto& o) { o.search_step_rad *= x(0.9996, 1.0004); });
+        add(p, "initial_sigma_theta_deg x" + Fixed(x(0.99, 1.01), 2),
+            [&](auto& o) { o.initial_sigma_theta_rad *= x(0.99, 1.01); });
+        add(p, "match_distance_m x" + Fixed(x(0.999, 1.001), 3),
+            [&](auto& o) { o.match_distance_m *= x(0.999, 1.001); });
       }
-      std::vector<double> ates;
+      add(p, "search order reversed (ties resolved the other way)", [](auto& o) { o.search_order_reversed = true; });
+      std::map<std::string, std::vector<double>> ates;  // by group, and "all"
       std::ofstream csv(out / "sweep.csv");
       std::ostringstream md;
-      csv << "setting,ate_rmse_m,ate_max_m,ms_per_scan\n";
-      md << "# eval-slam sweep: ATE at neighbouring settings\n\n| setting | ATE RMSE [m] | max [m] |\n|---|---|---|\n";
+      csv << "group,setting,ate_rmse_m,ate_max_m,ms_per_scan\n";
+      md << "# eval-slam sweep: ATE at neighbouring settings and under tiny perturbations\n\n"
+         << "| group | setting | ATE RMSE [m] | max [m] |\n|---|---|---|---|\n";
       for (const Variant& v : variants) {
         v.options.Validate();
         const eval::SlamRun r = eval::RunSlam(log, v.options);
         const auto pairs = eval::PairWithReference(r.slam, r, ref);
         const auto ate = nav::ComputeAte(pairs, nav::AlignSE2(pairs));
-        ates.push_back(ate.rmse_m);
-        csv << v.name << "," << ate.rmse_m << "," << ate.max_m << "," << r.ms_per_scan() << "\n";
-        md << "| " << v.name << " | " << Fixed(ate.rmse_m, 3) << " | " << Fixed(ate.max_m, 3) << " |\n";
+        ates["all"].push_back(ate.rmse_m);
+        ates[v.group].push_back(ate.rmse_m);
+        csv << v.group << "," << v.name << "," << ate.rmse_m << "," << ate.max_m << "," << r.ms_per_scan() << "\n";
+        md << "| " << v.group << " | " << v.name << " | " << Fixed(ate.rmse_m, 3) << " | " << Fixed(ate.max_m, 3)
+           << " |\n";
         std::cerr << "eval-slam: sweep " << v.name << ": ATE " << Fixed(ate.rmse_m, 4) << " m\n";
       }
-      std::vector<double> sorted = ates;
-      std::sort(sorted.begin(), sorted.end());
-      const double median = sorted[sorted.size() / 2];
-      md << "\n" << ates.size() << " runs: min " << Fixed(sorted.front(), 3) << " m, median " << Fixed(median, 3)
-         << " m, max " << Fixed(sorted.back(), 3) << " m\n";
+      md << "\n| runs | count | min [m] | median [m] | max [m] |\n|---|---|---|---|---|\n";
+      for (const std::string group : {"all", "neighbour", "perturbation"}) {
+        std::vector<double> sorted = ates[group];
+        if (sorted.empty()) continue;
+        std::sort(sorted.begin(), sorted.end());
+        const double median = sorted[sorted.size() / 2];
+        md << "| " << group << " | " << sorted.size() << " | " << Fixed(sorted.front(), 3) << " | " << Fixed(median, 3)
+           << " | " << Fixed(sorted.back(), 3) << " |\n";
+        std::cerr << "eval-slam: sweep, " << group << " (" << sorted.size() << " runs): ATE min "
+                  << Fixed(sorted.front(), 4) << " m, median " << Fixed(median, 4) << " m, max "
+                  << Fixed(sorted.back(), 4) << " m\n";
+        const std::string k = group == "all" ? "sweep" : "sweep_" + group;
+        json << ",\n  \"" << k << "_runs\": " << sorted.size() << ",\n  \"" << k
+             << "_ate_rmse_min_m\": " << sorted.front() << ",\n  \"" << k << "_ate_rmse_median_m\": " << median
+             << ",\n  \"" << k << "_ate_rmse_max_m\": " << sorted.back();
+      }
       std::ofstream(out / "sweep.md") << md.str();
-      std::cerr << "eval-slam: sweep of " << ates.size() << " settings: ATE min " << Fixed(sorted.front(), 4)
-                << " m, median " << Fixed(median, 4) << " m, max " << Fixed(sorted.back(), 4) << " m (sweep.md)\n";
-      json << ",\n  \"sweep_runs\": " << ates.size() << ",\n  \"sweep_ate_rmse_min_m\": " << sorted.front()
-           << ",\n  \"sweep_ate_rmse_median_m\": " << median << ",\n  \"sweep_ate_rmse_max_m\": " << sorted.back();
     }
     title = cmp ? ate_title : title + ": " + ate_title;
     // Draw the reference in the SLAM frame.
@@ -253,6 +314,29 @@ int Main(int argc, char** argv) {
       const nav::Pose2 &s = run.slam[i], &d = run.dead_reckoning[i];
       csv << run.utime[i] << "," << s.x_m << "," << s.y_m << "," << s.theta_rad << "," << d.x_m << "," << d.y_m << ","
           << d.theta_rad << "\n";
+    }
+  }
+  {
+    // What the laser slam did at each scan.
+    std::ofstream csv(out / "scans.csv");
+    csv << "scan,utime,points,matches,fit,searches,recoveries,stale_odometry,widened,measured,"
+           "predicted_x_m,predicted_y_m,predicted_theta_rad,predicted_sigma_xy_m,predicted_sigma_theta_deg,"
+           "measured_x_m,measured_y_m,measured_theta_rad,measured_sigma_x_m,measured_sigma_y_m,"
+           "measured_sigma_theta_deg,x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad\n"
+        << std::setprecision(9);
+    for (size_t i = 0; i < run.updates.size(); ++i) {
+      const nav::LaserSlamUpdate& u = run.updates[i];
+      const nav::Pose2& s = run.slam[i];
+      const double deg = 180 / 3.14159265358979323846;
+      csv << i << "," << run.utime[i] << "," << u.points << "," << u.matches << "," << u.fit << "," << u.searches << ","
+          << u.recoveries << "," << u.stale_odometry << "," << u.widened << "," << u.measured << "," << u.predicted.x_m
+          << "," << u.predicted.y_m << "," << u.predicted.theta_rad << ","
+          << std::sqrt(std::max(u.predicted_covariance(0, 0), u.predicted_covariance(1, 1))) << ","
+          << std::sqrt(u.predicted_covariance(2, 2)) * deg << "," << u.measurement.x_m << "," << u.measurement.y_m
+          << "," << u.measurement.theta_rad << "," << std::sqrt(u.measurement_covariance(0, 0)) << ","
+          << std::sqrt(u.measurement_covariance(1, 1)) << "," << std::sqrt(u.measurement_covariance(2, 2)) * deg << ","
+          << s.x_m << "," << s.y_m << "," << s.theta_rad << "," << u.start.x_m << "," << u.start.y_m << ","
+          << u.start.theta_rad << "\n";
     }
   }
   std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv"

@@ -171,16 +171,19 @@ SlamRun RunSlam(const SlamLog& log, const nav::LaserSlamOptions& options) {
   run.slam.reserve(log.scans);
   for (const SlamStep& step : log.steps) {
     if (!step.is_scan) {
-      slam.Predict(step.odometry_delta);
+      slam.Predict(step.odometry_delta, step.utime);
       dr.AddOdometry(step.odometry_delta);
       continue;
     }
     const auto t0 = Clock::now();
-    slam.Update(step.points);
+    const nav::LaserSlamUpdate u = slam.Update(step.points, step.utime);
     run.update_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    run.updates.push_back(u);
     run.utime.push_back(step.utime);
     run.ranges_key.push_back(step.ranges_key);
-    run.slam.push_back(slam.pose());
+    // The pose of the scan (where it was matched: its utime less scan_latency_s), as a reference
+    // aligned on the scans holds it; pose() is that pose carried on by the odometry since.
+    run.slam.push_back(slam.scan_pose());
     run.dead_reckoning.push_back(dr.pose());
   }
   run.map = slam.map().points();

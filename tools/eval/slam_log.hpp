@@ -59,7 +59,8 @@ Reference LoadReference(const std::string& path);
 struct SlamRun {
   std::vector<int64_t> utime;
   std::vector<std::string> ranges_key;
-  std::vector<nav::Pose2> slam, dead_reckoning;
+  std::vector<nav::Pose2> slam, dead_reckoning;  // slam: LaserSlam::scan_pose() after each scan's update
+  std::vector<nav::LaserSlamUpdate> updates;     // what LaserSlam::Update reported for each scan
   double update_seconds = 0;                  // time spent in LaserSlam::Update
   std::vector<Eigen::Vector2d> map;           // the final point map
   double ms_per_scan() const { return slam.empty() ? 0 : 1000 * update_seconds / static_cast<double>(slam.size()); }

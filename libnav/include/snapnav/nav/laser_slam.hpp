@@ -33,6 +33,14 @@ enum class IcpMetric {
 const char* IcpMetricName(IcpMetric m);
 std::optional<IcpMetric> ParseIcpMetric(const std::string& name);
 
+// Where ICP starts from.
+enum class ScanMatcher {
+  kHeading,      // a search of headings around the prediction (its position kept), then ICP
+  kCorrelative,  // a correlative search of poses (x, y and heading) around the prediction, then ICP
+};
+const char* ScanMatcherName(ScanMatcher m);
+std::optional<ScanMatcher> ParseScanMatcher(const std::string& name);
+
 // Unit surface normals of scan points from their neighbours in scan order: a line fitted
 // (principal axes) through the point and up to `neighbours` points on each side that lie
 // within `max_gap_m` of it. Zero where there are too few neighbours or they do not lie on a
@@ -120,6 +128,9 @@ class PointGridMap {
   std::vector<Eigen::Vector2d> points_, normals_;
 };
 
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180;
+constexpr double kStaleMinMotionM = 0.05;  // LaserSlamOptions::stale_fraction applies above this motion per scan
+
 struct LaserSlamOptions {
   // Odometry noise Q of the prediction. The heading noise per radian turned is 0.4, not dead
   // reckoning's 0.05: on a real robot turning fast, odometry and laser are out of step (CSAIL:
@@ -131,10 +142,10 @@ struct LaserSlamOptions {
     return m;
   }();
   double initial_sigma_xy_m = 0.01;         // initial covariance
-  double initial_sigma_theta_rad = 0.01;
+  double initial_sigma_theta_rad = 0.5 * kRadPerDeg;
   IcpMetric metric = IcpMetric::kPointToPoint;
   double match_distance_m = 0.2;            // a scan point matches a map point closer than this
-  double match_distance_start_m = 0.5;      // first iteration's match distance, halved each iteration
+  double match_distance_start_m = 0.6;      // first iteration's match distance, halved each iteration
                                             // down to match_distance_m (coarse to fine)
   double robust_scale_m = 0.05;             // point-to-line: Cauchy weight 1 / (1 + (r / scale)^2)
   double max_range_m = 0;                   // ignore points farther than this (0: no limit)
@@ -143,9 +154,27 @@ struct LaserSlamOptions {
   // starts from the best. Recovery: when fewer than recovery_fit of the points lie within
   // match_distance_m / 2 of the map after ICP, the whole window (and positions +-
   // match_distance_start_m / 2) is searched and ICP runs again; the better fit wins.
-  double search_sigmas = 3;
-  double search_window_max_rad = 0.5236;    // 30 deg; 0: no search, no recovery
-  double search_step_rad = 0.00873;         // 0.5 deg
+  double search_sigmas = 3.5;
+  double search_window_max_rad = 30 * kRadPerDeg;  // 0: no search, no recovery
+  double search_step_rad = 0.5 * kRadPerDeg;
+  // The correlative search (matcher = kCorrelative): poses within +-search_sigmas predicted
+  // standard deviations in heading (at most search_window_max_rad) and position (at most
+  // search_window_xy_m), in steps of search_step_rad and of the map's lookup cell, are scored
+  // (the sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest
+  // map point, less search_prior_weight times half the squared Mahalanobis distance from the
+  // prediction) and ICP starts from the best.
+  ScanMatcher matcher = ScanMatcher::kCorrelative;
+  // Test only (no config key): the searches visit their candidates in the opposite order, so that
+  // equal scores resolve the other way (a robust result does not depend on it).
+  bool search_order_reversed = false;
+  double search_window_xy_m = 0.3;
+  double search_sigma_m = 0.05;
+  double search_prior_weight = 1.0;
+  // ICP starts from the best this many local maxima of the search's score over the heading and
+  // the result that fits best (the sum over all points of exp(-d^2 / (2 search_sigma_m^2))) is the
+  // measurement: the nearest local minimum of ICP is not the best one when two lie close (a fast
+  // turn: two minima 1 deg apart, taken by turns as the search grid moves by a quarter step).
+  int refine_starts = 3;
   // Fast turns: odometry that lags the laser reports a turn a scan late (CSAIL: 21 deg, then 0.2
   // where the laser saw 15, then 20), so the prediction's heading also gets this std. dev. per
   // radian of the larger of odometry's turn since the last scan and its turn over the interval
@@ -157,6 +186,17 @@ struct LaserSlamOptions {
   // motion, and when odometry moves again, the motion the scans tracked meanwhile is taken out
   // of its increment. (A robot that really stopped: the last motion is small, the scan corrects it.)
   bool stale_odometry = true;
+  // ... and so is an interval whose odometry translation is below this fraction of the last
+  // scan-to-scan translation (when that was at least kStaleMinMotionM): a moving robot cannot
+  // stop within one scan (CSAIL: 0.21 m per scan, then 0.004, 0, 0, then 0.83 m). 0: only
+  // intervals with no motion at all.
+  double stale_fraction = 0.25;
+  // A scan is this much older than its utime (a laser on a slow serial line stamps it when it has
+  // arrived: CSAIL's SICK, its odometry pose half a scan interval ahead of the scan). The scan is
+  // matched at its utime minus this, odometry interpolated (LaserSlam's timed Predict / Update).
+  // 0 (the default): stamped at acquisition, as laser-hokuyo and the simulator do; a latency set
+  // for such a laser puts pose() that much odometry ahead of the truth.
+  double scan_latency_s = 0;
   double recovery_fit = 0.6;
   // The update should sit where the scan fits: when the updated pose scores (against the map,
   // every point) more than this fraction below the ICP pose, the prediction was off by more than
@@ -188,6 +228,9 @@ struct LaserSlamUpdate {
   bool widened = false;        // the update scored below the ICP pose: the prediction was widened
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
+  Pose2 start;      // the pose ICP started from (the search's best; after a recovery, its)
+  Pose2 predicted;  // the prediction the scan was matched from (after the odometry models)
+  Eigen::Matrix3d predicted_covariance = Eigen::Matrix3d::Zero();  // its covariance (turn noise included)
 };
 
 class LaserSlam {
@@ -198,8 +241,19 @@ class LaserSlam {
   void Predict(const Pose2& odometry_delta);
   // EKF update from one scan (points in the robot frame). The first scan only builds the map.
   LaserSlamUpdate Update(const std::vector<Eigen::Vector2d>& points_robot);
+  // The same with message times [us]: the increment ends at end_utime (it starts where the last
+  // timed one ended), the scan has `utime`. With scan_latency_s > 0 the scan is matched (and
+  // mapped) at utime - scan_latency_s: the increments after that time are taken out of the
+  // prediction (the one that straddles it in proportion to its duration) and put back after the
+  // update, so that pose() stays the pose at the latest odometry. Without times (the calls above)
+  // the latency is not applied.
+  void Predict(const Pose2& odometry_delta, int64_t end_utime);
+  LaserSlamUpdate Update(const std::vector<Eigen::Vector2d>& points_robot, int64_t utime);
 
   const Pose2& pose() const { return pose_; }
+  // The pose of the last scan: where it was matched (its utime minus scan_latency_s), after its
+  // update. pose() is that pose carried on by the odometry since.
+  const Pose2& scan_pose() const { return scan_pose_; }
   const Eigen::Matrix3d& covariance() const { return covariance_; }
   const PointGridMap& map() const { return map_; }
   int64_t scans() const { return scans_; }
@@ -216,8 +270,27 @@ class LaserSlam {
             const std::vector<Eigen::Vector2d>& normals) const;
   // Sum over every stride-th point of 1 - (d / match_distance)^2, d its distance to the map.
   double Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
-  Pose2 SearchHeading(const Pose2& around, double window_rad, double shift_m, const std::vector<Eigen::Vector2d>& points,
-                      size_t stride) const;
+  // A search's candidates: the local maxima of its score over the heading, best first.
+  struct Candidate {
+    Pose2 pose;
+    double score = 0;
+  };
+  // The local maxima of scores by heading index (a plateau: its first), best first.
+  static std::vector<Candidate> Peaks(const std::vector<Candidate>& by_heading);
+  // Headings within +-window_rad of `around` (and positions +-shift_m, if > 0).
+  std::vector<Candidate> SearchHeading(const Pose2& around, double window_rad, double shift_m,
+                                       const std::vector<Eigen::Vector2d>& points, size_t stride) const;
+  // The correlative search around `around` (covariance `covariance`) within +-window_rad and
+  // +-window_xy_m (with `prior`, the prior included in the scores; the recovery after a poor fit
+  // searches without it: the prediction was wrong, whatever its covariance says).
+  std::vector<Candidate> SearchPoses(const Pose2& around, const Eigen::Matrix3d& covariance, double window_rad,
+                                     double window_xy_m, bool prior, const std::vector<Eigen::Vector2d>& points,
+                                     size_t stride) const;
+  // Sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest map point.
+  double KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
+  // ICP from each of the first refine_starts candidates; the result with the best KernelScore.
+  Icp RefineBest(const std::vector<Candidate>& candidates, const std::vector<Eigen::Vector2d>& points,
+                 const std::vector<Eigen::Vector2d>& normals, Pose2* start) const;
 
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
@@ -227,11 +300,21 @@ class LaserSlam {
   Eigen::Matrix3d covariance_;
   PointGridMap map_;
   int64_t scans_ = 0;
+  LaserSlamUpdate UpdateAtScan(const std::vector<Eigen::Vector2d>& points_robot);
+  struct TimedIncrement {
+    int64_t start_utime, end_utime;
+    Pose2 delta;
+  };
+  std::deque<TimedIncrement> recent_odometry_;  // timed increments since the last scan's match time
+  Pose2 scan_pose_;
+  std::optional<int64_t> last_odometry_utime_;  // end of the last timed increment
+  Pose2 tail_;                                  // odometry after the last scan's match time (re-applied after it)
   Pose2 odometry_since_scan_;         // odometry's motion since the last scan
   double previous_odometry_turn_rad_ = 0;  // odometry's heading change over the interval before
   std::optional<Pose2> last_scan_pose_;    // the pose after the last scan
   Pose2 last_motion_;                  // the estimate's motion between the last two scans
   std::optional<Pose2> stale_since_;   // the pose at the last scan before odometry went stale
+  Pose2 odometry_since_stale_;         // odometry's motion since then
 
   // ---- For filters built on this one (nav::FusedSlam: a visual pose measurement in the same EKF).
  public:
