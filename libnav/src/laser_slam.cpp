@@ -120,7 +120,8 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_r
       lookup_radius_(lookup_radius_m),
       lookup_cell_(lookup_cell_m),
       likelihood_sigma_(likelihood_sigma_m),
-      node_(lookup_cell_m / kLikelihoodSub) {
+      node_(lookup_cell_m / kLikelihoodSub),
+      inv_lookup_cell_(1.0 / lookup_cell_m) {
   if (!(resolution_m > 0) || !(bucket_m > 0)) throw std::invalid_argument("point map: cell sizes must be > 0");
   if (!(lookup_radius_m >= 0) || !(lookup_cell_m > 0)) {
     throw std::invalid_argument("point map: lookup radius must be >= 0 and its cell > 0");
@@ -139,15 +140,6 @@ bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) 
   points_.push_back(p);
   normals_.push_back(normal);
   return true;
-}
-
-uint32_t PointGridMap::TileTable::Find(uint64_t key) const {
-  if (count == 0) return kNone;
-  const size_t mask = values.size() - 1;
-  for (size_t i = Slot(key);; i = (i + 1) & mask) {
-    if (values[i] == kNone) return kNone;
-    if (keys[i] == key) return values[i];
-  }
 }
 
 uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
@@ -239,25 +231,6 @@ int64_t FloorToInt(double v) {
 }
 
 }  // namespace
-
-int PointGridMap::LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const {
-  if (!(max_distance_m <= lookup_radius_)) return NearestIndex(p, max_distance_m);
-  const int64_t cx = FloorToInt(p.x() / lookup_cell_);
-  const int64_t cy = FloorToInt(p.y() / lookup_cell_);
-  const uint32_t tile = tile_index_.Find(Key(cx >> kTileBits, cy >> kTileBits));
-  if (tile == kNone) return -1;
-  const uint32_t* candidates = tiles_[tile].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
-  double best = max_distance_m * max_distance_m;
-  int found = -1;
-  for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
-    const double d = (points_[candidates[k]] - p).squaredNorm();
-    if (d <= best) {
-      best = d;
-      found = static_cast<int>(candidates[k]);
-    }
-  }
-  return found;
-}
 
 void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
   const double reach = 3 * likelihood_sigma_, reach2 = reach * reach;

@@ -148,7 +148,7 @@ class PointGridMap {
   void AddToLikelihood(const Eigen::Vector2d& p);
   Tile* TileAt(int64_t tx, int64_t ty);  // created (empty) if absent
   float Node(int64_t ix, int64_t iy) const;  // a raster node (0 where there is no tile)
-  double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_;
+  double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_, inv_lookup_cell_;
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
@@ -156,6 +156,40 @@ class PointGridMap {
   std::deque<RasterTile> rasters_;  // with a likelihood raster: one per tile
   std::vector<Eigen::Vector2d> points_, normals_;
 };
+
+// The lookup's hot path, inline.
+inline uint32_t PointGridMap::TileTable::Find(uint64_t key) const {
+  if (count == 0) return kNone;
+  const size_t mask = values.size() - 1;
+  for (size_t i = Slot(key);; i = (i + 1) & mask) {
+    if (values[i] == kNone) return kNone;
+    if (keys[i] == key) return values[i];
+  }
+}
+
+inline int PointGridMap::LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const {
+  if (!(max_distance_m <= lookup_radius_)) return NearestIndex(p, max_distance_m);
+  // floor() without the library call.
+  const auto floor_to_int = [](double v) {
+    const auto i = static_cast<int64_t>(v);
+    return i - (static_cast<double>(i) > v);
+  };
+  const int64_t cx = floor_to_int(p.x() * inv_lookup_cell_);
+  const int64_t cy = floor_to_int(p.y() * inv_lookup_cell_);
+  const uint32_t tile = tile_index_.Find(Key(cx >> kTileBits, cy >> kTileBits));
+  if (tile == kNone) return -1;
+  const uint32_t* candidates = tiles_[tile].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
+  double best = max_distance_m * max_distance_m;
+  int found = -1;
+  for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
+    const double d = (points_[candidates[k]] - p).squaredNorm();
+    if (d <= best) {
+      best = d;
+      found = static_cast<int>(candidates[k]);
+    }
+  }
+  return found;
+}
 
 constexpr double kRadPerDeg = 3.14159265358979323846 / 180;
 constexpr double kStaleMinMotionM = 0.05;  // LaserSlamOptions::stale_fraction applies above this motion per scan
