@@ -310,8 +310,20 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
       row_stride = kNodes;
     } else {
       block.resize(static_cast<size_t>(w) * w);
+      // The block spans tiles: node by node, the tile looked up when it changes.
       for (int r = 0; r < w; ++r) {
-        for (int c = 0; c < w; ++c) block[static_cast<size_t>(r) * w + c] = static_cast<uint8_t>(Node(lx + c, ly + r));
+        const int64_t iy = ly + r;
+        for (int c = 0; c < w; ++c) {
+          const int64_t ix = lx + c;
+          const uint64_t key = Key(ix >> kNodeBits, iy >> kNodeBits);
+          if (!cached || key != cached_key) {
+            cached_key = key;
+            cached_tile = tile_index_.Find(key);
+            cached = true;
+          }
+          block[static_cast<size_t>(r) * w + c] =
+              cached_tile == kNone ? uint8_t{0} : rasters_[cached_tile].node[((iy & mask) << kNodeBits) | (ix & mask)];
+        }
       }
       base = block.data();
       row_stride = w;
@@ -416,6 +428,8 @@ namespace {
 
 // The correlative search scores this many of a heading's shifts exactly (the best on the raster).
 constexpr size_t kRescoredShifts = 2;
+// ... for the headings whose best raster score is within this fraction of the search's best.
+constexpr double kRescoreMargin = 0.25;
 
 Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
 
@@ -603,37 +617,40 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
     size_t order;  // visiting order
   };
   std::vector<Ranked> ranked;
-  std::vector<Candidate> by_heading;
-  for (int ik = -nt; ik <= nt; ++ik) {
-    const double dt = sign * ik * step;
+  std::vector<Candidate> by_heading(static_cast<size_t>(2 * nt + 1));
+  // Per heading with the raster: its shifts to score exactly (the best kRescoredShifts on the raster).
+  std::vector<std::vector<Ranked>> to_rescore(raster ? by_heading.size() : 0);
+  const auto rotate_to = [&](double dt) {
     const double c = std::cos(around.theta_rad + dt), sn = std::sin(around.theta_rad + dt);
     rotated.clear();
     for (size_t i = 0; i < points.size(); i += stride) {
       rotated.push_back(Rotate(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
     }
-    // A shift's score: the sum of the points' kernels, less the prior.
-    const auto exact = [&](const Eigen::Vector2d& shift) {
-      double score = 0;
-      for (const Eigen::Vector2d& q0 : rotated) {
-        const Eigen::Vector2d q = q0 + shift;
-        const int j = map_.LookupIndex(q, reach);
-        if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
-      }
-      return score;
-    };
-    const auto penalty = [&](const Eigen::Vector2d& shift) {
-      const Eigen::Vector3d d(shift.x(), shift.y(), dt);
-      return prior * d.dot(info * d);
-    };
-    Candidate best{around, -std::numeric_limits<double>::infinity()};
-    const auto consider = [&](const Eigen::Vector2d& shift, double total) {
-      if (total > best.score) {
-        best = {{around.x_m + shift.x(), around.y_m + shift.y(), WrapAngle(around.theta_rad + dt)}, total};
-      }
-    };
+  };
+  // A shift's score: the sum of the points' kernels (the rotated points), less the prior.
+  const auto exact = [&](const Eigen::Vector2d& shift) {
+    double score = 0;
+    for (const Eigen::Vector2d& q0 : rotated) {
+      const Eigen::Vector2d q = q0 + shift;
+      const int j = map_.LookupIndex(q, reach);
+      if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+    }
+    return score;
+  };
+  const auto penalty = [&](const Eigen::Vector2d& shift, double dt) {
+    const Eigen::Vector3d d(shift.x(), shift.y(), dt);
+    return prior * d.dot(info * d);
+  };
+  const auto pose_at = [&](const Eigen::Vector2d& shift, double dt) {
+    return Pose2{around.x_m + shift.x(), around.y_m + shift.y(), WrapAngle(around.theta_rad + dt)};
+  };
+  for (int ik = -nt; ik <= nt; ++ik) {
+    const double dt = sign * ik * step;
+    rotate_to(dt);
+    Candidate& best = by_heading[static_cast<size_t>(ik + nt)];
+    best = {around, -std::numeric_limits<double>::infinity()};
     if (raster) {
-      // The raster ranks the shifts; the best kRescoredShifts of them (in visiting order on a tie)
-      // are scored exactly, and the best of those is the heading's candidate.
+      // The raster ranks the shifts; its best is the heading's candidate unless it is scored exactly below.
       std::fill(sums.begin(), sums.end(), 0.0);
       map_.AddShiftedLikelihoods(rotated, nxy, PointGridMap::kLikelihoodSub, sums.data());
       ranked.clear();
@@ -642,7 +659,7 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
           const Eigen::Vector2d shift(sign * ia * cell, sign * ib * cell);
           const double score =
               sums[static_cast<size_t>(sign * ia + nxy) * (2 * nxy + 1) + static_cast<size_t>(sign * ib + nxy)];
-          ranked.push_back({shift, score - penalty(shift), ranked.size()});
+          ranked.push_back({shift, score - penalty(shift, dt), ranked.size()});
         }
       }
       const size_t keep = std::min(ranked.size(), kRescoredShifts);
@@ -650,16 +667,42 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
                         [&](const Ranked& x, const Ranked& y) {
                           return x.total > y.total || (x.total == y.total && x.order < y.order);
                         });
-      for (size_t r = 0; r < keep; ++r) consider(ranked[r].shift, exact(ranked[r].shift) - penalty(ranked[r].shift));
+      best = {pose_at(ranked[0].shift, dt), ranked[0].total};
+      to_rescore[static_cast<size_t>(ik + nt)].assign(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep));
     } else {
       for (int ia = -nxy; ia <= nxy; ++ia) {
         for (int ib = -nxy; ib <= nxy; ++ib) {
           const Eigen::Vector2d shift(sign * ia * cell, sign * ib * cell);
-          consider(shift, exact(shift) - penalty(shift));
+          const double total = exact(shift) - penalty(shift, dt);
+          if (total > best.score) best = {pose_at(shift, dt), total};  // on a tie the first one stays
         }
       }
     }
-    by_heading.push_back(best);
+  }
+  if (raster) {
+    // The headings that may hold the search's best maxima: within kRescoreMargin of the raster's
+    // best, and their neighbours (whether a heading is a maximum depends on them). Their shifts
+    // are scored exactly; the others keep their raster score, far below.
+    double top = -std::numeric_limits<double>::infinity();
+    for (const Candidate& c : by_heading) top = std::max(top, c.score);
+    const double cut = top - kRescoreMargin * std::max(1.0, std::abs(top));
+    const int n = static_cast<int>(by_heading.size());
+    std::vector<bool> rescore(by_heading.size(), false);
+    for (int h = 0; h < n; ++h) {
+      if (by_heading[static_cast<size_t>(h)].score < cut) continue;
+      for (int k = std::max(0, h - 1); k <= std::min(n - 1, h + 1); ++k) rescore[static_cast<size_t>(k)] = true;
+    }
+    for (int h = 0; h < n; ++h) {
+      if (!rescore[static_cast<size_t>(h)]) continue;
+      const double dt = sign * (h - nt) * step;
+      rotate_to(dt);
+      Candidate best{around, -std::numeric_limits<double>::infinity()};
+      for (const Ranked& r : to_rescore[static_cast<size_t>(h)]) {
+        const double total = exact(r.shift) - penalty(r.shift, dt);
+        if (total > best.score) best = {pose_at(r.shift, dt), total};
+      }
+      by_heading[static_cast<size_t>(h)] = best;
+    }
   }
   if (sign < 0) std::reverse(by_heading.begin(), by_heading.end());
   return Peaks(by_heading);
