@@ -225,7 +225,9 @@ struct LaserSlamOptions {
   // search_window_xy_m), in steps of search_step_rad and of the map's lookup cell, are scored
   // (the sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest
   // map point, less search_prior_weight times half the squared Mahalanobis distance from the
-  // prediction) and ICP starts from the best.
+  // prediction) and ICP starts from the best. With a lookup grid (lookup_cell_m > 0) the map keeps
+  // a likelihood raster (PointGridMap) that ranks each heading's shifts; the headings within 25 % of
+  // the raster's best score, and their neighbours, have their best 2 shifts scored exactly.
   ScanMatcher matcher = ScanMatcher::kCorrelative;
   // Test only (no config key): the searches visit their candidates in the opposite order, so that
   // equal scores resolve the other way (a robust result does not depend on it).
