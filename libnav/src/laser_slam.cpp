@@ -113,12 +113,20 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
   return points;
 }
 
-PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m, double lookup_cell_m)
-    : resolution_(resolution_m), bucket_(bucket_m), lookup_radius_(lookup_radius_m), lookup_cell_(lookup_cell_m) {
+PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m, double lookup_cell_m,
+                           double likelihood_sigma_m)
+    : resolution_(resolution_m),
+      bucket_(bucket_m),
+      lookup_radius_(lookup_radius_m),
+      lookup_cell_(lookup_cell_m),
+      likelihood_sigma_(likelihood_sigma_m),
+      node_(lookup_cell_m / kLikelihoodSub),
+      inv_lookup_cell_(1.0 / lookup_cell_m) {
   if (!(resolution_m > 0) || !(bucket_m > 0)) throw std::invalid_argument("point map: cell sizes must be > 0");
   if (!(lookup_radius_m >= 0) || !(lookup_cell_m > 0)) {
     throw std::invalid_argument("point map: lookup radius must be >= 0 and its cell > 0");
   }
+  if (!(likelihood_sigma_m >= 0)) throw std::invalid_argument("point map: likelihood sigma must be >= 0 (0: none)");
 }
 
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
@@ -128,18 +136,10 @@ bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) 
   buckets_[Key(static_cast<int64_t>(std::floor(p.x() / bucket_)), static_cast<int64_t>(std::floor(p.y() / bucket_)))]
       .push_back(static_cast<uint32_t>(points_.size()));
   if (lookup_radius_ > 0) AddToLookup(p, static_cast<uint32_t>(points_.size()));
+  if (has_likelihood()) AddToLikelihood(p);
   points_.push_back(p);
   normals_.push_back(normal);
   return true;
-}
-
-uint32_t PointGridMap::TileTable::Find(uint64_t key) const {
-  if (count == 0) return kNone;
-  const size_t mask = values.size() - 1;
-  for (size_t i = Slot(key);; i = (i + 1) & mask) {
-    if (values[i] == kNone) return kNone;
-    if (keys[i] == key) return values[i];
-  }
 }
 
 uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
@@ -165,6 +165,23 @@ uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
   return value;
 }
 
+PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
+  const uint32_t slot = tile_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
+  if (slot == tiles_.size()) {
+    tiles_.emplace_back();
+    Tile& t = tiles_.back();
+    for (int c = 0; c < kTile * kTile; ++c) {
+      std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
+      std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
+    }
+    if (has_likelihood()) {
+      rasters_.emplace_back();
+      std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
+    }
+  }
+  return &tiles_[slot];
+}
+
 void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   // Every cell whose centre lies within the radius (plus half a cell diagonal, so that a query
   // anywhere in the cell within the radius of p finds a point) may now have p as its nearest.
@@ -176,16 +193,7 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   const int64_t y1 = static_cast<int64_t>(std::floor((p.y() + reach) / lookup_cell_));
   for (int64_t tx = x0 >> kTileBits; tx <= x1 >> kTileBits; ++tx) {
     for (int64_t ty = y0 >> kTileBits; ty <= y1 >> kTileBits; ++ty) {
-      const uint32_t tile_slot = tile_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
-      if (tile_slot == tiles_.size()) {
-        tiles_.emplace_back();
-        Tile& t = tiles_.back();
-        for (int c = 0; c < kTile * kTile; ++c) {
-          std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
-          std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
-        }
-      }
-      Tile* tile = &tiles_[tile_slot];
+      Tile* tile = TileAt(tx, ty);
       const int64_t cx0 = std::max(x0, tx << kTileBits), cx1 = std::min(x1, ((tx + 1) << kTileBits) - 1);
       const int64_t cy0 = std::max(y0, ty << kTileBits), cy1 = std::min(y1, ((ty + 1) << kTileBits) - 1);
       for (int64_t cy = cy0; cy <= cy1; ++cy) {
@@ -224,23 +232,114 @@ int64_t FloorToInt(double v) {
 
 }  // namespace
 
-int PointGridMap::LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const {
-  if (!(max_distance_m <= lookup_radius_)) return NearestIndex(p, max_distance_m);
-  const int64_t cx = FloorToInt(p.x() / lookup_cell_);
-  const int64_t cy = FloorToInt(p.y() / lookup_cell_);
-  const uint32_t tile = tile_index_.Find(Key(cx >> kTileBits, cy >> kTileBits));
-  if (tile == kNone) return -1;
-  const uint32_t* candidates = tiles_[tile].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
-  double best = max_distance_m * max_distance_m;
-  int found = -1;
-  for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
-    const double d = (points_[candidates[k]] - p).squaredNorm();
-    if (d <= best) {
-      best = d;
-      found = static_cast<int>(candidates[k]);
+void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
+  const double reach = 3 * likelihood_sigma_, reach2 = reach * reach;
+  const double inv2s2 = 1.0 / (2 * likelihood_sigma_ * likelihood_sigma_);
+  // Nodes sit at the centres of cells of node_: node i at (i + 0.5) node_.
+  const int64_t x0 = FloorToInt((p.x() - reach) / node_), x1 = FloorToInt((p.x() + reach) / node_);
+  const int64_t y0 = FloorToInt((p.y() - reach) / node_), y1 = FloorToInt((p.y() + reach) / node_);
+  for (int64_t tx = x0 >> kNodeBits; tx <= x1 >> kNodeBits; ++tx) {
+    for (int64_t ty = y0 >> kNodeBits; ty <= y1 >> kNodeBits; ++ty) {
+      TileAt(tx, ty);
+      RasterTile& raster = rasters_[tile_index_.Find(Key(tx, ty))];
+      const int64_t ix0 = std::max(x0, tx << kNodeBits), ix1 = std::min(x1, ((tx + 1) << kNodeBits) - 1);
+      const int64_t iy0 = std::max(y0, ty << kNodeBits), iy1 = std::min(y1, ((ty + 1) << kNodeBits) - 1);
+      for (int64_t iy = iy0; iy <= iy1; ++iy) {
+        const double dy = (static_cast<double>(iy) + 0.5) * node_ - p.y();
+        uint8_t* row = raster.node + (static_cast<int>(iy - (ty << kNodeBits)) << kNodeBits);
+        for (int64_t ix = ix0; ix <= ix1; ++ix) {
+          const double dx = (static_cast<double>(ix) + 0.5) * node_ - p.x();
+          const double d2 = dx * dx + dy * dy;
+          if (d2 > reach2) continue;
+          uint8_t& v = row[ix - (tx << kNodeBits)];
+          v = std::max(v, static_cast<uint8_t>(std::lround(255 * std::exp(-d2 * inv2s2))));
+        }
+      }
     }
   }
-  return found;
+}
+
+float PointGridMap::Node(int64_t ix, int64_t iy) const {
+  const uint32_t tile = tile_index_.Find(Key(ix >> kNodeBits, iy >> kNodeBits));
+  if (tile == kNone) return 0.0f;
+  return rasters_[tile].node[((iy & (kNodes - 1)) << kNodeBits) | (ix & (kNodes - 1))];
+}
+
+double PointGridMap::Likelihood(const Eigen::Vector2d& p) const {
+  if (!has_likelihood()) return 0.0;
+  const double u = p.x() / node_ - 0.5, v = p.y() / node_ - 0.5;
+  const int64_t i = FloorToInt(u), j = FloorToInt(v);
+  const double fx = u - static_cast<double>(i), fy = v - static_cast<double>(j);
+  return ((1 - fy) * ((1 - fx) * Node(i, j) + fx * Node(i + 1, j)) +
+          fy * ((1 - fx) * Node(i, j + 1) + fx * Node(i + 1, j + 1))) /
+         255.0;
+}
+
+void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes,
+                                         double* sums) const {
+  if (!has_likelihood()) throw std::logic_error("point map: no likelihood raster");
+  const int shifts = 2 * n + 1;
+  // The nodes any shift of a point interpolates between: a block of w x w from (i - n s, j - n s).
+  const int w = 2 * n * step_nodes + 2;
+  const int64_t mask = kNodes - 1;
+  const double inv_node = 1.0 / node_;
+  uint64_t cached_key = 0;
+  uint32_t cached_tile = kNone;
+  bool cached = false;
+  std::vector<uint8_t> block;  // the block, where it spans tiles
+  const int cells = shifts * shifts;
+  std::vector<float> acc(static_cast<size_t>(cells), 0.0f);  // per shift, in units of 1/255
+  for (const Eigen::Vector2d& p : points) {
+    const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
+    const int64_t i = FloorToInt(u), j = FloorToInt(v);
+    const float fx = static_cast<float>(u - static_cast<double>(i)), fy = static_cast<float>(v - static_cast<double>(j));
+    const int64_t lx = i - static_cast<int64_t>(n) * step_nodes, ly = j - static_cast<int64_t>(n) * step_nodes;
+    const int64_t hx = lx + w - 1, hy = ly + w - 1;
+    const uint8_t* base;  // the block's first node
+    int row_stride;     // nodes from one block row to the next
+    if ((lx >> kNodeBits) == (hx >> kNodeBits) && (ly >> kNodeBits) == (hy >> kNodeBits)) {
+      // One tile holds the block (mostly: a tile is kNodes nodes wide): read it in place.
+      const uint64_t key = Key(lx >> kNodeBits, ly >> kNodeBits);
+      if (!cached || key != cached_key) {
+        cached_key = key;
+        cached_tile = tile_index_.Find(key);
+        cached = true;
+      }
+      if (cached_tile == kNone) continue;  // no map point within reach of any shift
+      base = rasters_[cached_tile].node + ((ly & mask) << kNodeBits) + (lx & mask);
+      row_stride = kNodes;
+    } else {
+      block.resize(static_cast<size_t>(w) * w);
+      // The block spans tiles: node by node, the tile looked up when it changes.
+      for (int r = 0; r < w; ++r) {
+        const int64_t iy = ly + r;
+        for (int c = 0; c < w; ++c) {
+          const int64_t ix = lx + c;
+          const uint64_t key = Key(ix >> kNodeBits, iy >> kNodeBits);
+          if (!cached || key != cached_key) {
+            cached_key = key;
+            cached_tile = tile_index_.Find(key);
+            cached = true;
+          }
+          block[static_cast<size_t>(r) * w + c] =
+              cached_tile == kNone ? uint8_t{0} : rasters_[cached_tile].node[((iy & mask) << kNodeBits) | (ix & mask)];
+        }
+      }
+      base = block.data();
+      row_stride = w;
+    }
+    // Bilinear weights, the same for every shift.
+    const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+    for (int a = 0; a < shifts; ++a) {
+      const uint8_t* col = base + a * step_nodes;
+      float* out = acc.data() + a * shifts;
+      for (int b = 0; b < shifts; ++b) {
+        const uint8_t* q = col + b * step_nodes * row_stride;
+        out[b] += w00 * q[0] + w10 * q[1] + w01 * q[row_stride] + w11 * q[row_stride + 1];
+      }
+    }
+  }
+  for (int c = 0; c < cells; ++c) sums[c] += acc[static_cast<size_t>(c)] / 255.0;
 }
 
 int PointGridMap::NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const {
@@ -311,7 +410,8 @@ LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
       pose_(start),
       map_(options.map_resolution_m, std::max(0.25, options.match_distance_m),
            options.lookup_cell_m > 0 ? std::max(options.match_distance_start_m, options.add_distance_m) : 0,
-           options.lookup_cell_m > 0 ? options.lookup_cell_m : 1.0) {
+           options.lookup_cell_m > 0 ? options.lookup_cell_m : 1.0,
+           options.matcher == ScanMatcher::kCorrelative && options.lookup_cell_m > 0 ? options.search_sigma_m : 0) {
   options_.Validate();
   covariance_ = Eigen::Vector3d(options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_xy_m * options.initial_sigma_xy_m,
@@ -325,6 +425,11 @@ void LaserSlam::Predict(const Pose2& odometry_delta) {
 }
 
 namespace {
+
+// The correlative search scores this many of a heading's shifts exactly (the best on the raster).
+constexpr size_t kRescoredShifts = 2;
+// ... for the headings whose best raster score is within this fraction of the search's best.
+constexpr double kRescoreMargin = 0.25;
 
 Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
 
@@ -502,32 +607,102 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
   std::vector<Eigen::Vector2d> rotated;
   rotated.reserve(points.size() / stride + 1);
   const int sign = options_.search_order_reversed ? -1 : 1;
-  std::vector<Candidate> by_heading;
-  for (int ik = -nt; ik <= nt; ++ik) {
-    const double dt = sign * ik * step;
+  // With the map's likelihood raster (its nodes a lookup cell / kLikelihoodSub apart, the shifts
+  // a whole cell), a point's score at every shift comes from one block of the raster.
+  const bool raster = map_.has_likelihood();
+  std::vector<double> sums(raster ? static_cast<size_t>(2 * nxy + 1) * (2 * nxy + 1) : 0);
+  struct Ranked {
+    Eigen::Vector2d shift;
+    double total;
+    size_t order;  // visiting order
+  };
+  std::vector<Ranked> ranked;
+  std::vector<Candidate> by_heading(static_cast<size_t>(2 * nt + 1));
+  // Per heading with the raster: its shifts to score exactly (the best kRescoredShifts on the raster).
+  std::vector<std::vector<Ranked>> to_rescore(raster ? by_heading.size() : 0);
+  const auto rotate_to = [&](double dt) {
     const double c = std::cos(around.theta_rad + dt), sn = std::sin(around.theta_rad + dt);
     rotated.clear();
     for (size_t i = 0; i < points.size(); i += stride) {
       rotated.push_back(Rotate(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
     }
-    Candidate best{around, -std::numeric_limits<double>::infinity()};
-    for (int ia = -nxy; ia <= nxy; ++ia) {
-      for (int ib = -nxy; ib <= nxy; ++ib) {
-        const Eigen::Vector2d shift(sign * ia * cell, sign * ib * cell);
-        double score = 0;
-        for (const Eigen::Vector2d& q0 : rotated) {
-          const Eigen::Vector2d q = q0 + shift;
-          const int j = map_.LookupIndex(q, reach);
-          if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+  };
+  // A shift's score: the sum of the points' kernels (the rotated points), less the prior.
+  const auto exact = [&](const Eigen::Vector2d& shift) {
+    double score = 0;
+    for (const Eigen::Vector2d& q0 : rotated) {
+      const Eigen::Vector2d q = q0 + shift;
+      const int j = map_.LookupIndex(q, reach);
+      if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+    }
+    return score;
+  };
+  const auto penalty = [&](const Eigen::Vector2d& shift, double dt) {
+    const Eigen::Vector3d d(shift.x(), shift.y(), dt);
+    return prior * d.dot(info * d);
+  };
+  const auto pose_at = [&](const Eigen::Vector2d& shift, double dt) {
+    return Pose2{around.x_m + shift.x(), around.y_m + shift.y(), WrapAngle(around.theta_rad + dt)};
+  };
+  for (int ik = -nt; ik <= nt; ++ik) {
+    const double dt = sign * ik * step;
+    rotate_to(dt);
+    Candidate& best = by_heading[static_cast<size_t>(ik + nt)];
+    best = {around, -std::numeric_limits<double>::infinity()};
+    if (raster) {
+      // The raster ranks the shifts; its best is the heading's candidate unless it is scored exactly below.
+      std::fill(sums.begin(), sums.end(), 0.0);
+      map_.AddShiftedLikelihoods(rotated, nxy, PointGridMap::kLikelihoodSub, sums.data());
+      ranked.clear();
+      for (int ia = -nxy; ia <= nxy; ++ia) {
+        for (int ib = -nxy; ib <= nxy; ++ib) {
+          const Eigen::Vector2d shift(sign * ia * cell, sign * ib * cell);
+          const double score =
+              sums[static_cast<size_t>(sign * ia + nxy) * (2 * nxy + 1) + static_cast<size_t>(sign * ib + nxy)];
+          ranked.push_back({shift, score - penalty(shift, dt), ranked.size()});
         }
-        const Eigen::Vector3d d(shift.x(), shift.y(), dt);
-        const double total = score - prior * d.dot(info * d);
-        if (total > best.score) {
-          best = {{around.x_m + shift.x(), around.y_m + shift.y(), WrapAngle(around.theta_rad + dt)}, total};
+      }
+      const size_t keep = std::min(ranked.size(), kRescoredShifts);
+      std::partial_sort(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep), ranked.end(),
+                        [&](const Ranked& x, const Ranked& y) {
+                          return x.total > y.total || (x.total == y.total && x.order < y.order);
+                        });
+      best = {pose_at(ranked[0].shift, dt), ranked[0].total};
+      to_rescore[static_cast<size_t>(ik + nt)].assign(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep));
+    } else {
+      for (int ia = -nxy; ia <= nxy; ++ia) {
+        for (int ib = -nxy; ib <= nxy; ++ib) {
+          const Eigen::Vector2d shift(sign * ia * cell, sign * ib * cell);
+          const double total = exact(shift) - penalty(shift, dt);
+          if (total > best.score) best = {pose_at(shift, dt), total};  // on a tie the first one stays
         }
       }
     }
-    by_heading.push_back(best);
+  }
+  if (raster) {
+    // The headings that may hold the search's best maxima: within kRescoreMargin of the raster's
+    // best, and their neighbours (whether a heading is a maximum depends on them). Their shifts
+    // are scored exactly; the others keep their raster score, far below.
+    double top = -std::numeric_limits<double>::infinity();
+    for (const Candidate& c : by_heading) top = std::max(top, c.score);
+    const double cut = top - kRescoreMargin * std::max(1.0, std::abs(top));
+    const int n = static_cast<int>(by_heading.size());
+    std::vector<bool> rescore(by_heading.size(), false);
+    for (int h = 0; h < n; ++h) {
+      if (by_heading[static_cast<size_t>(h)].score < cut) continue;
+      for (int k = std::max(0, h - 1); k <= std::min(n - 1, h + 1); ++k) rescore[static_cast<size_t>(k)] = true;
+    }
+    for (int h = 0; h < n; ++h) {
+      if (!rescore[static_cast<size_t>(h)]) continue;
+      const double dt = sign * (h - nt) * step;
+      rotate_to(dt);
+      Candidate best{around, -std::numeric_limits<double>::infinity()};
+      for (const Ranked& r : to_rescore[static_cast<size_t>(h)]) {
+        const double total = exact(r.shift) - penalty(r.shift, dt);
+        if (total > best.score) best = {pose_at(r.shift, dt), total};
+      }
+      by_heading[static_cast<size_t>(h)] = best;
+    }
   }
   if (sign < 0) std::reverse(by_heading.begin(), by_heading.end());
   return Peaks(by_heading);

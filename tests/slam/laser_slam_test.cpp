@@ -104,6 +104,50 @@ TEST(PointGridMap, LookupGridFindsTheNearestPoint) {
   EXPECT_THROW(PointGridMap(0.05, 0.25, -1), std::invalid_argument);
 }
 
+TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
+  const double sigma = 0.05;
+  PointGridMap exact(0.05, 0.25), raster(0.05, 0.25, 0.6, 0.05, sigma);
+  ASSERT_TRUE(raster.has_likelihood());
+  EXPECT_FALSE(PointGridMap(0.05, 0.25, 0.6, 0.05).has_likelihood());
+  for (int i = 0; i < 60; ++i) {
+    const Eigen::Vector2d p(-1.3 + 0.05 * i, 0.3 * std::sin(0.2 * i));  // a curve across tile borders
+    exact.Add(p);
+    raster.Add(p);
+  }
+  const auto kernel = [&](const Eigen::Vector2d& q) {
+    const int j = exact.NearestIndex(q, 3 * sigma);
+    return j < 0 ? 0.0 : std::exp(-(exact.points()[j] - q).squaredNorm() / (2 * sigma * sigma));
+  };
+  double worst = 0, sum = 0;
+  int count = 0;
+  for (double x = -1.5; x < 1.9; x += 0.0071) {
+    for (double y = -0.6; y < 0.6; y += 0.0093) {
+      const double e = kernel({x, y}), l = raster.Likelihood({x, y});
+      worst = std::max(worst, std::abs(e - l));
+      sum += std::abs(e - l);
+      ++count;
+    }
+  }
+  const double h = raster.likelihood_node_m();
+  // Bilinear between nodes h apart: the error of a Gaussian of scale sigma is about h^2 / (8 sigma^2) per axis.
+  EXPECT_LT(worst, 2 * 2 * h * h / (8 * sigma * sigma) + 0.02);
+  EXPECT_LT(sum / count, 0.01);
+  EXPECT_EQ(raster.Likelihood({5, 5}), 0.0);
+  // The shifted sums are the sums of the likelihoods at the shifted points.
+  const std::vector<Eigen::Vector2d> scan = {{-1.21, 0.02}, {-0.03, 0.11}, {0.52, -0.17}, {1.17, 0.29}, {0.0, 0.5}};
+  const int n = 2, step = PointGridMap::kLikelihoodSub;
+  std::vector<double> sums((2 * n + 1) * (2 * n + 1), 0.0);
+  raster.AddShiftedLikelihoods(scan, n, step, sums.data());
+  for (int a = -n; a <= n; ++a) {
+    for (int b = -n; b <= n; ++b) {
+      double expected = 0;
+      for (const Eigen::Vector2d& p : scan) expected += raster.Likelihood(p + Eigen::Vector2d(a, b) * step * h);
+      EXPECT_NEAR(sums[(a + n) * (2 * n + 1) + (b + n)], expected, 1e-5) << a << " " << b;
+    }
+  }
+  EXPECT_THROW(exact.AddShiftedLikelihoods(scan, n, step, sums.data()), std::logic_error);
+}
+
 sim::Scene SquareRoom() {
   sim::Scene scene;
   scene.name = "square room";

@@ -69,9 +69,17 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
 // the kLookupCandidates stored points nearest to the cell's centre, updated as points are added;
 // a query (LookupIndex) takes the nearest of its cell's candidates: one tile lookup instead of a
 // search over buckets.
+//
+// With likelihood_sigma_m > 0 (and a lookup grid) the tiles also hold a likelihood raster for
+// correlative scan matching (Olson 2009): nodes every lookup_cell_m / kLikelihoodSub, at the
+// centres of cells of that size, hold exp(-d^2 / (2 sigma^2)), d the distance from the node to the
+// nearest stored point (0 beyond 3 sigma), updated as points are added; between nodes the
+// likelihood is bilinear. Its memory is that of the lookup tiles (they cover the same area): it
+// grows with the area explored, not with the scans.
 class PointGridMap {
  public:
-  PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m = 0, double lookup_cell_m = 0.05);
+  PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m = 0, double lookup_cell_m = 0.05,
+               double likelihood_sigma_m = 0);
   // Adds p (with its unit surface normal, or zero if unknown) unless its cell is taken;
   // returns whether it was added.
   bool Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal = Eigen::Vector2d::Zero());
@@ -92,17 +100,34 @@ class PointGridMap {
   const std::vector<Eigen::Vector2d>& normals() const { return normals_; }
   double resolution_m() const { return resolution_; }
   double lookup_radius_m() const { return lookup_radius_; }
+  // Whether there is a likelihood raster (likelihood_sigma_m > 0 and a lookup grid).
+  bool has_likelihood() const { return likelihood_sigma_ > 0 && lookup_radius_ > 0; }
+  double likelihood_node_m() const { return node_; }  // spacing of the raster's nodes [m]
+  // The raster's likelihood at p (bilinear between nodes); 0 without a raster.
+  double Likelihood(const Eigen::Vector2d& p) const;
+  // For every shift (ia, ib) in [-n, n]^2 of step_nodes raster nodes in x and y: adds to
+  // sums[(ia + n) * (2n + 1) + (ib + n)] the sum over `points` of Likelihood(p + shift), each
+  // point's interpolation weights computed once for all shifts. Needs a raster.
+  void AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes, double* sums) const;
 
  private:
   static constexpr int kTileBits = 5, kTile = 1 << kTileBits;  // 32 x 32 lookup cells per tile
  public:
   static constexpr int kLookupCandidates = 3;
+  static constexpr int kLikelihoodSubBits = 1;
+  static constexpr int kLikelihoodSub = 1 << kLikelihoodSubBits;  // raster nodes per lookup cell, in x and in y
 
  private:
+  static constexpr int kNodeBits = kTileBits + kLikelihoodSubBits, kNodes = 1 << kNodeBits;
   struct Tile {
     // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
     uint32_t index[kTile * kTile][kLookupCandidates];
     float d2[kTile * kTile][kLookupCandidates];  // their squared distances from the cell centre [m^2]
+  };
+  // The likelihood raster's nodes in a tile, row by row (y), in units of 1/255 (a byte each: the
+  // raster of the area a scan covers stays in the cache). rasters_[i] belongs to tiles_[i].
+  struct RasterTile {
+    uint8_t node[kNodes * kNodes];
   };
   static constexpr uint32_t kNone = 0xffffffffu;
   static uint64_t Key(int64_t ix, int64_t iy) {
@@ -120,13 +145,51 @@ class PointGridMap {
     uint32_t FindOrAdd(uint64_t key, uint32_t value);  // the stored value (`value` if it was absent)
   };
   void AddToLookup(const Eigen::Vector2d& p, uint32_t index);
-  double resolution_, bucket_, lookup_radius_, lookup_cell_;
+  void AddToLikelihood(const Eigen::Vector2d& p);
+  Tile* TileAt(int64_t tx, int64_t ty);  // created (empty) if absent
+  float Node(int64_t ix, int64_t iy) const;  // a raster node (0 where there is no tile)
+  double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_, inv_lookup_cell_;
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
   std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
+  std::deque<RasterTile> rasters_;  // with a likelihood raster: one per tile
   std::vector<Eigen::Vector2d> points_, normals_;
 };
+
+// The lookup's hot path, inline.
+inline uint32_t PointGridMap::TileTable::Find(uint64_t key) const {
+  if (count == 0) return kNone;
+  const size_t mask = values.size() - 1;
+  for (size_t i = Slot(key);; i = (i + 1) & mask) {
+    if (values[i] == kNone) return kNone;
+    if (keys[i] == key) return values[i];
+  }
+}
+
+inline int PointGridMap::LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const {
+  if (!(max_distance_m <= lookup_radius_)) return NearestIndex(p, max_distance_m);
+  // floor() without the library call.
+  const auto floor_to_int = [](double v) {
+    const auto i = static_cast<int64_t>(v);
+    return i - (static_cast<double>(i) > v);
+  };
+  const int64_t cx = floor_to_int(p.x() * inv_lookup_cell_);
+  const int64_t cy = floor_to_int(p.y() * inv_lookup_cell_);
+  const uint32_t tile = tile_index_.Find(Key(cx >> kTileBits, cy >> kTileBits));
+  if (tile == kNone) return -1;
+  const uint32_t* candidates = tiles_[tile].index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
+  double best = max_distance_m * max_distance_m;
+  int found = -1;
+  for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
+    const double d = (points_[candidates[k]] - p).squaredNorm();
+    if (d <= best) {
+      best = d;
+      found = static_cast<int>(candidates[k]);
+    }
+  }
+  return found;
+}
 
 constexpr double kRadPerDeg = 3.14159265358979323846 / 180;
 constexpr double kStaleMinMotionM = 0.05;  // LaserSlamOptions::stale_fraction applies above this motion per scan
@@ -162,7 +225,9 @@ struct LaserSlamOptions {
   // search_window_xy_m), in steps of search_step_rad and of the map's lookup cell, are scored
   // (the sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest
   // map point, less search_prior_weight times half the squared Mahalanobis distance from the
-  // prediction) and ICP starts from the best.
+  // prediction) and ICP starts from the best. With a lookup grid (lookup_cell_m > 0) the map keeps
+  // a likelihood raster (PointGridMap) that ranks each heading's shifts; the headings within 25 % of
+  // the raster's best score, and their neighbours, have their best 2 shifts scored exactly.
   ScanMatcher matcher = ScanMatcher::kCorrelative;
   // Test only (no config key): the searches visit their candidates in the opposite order, so that
   // equal scores resolve the other way (a robust result does not depend on it).
