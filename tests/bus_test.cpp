@@ -4,9 +4,12 @@
 
 #include <chrono>
 #include <cstdlib>
+#include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/lcm_url.hpp"
 #include "snapnav/pose_t.hpp"
 #include "snapnav/laser_scan_t.hpp"
@@ -115,6 +118,33 @@ TEST(BusPrivate, QueueCapacityBoundsWhatALaggingSubscriberKeeps) {
 TEST(Bus, QueueCapacityMustBePositive) {
   Bus bus("memq://");
   EXPECT_THROW(bus.Subscribe<pose_t>("TEST_BUS_QUEUE", [](const pose_t&) {}, 0), std::invalid_argument);
+}
+
+// A node's handler problems: a malformed message is skipped and rejected on its channel, a
+// benign skip is only counted, an exception out of the work is an internal error, not a crash.
+TEST(HandlerProblems, SkipsRejectsAndGuardsCountedByReason) {
+  Bus bus("memq://");
+  HandlerProblems problems(bus, "test-node");
+  bus.SubscribeRaw("TEST_PROBLEMS", [&](const void*, size_t) {
+    problems.Skip("no ranges", "0 ranges", true);
+    problems.Skip("waiting for a fix", "", false);
+    problems.Guard("scan", [] { throw std::runtime_error("publish failed"); });
+    problems.Guard("scan", [] {});
+  });
+  bus.PublishRaw("TEST_PROBLEMS", "x", 1);
+  HandleAll(bus);
+  EXPECT_EQ(problems.skipped("no ranges"), 1);
+  EXPECT_EQ(problems.skipped("waiting for a fix"), 1);
+  EXPECT_EQ(problems.skipped("other"), 0);
+  EXPECT_EQ(problems.skipped_total(), 2);
+  EXPECT_EQ(problems.internal_errors(), 1);
+  EXPECT_EQ(problems.last_internal_error(), "scan: publish failed");
+  EXPECT_EQ(bus.stats().at("TEST_PROBLEMS").decode_errors, 1u);  // only the malformed one
+  EXPECT_EQ(bus.stats().at("TEST_PROBLEMS").handler_errors, 0u);
+  std::ostringstream report;
+  problems.Report(report);
+  EXPECT_NE(report.str().find("test-node:   skipped (no ranges): 1"), std::string::npos) << report.str();
+  EXPECT_NE(report.str().find("test-node:   last internal error: scan: publish failed"), std::string::npos);
 }
 
 TEST(Bus, MissingLogFileIsExplained) {

@@ -115,53 +115,26 @@ void FusedSlamConfig::Print(std::ostream& out) const {
       << "\nmap_every_n_scans = " << map_every_n_scans << "\nstatus_every_n_scans = " << status_every_n_scans << "\n";
 }
 
-FusedSlamNode::FusedSlamNode(glue::Bus& bus, const FusedSlamConfig& config) : bus_(bus), config_(config) {
+FusedSlamNode::FusedSlamNode(glue::Bus& bus, const FusedSlamConfig& config)
+    : bus_(bus), config_(config), problems_(bus, "fused-slam") {
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
-  bus_.Subscribe(config_.odometry_channel, &FusedSlamNode::OnOdometry, this);
+  bus_.Subscribe(config_.odometry_channel, &FusedSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.scan_channel, &FusedSlamNode::OnScan, this);
   bus_.Subscribe(config_.visual_channel, &FusedSlamNode::OnVisual, this);
-}
-
-int64_t FusedSlamNode::skipped(const std::string& reason) const {
-  const auto it = skipped_.find(reason);
-  return it == skipped_.end() ? 0 : it->second;
-}
-
-void FusedSlamNode::Skip(const std::string& reason, const std::string& detail, bool malformed) {
-  ++skipped_[reason];
-  if (malformed) bus_.CountDecodeError(reason + ": " + detail);  // per channel; printed, rate-limited
-}
-
-void FusedSlamNode::InternalError(const std::string& what) {
-  last_internal_error_ = what;
-  const int64_t n = ++internal_errors_;
-  if (n <= 5 || n % 100 == 0) std::cerr << "fused-slam: internal error #" << n << ": " << what << "\n";
 }
 
 // Nothing leaves a handler: inputs are checked before libnav sees them, and anything else
 // (a failed publish) is counted as an internal error and reported at exit.
 void FusedSlamNode::OnOdometry(const odometry_t& msg) {
-  try {
-    HandleOdometry(msg);
-  } catch (const std::exception& e) {
-    InternalError(std::string("odometry: ") + e.what());
-  }
+  problems_.Guard("odometry", [&] { HandleOdometry(msg); });
 }
 
 void FusedSlamNode::OnScan(const laser_scan_t& msg) {
-  try {
-    HandleScan(msg);
-  } catch (const std::exception& e) {
-    InternalError(std::string("scan: ") + e.what());
-  }
+  problems_.Guard("scan", [&] { HandleScan(msg); });
 }
 
 void FusedSlamNode::OnVisual(const pose_t& msg) {
-  try {
-    HandleVisual(msg);
-  } catch (const std::exception& e) {
-    InternalError(std::string("visual: ") + e.what());
-  }
+  problems_.Guard("visual", [&] { HandleVisual(msg); });
 }
 
 void FusedSlamNode::HandleOdometry(const odometry_t& msg) {
@@ -367,12 +340,10 @@ void FusedSlamNode::PublishStatus(int64_t utime) {
 }
 
 void FusedSlamNode::Report(std::ostream& out) const {
-  int64_t skipped_total = 0;
-  for (const auto& [_, n] : skipped_) skipped_total += n;
   out << "fused-slam: scans " << scans_ << ", updates " << updates_ << ", odometry " << odometry_ << ", visual "
       << visual_ << " (used " << visual_used_ << "), poses published " << poses_published_ << ", maps published "
-      << maps_published_ << ", statuses published " << statuses_published_ << ", skipped " << skipped_total
-      << ", internal errors " << internal_errors_;
+      << maps_published_ << ", statuses published " << statuses_published_ << ", skipped " << problems_.skipped_total()
+      << ", internal errors " << problems_.internal_errors();
   if (time_restarts_ > 0) out << ", odometry time restarts " << time_restarts_;
   out << "\n";
   if (slam_) {
@@ -383,8 +354,7 @@ void FusedSlamNode::Report(std::ostream& out) const {
         << f.unmapped_scans() << ", map " << f.map().size() << " points\n";
   }
   out << "fused-slam: mean " << mean_scan_ms() << " ms per scan, " << mean_visual_ms() << " ms per visual measurement\n";
-  for (const auto& [reason, n] : skipped_) out << "fused-slam:   skipped (" << reason << "): " << n << "\n";
-  if (!last_internal_error_.empty()) out << "fused-slam:   last internal error: " << last_internal_error_ << "\n";
+  problems_.Report(out);
 }
 
 }  // namespace snapnav::processes

@@ -36,6 +36,7 @@
 #include <string>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/message_clock.hpp"
 #include "snapnav/laser_scan_t.hpp"
@@ -80,9 +81,9 @@ class FusedSlamNode {
   int64_t maps_published() const { return maps_published_; }
   int64_t statuses_published() const { return statuses_published_; }
   // Messages skipped, by reason ("no ranges", "non-finite visual pose", "waiting for a visual fix", ...).
-  const std::map<std::string, int64_t>& skipped() const { return skipped_; }
-  int64_t skipped(const std::string& reason) const;
-  int64_t internal_errors() const { return internal_errors_; }
+  const std::map<std::string, int64_t>& skipped() const { return problems_.skipped(); }
+  int64_t skipped(const std::string& reason) const { return problems_.skipped(reason); }
+  int64_t internal_errors() const { return problems_.internal_errors(); }
   double mean_scan_ms() const { return updates_ > 0 ? scan_ms_total_ / static_cast<double>(updates_) : 0.0; }
   double mean_visual_ms() const { return visual_used_ > 0 ? visual_ms_total_ / static_cast<double>(visual_used_) : 0.0; }
   // The filter; nullptr before it started.
@@ -96,8 +97,9 @@ class FusedSlamNode {
   void HandleOdometry(const odometry_t& msg);
   void HandleScan(const laser_scan_t& msg);
   void HandleVisual(const pose_t& msg);
-  void Skip(const std::string& reason, const std::string& detail, bool malformed);
-  void InternalError(const std::string& what);
+  void Skip(const std::string& reason, const std::string& detail, bool malformed) {
+    problems_.Skip(reason, detail, malformed);
+  }
   void PublishPose(int64_t utime, const nav::Pose2& pose);
   void PublishMap(int64_t utime);
   void PublishStatus(int64_t utime);
@@ -111,10 +113,9 @@ class FusedSlamNode {
   int8_t last_outcome_ = -1;
   double last_mahalanobis2_ = 0, last_fit_ = 0;
   int64_t scans_ = 0, updates_ = 0, odometry_ = 0, visual_ = 0, visual_used_ = 0;
-  int64_t poses_published_ = 0, maps_published_ = 0, statuses_published_ = 0, internal_errors_ = 0;
+  int64_t poses_published_ = 0, maps_published_ = 0, statuses_published_ = 0;
   double scan_ms_total_ = 0, visual_ms_total_ = 0;
-  std::map<std::string, int64_t> skipped_;
-  std::string last_internal_error_;
+  glue::HandlerProblems problems_;
 };
 
 }  // namespace snapnav::processes

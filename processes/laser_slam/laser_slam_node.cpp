@@ -121,44 +121,21 @@ void LaserSlamConfig::Print(std::ostream& out) const {
   out << "map_every_n_scans = " << map_every_n_scans << "\n";
 }
 
-LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config) : bus_(bus), config_(config) {
+LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config)
+    : bus_(bus), config_(config), problems_(bus, "laser-slam") {
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
-  bus_.Subscribe(config_.odometry_channel, &LaserSlamNode::OnOdometry, this);
+  bus_.Subscribe(config_.odometry_channel, &LaserSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.scan_channel, &LaserSlamNode::OnScan, this);
-}
-
-int64_t LaserSlamNode::skipped(const std::string& reason) const {
-  const auto it = skipped_.find(reason);
-  return it == skipped_.end() ? 0 : it->second;
-}
-
-void LaserSlamNode::Skip(const std::string& reason, const std::string& detail, bool malformed) {
-  ++skipped_[reason];
-  if (malformed) bus_.CountDecodeError(reason + ": " + detail);  // per channel; printed, rate-limited
-}
-
-void LaserSlamNode::InternalError(const std::string& what) {
-  last_internal_error_ = what;
-  const int64_t n = ++internal_errors_;
-  if (n <= 5 || n % 100 == 0) std::cerr << "laser-slam: internal error #" << n << ": " << what << "\n";
 }
 
 // Nothing leaves a handler: inputs are checked before libnav sees them, and anything else
 // (a failed publish) is counted as an internal error and reported at exit.
 void LaserSlamNode::OnOdometry(const odometry_t& msg) {
-  try {
-    HandleOdometry(msg);
-  } catch (const std::exception& e) {
-    InternalError(std::string("odometry: ") + e.what());
-  }
+  problems_.Guard("odometry", [&] { HandleOdometry(msg); });
 }
 
 void LaserSlamNode::OnScan(const laser_scan_t& msg) {
-  try {
-    HandleScan(msg);
-  } catch (const std::exception& e) {
-    InternalError(std::string("scan: ") + e.what());
-  }
+  problems_.Guard("scan", [&] { HandleScan(msg); });
 }
 
 void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
@@ -232,16 +209,13 @@ void LaserSlamNode::PublishMap(int64_t utime) {
 }
 
 void LaserSlamNode::Report(std::ostream& out) const {
-  int64_t skipped_total = 0;
-  for (const auto& [_, n] : skipped_) skipped_total += n;
   out << "laser-slam: scans " << scans_ << ", updates " << updates_ << ", measured " << measured_ << ", odometry "
       << odometry_ << " (late " << late_odometry_ << "), poses published " << poses_published_ << ", maps published "
-      << maps_published_ << ", skipped " << skipped_total << ", internal errors " << internal_errors_ << "\n";
+      << maps_published_ << ", skipped " << problems_.skipped_total() << ", internal errors " << problems_.internal_errors() << "\n";
   out << "laser-slam: mean update " << mean_update_ms() << " ms per scan";
   if (slam_) out << ", map " << slam_->map().size() << " points";
   out << "\n";
-  for (const auto& [reason, n] : skipped_) out << "laser-slam:   skipped (" << reason << "): " << n << "\n";
-  if (!last_internal_error_.empty()) out << "laser-slam:   last internal error: " << last_internal_error_ << "\n";
+  problems_.Report(out);
 }
 
 }  // namespace snapnav::processes

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
 #include "snapnav/laser_scan_t.hpp"
@@ -65,10 +66,10 @@ class LaserSlamNode {
   int64_t poses_published() const { return poses_published_; }
   int64_t maps_published() const { return maps_published_; }
   // Scans and odometry messages skipped, by reason ("no ranges", "no valid points", ...).
-  const std::map<std::string, int64_t>& skipped() const { return skipped_; }
-  int64_t skipped(const std::string& reason) const;
+  const std::map<std::string, int64_t>& skipped() const { return problems_.skipped(); }
+  int64_t skipped(const std::string& reason) const { return problems_.skipped(reason); }
   // Unexpected exceptions caught in a handler (e.g. a failed publish); that message's work is lost.
-  int64_t internal_errors() const { return internal_errors_; }
+  int64_t internal_errors() const { return problems_.internal_errors(); }
   // Mean wall time of LaserSlam::Update per updating scan [ms] (a statistic only; 0 before any).
   double mean_update_ms() const { return updates_ > 0 ? update_ms_total_ / static_cast<double>(updates_) : 0.0; }
   // The filter; nullptr before the first usable message.
@@ -81,11 +82,10 @@ class LaserSlamNode {
   void OnScan(const laser_scan_t& msg);
   void HandleOdometry(const odometry_t& msg);
   void HandleScan(const laser_scan_t& msg);
-  // Counts a skipped message. A malformed one (`malformed`) is also counted as rejected on its
-  // channel by the bus, which reports it (rate-limited) with `detail`.
-  void Skip(const std::string& reason, const std::string& detail, bool malformed);
-  // Counts and prints (rate-limited) an unexpected exception of a handler.
-  void InternalError(const std::string& what);
+  // Counts a skipped message (a malformed one also as rejected on its channel; glue::HandlerProblems).
+  void Skip(const std::string& reason, const std::string& detail, bool malformed) {
+    problems_.Skip(reason, detail, malformed);
+  }
   void PublishMap(int64_t utime);
 
   glue::Bus& bus_;
@@ -94,10 +94,9 @@ class LaserSlamNode {
   bool odometry_seen_ = false;
   int64_t last_scan_utime_ = 0;
   int64_t scans_ = 0, updates_ = 0, measured_ = 0, odometry_ = 0, late_odometry_ = 0;
-  int64_t poses_published_ = 0, maps_published_ = 0, internal_errors_ = 0;
+  int64_t poses_published_ = 0, maps_published_ = 0;
   double update_ms_total_ = 0.0;
-  std::map<std::string, int64_t> skipped_;
-  std::string last_internal_error_;
+  glue::HandlerProblems problems_;
 };
 
 }  // namespace snapnav::processes

@@ -182,7 +182,11 @@ void RatSlamConfig::Print(std::ostream& out) const {
 }
 
 RatSlamNode::RatSlamNode(glue::Bus& bus, const RatSlamConfig& config, std::ostream& log)
-    : bus_(bus), config_(config), log_(log), frames_to_panoramas_(config.panorama, config.mirror) {
+    : bus_(bus),
+      config_(config),
+      log_(log),
+      frames_to_panoramas_(config.panorama, config.mirror),
+      problems_(bus, "ratslam") {
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
   bus_.Subscribe(config_.input_channel(), &RatSlamNode::OnFrame, this);
   bus_.Subscribe(config_.odometry_channel, &RatSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
@@ -204,28 +208,14 @@ void RatSlamNode::Reject(const std::string& reason, const std::string& detail) {
   bus_.CountDecodeError(reason + (detail.empty() ? "" : ": " + detail));  // per channel; printed, rate-limited
 }
 
-void RatSlamNode::InternalError(const std::string& what) {
-  last_internal_error_ = what;
-  const int64_t n = ++internal_errors_;
-  if (n <= 5 || n % 100 == 0) std::cerr << "ratslam: internal error #" << n << ": " << what << "\n";
-}
-
 // Nothing leaves a handler: inputs are checked before libnav sees them, and anything else (a failed
 // publish) is counted as an internal error and reported at exit.
 void RatSlamNode::OnFrame(const omni_frame_t& frame) {
-  try {
-    HandleFrame(frame);
-  } catch (const std::exception& e) {
-    InternalError(std::string("frame: ") + e.what());
-  }
+  problems_.Guard("frame", [&] { HandleFrame(frame); });
 }
 
 void RatSlamNode::OnOdometry(const odometry_t& msg) {
-  try {
-    HandleOdometry(msg);
-  } catch (const std::exception& e) {
-    InternalError(std::string("odometry: ") + e.what());
-  }
+  problems_.Guard("odometry", [&] { HandleOdometry(msg); });
 }
 
 void RatSlamNode::HandleOdometry(const odometry_t& msg) {
@@ -326,7 +316,7 @@ void RatSlamNode::PrintStats(std::ostream& out, int64_t utime) const {
 void RatSlamNode::Report(std::ostream& out) const {
   out << "ratslam: frames " << frames_ << ", processed " << processed_ << ", odometry " << odometry_
       << ", poses published " << poses_published_ << ", experience maps published " << maps_published_
-      << ", rejected " << rejected_total() << ", internal errors " << internal_errors_ << "\n";
+      << ", rejected " << rejected_total() << ", internal errors " << problems_.internal_errors() << "\n";
   if (slam_) {
     out << "ratslam: " << slam_->templates() << " templates, " << slam_->experience_map().experiences().size()
         << " experiences, " << slam_->experience_map().links().size() << " links, " << slam_->loop_closures()
@@ -334,7 +324,7 @@ void RatSlamNode::Report(std::ostream& out) const {
         << " ms per odometry message\n";
   }
   for (const auto& [reason, n] : rejected_) out << "ratslam:   rejected (" << reason << "): " << n << "\n";
-  if (!last_internal_error_.empty()) out << "ratslam:   last internal error: " << last_internal_error_ << "\n";
+  problems_.Report(out);
 }
 
 }  // namespace snapnav::processes

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/nav/omni_geometry.hpp"
@@ -79,7 +80,7 @@ class RatSlamNode {
   const std::map<std::string, int64_t>& rejected() const { return rejected_; }
   int64_t rejected(const std::string& reason) const;
   int64_t rejected_total() const;
-  int64_t internal_errors() const { return internal_errors_; }
+  int64_t internal_errors() const { return problems_.internal_errors(); }
   // Mean wall time per RatSlam::OnImage and per OnOdometry [ms] (statistics only).
   double mean_image_ms() const { return processed_ > 0 ? image_ms_ / static_cast<double>(processed_) : 0.0; }
   double mean_odometry_ms() const { return steps_ > 0 ? odometry_ms_ / static_cast<double>(steps_) : 0.0; }
@@ -95,7 +96,6 @@ class RatSlamNode {
   void HandleFrame(const omni_frame_t& frame);
   void HandleOdometry(const odometry_t& msg);
   void Reject(const std::string& reason, const std::string& detail);
-  void InternalError(const std::string& what);
   void PublishPose(int64_t utime);
   void AfterMessage(int64_t utime);  // experience map and stats when due
   void PrintStats(std::ostream& out, int64_t utime) const;
@@ -108,10 +108,10 @@ class RatSlamNode {
   bool odometry_seen_ = false;
   std::optional<int64_t> last_map_utime_, last_stats_utime_, first_utime_;
   int64_t frames_ = 0, processed_ = 0, odometry_ = 0, steps_ = 0;
-  int64_t poses_published_ = 0, maps_published_ = 0, internal_errors_ = 0;
+  int64_t poses_published_ = 0, maps_published_ = 0;
   double image_ms_ = 0, odometry_ms_ = 0;
   std::map<std::string, int64_t> rejected_;
-  std::string last_internal_error_;
+  glue::HandlerProblems problems_;  // internal errors (rejected messages are counted in rejected_)
   cv::Mat gray_;
 };
 
