@@ -16,6 +16,7 @@
 #include "compare_config.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
+#include "stats.hpp"
 #include "slam_compare.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
@@ -25,11 +26,10 @@ namespace {
 namespace fs = std::filesystem;
 using namespace snapnav;
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
+const double kNaN = std::nan("");
+
+// The median of the runs' figures; NaN (null in the JSON) for none.
+double Median(const std::vector<double>& v) { return eval::Median(v, kNaN); }
 
 std::string Json(double v) { return std::isfinite(v) ? eval::Fixed(v, 5) : "null"; }
 

@@ -32,6 +32,7 @@
 #include "report_text.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
+#include "stats.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -44,6 +45,7 @@ namespace fs = std::filesystem;
 using namespace snapnav;
 using Clock = std::chrono::steady_clock;
 using eval::Fixed;
+using eval::Median;
 
 constexpr double kGoalMsAt1000 = 50;
 constexpr double kRoomPitchM = 10;  // synthetic cells: copies of the room on a 10 m lattice
@@ -51,11 +53,6 @@ constexpr int kRoomsPerRow = 10;
 
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 // A synthetic view from a real one (see the file comment).
 nav::PlaceView Perturb(const nav::PlaceView& base, std::mt19937_64& rng) {

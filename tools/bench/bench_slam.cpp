@@ -25,6 +25,7 @@
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
 #include "slam_sim.hpp"
+#include "stats.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -37,15 +38,12 @@ namespace fs = std::filesystem;
 using namespace snapnav;
 using eval::Fixed;
 using eval::JsonString;
+using eval::Median;
 
 constexpr double kGoalTimeRatio = 2.0;        // icp-slam ms/scan over ours, at least
 constexpr double kGoalRmsDifferenceM = 0.05;  // ours against icp-slam, at most
 constexpr double kGoalScansPerSecond = 500;   // 681-beam scans, one core, at least
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0 : v[v.size() / 2];
-}
 
 // "min-max" of run times.
 std::string Spread(const std::vector<double>& v) {

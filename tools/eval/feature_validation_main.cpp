@@ -31,6 +31,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "report_text.hpp"
+#include "stats.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/nav/surf.hpp"
@@ -41,6 +42,8 @@ namespace fs = std::filesystem;
 using namespace snapnav;
 using eval::Fixed;
 using eval::JsonString;
+using eval::Mean;
+using eval::Median;
 
 constexpr double kMarginPx = 16;         // keypoints this close to an image border are left out
 constexpr double kRepeatPx = 2.5;        // repeated: a keypoint of B this close to the mapped position
@@ -55,16 +58,7 @@ double MsSince(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
-double Mean(const std::vector<double>& v) {
-  return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-}
 
 // Keypoints of one detector on one image: positions, sizes (each detector's own KeyPoint::size
 // convention; only compared within a detector) and descriptor rows.

@@ -12,6 +12,7 @@
 #include "people_view.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
+#include "stats.hpp"
 #include "snapnav/nav/view_fusion.hpp"
 #include "snapnav/plot/plot.hpp"
 
@@ -19,6 +20,7 @@ namespace snapnav::eval {
 namespace {
 
 namespace fs = std::filesystem;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 void Progress(const std::string& what, int done, int total) {
   if (done == total || done % 10 == 0) {
@@ -40,11 +42,6 @@ std::vector<cv::Mat> WithHome(const Grid& current, const Grid& home) {
   return panos;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
 
 }  // namespace
 
@@ -100,7 +97,7 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
      << "| | images | camera inside a person | nearest person < 0.3 m | occluded > 50% | nearest person, median [m] "
         "| occluded, mean | occluded, max |\n|---|---|---|---|---|---|---|---|\n"
      << "| grid | " << g.db.poses.size() << " | " << inside_images << " | " << within_30cm << " | " << half_covered << " | "
-     << Fixed(Median(nearest), 2) << " | " << Fixed(occluded_mean, 3) << " | "
+     << Fixed(Median(nearest, kNaN), 2) << " | " << Fixed(occluded_mean, 3) << " | "
      << Fixed(*std::max_element(occluded.begin(), occluded.end()), 3) << " |\n"
      << "| home snapshot | 1 | " << home_view.inside << " | " << (home_view.nearest_surface_m < 0.3) << " | "
      << (home_view.occluded_fraction > 0.5) << " | " << Fixed(home_view.nearest_surface_m, 2) << " | "
@@ -288,7 +285,7 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
   json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"grid_images\": " << g.db.poses.size()
        << ",\n  \"images_camera_inside_person\": " << inside_images << ",\n  \"images_person_within_0_3_m\": "
        << within_30cm << ",\n  \"images_occluded_over_half\": " << half_covered
-       << ",\n  \"nearest_person_median_m\": " << Fixed(Median(nearest), 3)
+       << ",\n  \"nearest_person_median_m\": " << Fixed(Median(nearest, kNaN), 3)
        << ",\n  \"occluded_fraction_mean\": " << Fixed(occluded_mean, 4)
        << ",\n  \"home_nearest_person_m\": " << Fixed(home_view.nearest_surface_m, 3)
        << ",\n  \"home_camera_inside_person\": " << home_view.inside

@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "scene_file.hpp"
+#include "stats.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/nav/unwrap.hpp"
@@ -27,32 +28,6 @@ namespace snapnav::eval {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-int EveryNSteps(double physics_hz, double rate_hz, const char* what) {
-  const double n = physics_hz / rate_hz;
-  if (!std::isfinite(n) || n < 1 || std::abs(n - std::round(n)) > 1e-6) {
-    throw std::invalid_argument(std::string("sim camera run: ") + what + " rate must divide the physics rate");
-  }
-  return static_cast<int>(std::round(n));
-}
-
-double RouteLength(const std::vector<Eigen::Vector2d>& route) {
-  double length = 0;
-  for (size_t i = 0; i < route.size(); ++i) length += (route[(i + 1) % route.size()] - route[i]).norm();
-  return length;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
-
-double Mean(const std::vector<double>& v) {
-  double s = 0;
-  for (double x : v) s += x;
-  return v.empty() ? 0 : s / static_cast<double>(v.size());
-}
 
 TrajectoryErrors ErrorsOf(const std::vector<nav::Pose2>& estimate, const std::vector<nav::Pose2>& truth,
                           double rpe_delta_m) {

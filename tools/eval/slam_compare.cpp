@@ -17,6 +17,7 @@
 #include "localization_eval.hpp"
 #include "report_text.hpp"
 #include "slam_plot.hpp"
+#include "stats.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/plot/plot.hpp"
@@ -103,11 +104,6 @@ double RecoveryTime(const std::vector<double>& time_s, const std::vector<double>
   return kNaN;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
 
 }  // namespace
 
@@ -424,7 +420,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     double sum = 0;
     for (const double e : fix_errors) sum += e;
     out.visual_error_mean_m = sum / static_cast<double>(fix_errors.size());
-    out.visual_error_median_m = Median(fix_errors);
+    out.visual_error_median_m = Median(fix_errors, kNaN);
   }
   out.seconds = Ms(wall0) / 1000;
   return out;

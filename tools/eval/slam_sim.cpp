@@ -13,13 +13,11 @@
 #include "snapnav/pose_t.hpp"
 
 namespace snapnav::eval {
-namespace {
 
-// Physics steps per sensor reading; throws unless the rate divides the physics rate.
 int EveryNSteps(double physics_hz, double rate_hz, const char* what) {
   const double n = physics_hz / rate_hz;
   if (!std::isfinite(n) || n < 1 || std::abs(n - std::round(n)) > 1e-6) {
-    throw std::invalid_argument(std::string("slam sim: ") + what + " rate must divide the physics rate");
+    throw std::invalid_argument(std::string("simulator: ") + what + " rate must divide the physics rate");
   }
   return static_cast<int>(std::round(n));
 }
@@ -29,8 +27,6 @@ double RouteLength(const std::vector<Eigen::Vector2d>& route) {
   for (size_t i = 0; i < route.size(); ++i) length += (route[(i + 1) % route.size()] - route[i]).norm();
   return length;
 }
-
-}  // namespace
 
 void SimSlamOptions::Validate() const {
   if (laps < 0 || !(duration_s >= 0) || !std::isfinite(duration_s)) {

@@ -82,6 +82,12 @@ struct SimulatedSlamLog {
 // invalid options.
 SimulatedSlamLog SimulateSlamLog(const SimSlamOptions& options);
 
+// Physics steps per sensor reading; throws std::invalid_argument unless `rate_hz` divides the
+// physics rate (`what` names the sensor in the message).
+int EveryNSteps(double physics_hz, double rate_hz, const char* what);
+// The length of a closed route (back from the last waypoint to the first) [m].
+double RouteLength(const std::vector<Eigen::Vector2d>& route);
+
 // The errors of one estimator against the ground truth, at every scan.
 struct TrajectoryErrors {
   nav::AteResult ate;          // no alignment: estimators and truth share the start pose

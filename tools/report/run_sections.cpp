@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "report_text.hpp"
+#include "stats.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::report {
@@ -16,14 +17,10 @@ namespace {
 
 namespace fs = std::filesystem;
 using eval::Fixed;
+using eval::Median;
 constexpr double kDeg = M_PI / 180;
 constexpr int64_t kTruthToleranceUs = 30000;  // sim: ground truth at 50 Hz, on the frames' steps
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-  return v[v.size() / 2];
-}
 
 std::string Lower(std::string s) {
   for (auto& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
