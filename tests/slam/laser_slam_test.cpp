@@ -159,6 +159,23 @@ sim::Scene SquareRoom() {
   return scene;
 }
 
+// Scans of the square room from any true pose: the simulator's laser (seed 3), points in the
+// robot frame as the laser-slam node makes them.
+class RoomScanner {
+ public:
+  RoomScanner() : scene_(SquareRoom()), world_(scene_, {}, laser_, 3) {}
+  std::vector<Eigen::Vector2d> operator()(const Pose2& pose) {
+    world_.SetTruePose(pose);
+    return ScanToPoints(world_.Scan(), laser_.angle_min_rad, laser_.AngleIncrement(), laser_.range_min_m,
+                        laser_.range_max_m, {laser_.mount_x_m, 0, 0});
+  }
+
+ private:
+  sim::Scene scene_;
+  sim::LaserOptions laser_;
+  sim::World world_;  // holds a reference to scene_
+};
+
 TEST(ScanNormals, LinesGiveTheirNormalCornersAndLoneNeighboursNone) {
   std::vector<Eigen::Vector2d> pts;
   for (int i = 0; i < 10; ++i) pts.push_back({0.1 * i, 1.0});   // a wall along x at y = 1
@@ -218,14 +235,7 @@ TEST(LaserSlam, HeadingSearchRecoversATurnOdometryMissed) {
 // scans from the last motion and takes the tracked turn out of the catch-up increment; without
 // it the catch-up increment counts the turn twice and the pose ends far off.
 TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
-  const sim::Scene scene = SquareRoom();
-  sim::LaserOptions laser;
-  sim::World world(scene, {}, laser, 3);
-  const auto scan_at = [&](const Pose2& p) {
-    world.SetTruePose(p);
-    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m,
-                        laser.range_max_m, {laser.mount_x_m, 0, 0});
-  };
+  RoomScanner scan_at;
   const Pose2 start{2.0, 3.5, 0.3};
   const Pose2 step{0.05, 0, 10.0 * M_PI / 180.0};  // per scan: 5 cm and 10 degrees
   std::vector<Pose2> truth = {start};
@@ -269,14 +279,7 @@ TEST(LaserSlam, StaleOdometryDuringATurnIsTakenOutOfTheCatchUp) {
 // stale_fraction of the last scan-to-scan motion, a moving robot cannot have stopped within one
 // scan, so those scans are stale too (CSAIL: 0.21 m per scan, then 0.004, 0, 0, then 0.83 m).
 TEST(LaserSlam, OdometryThatCreepsWhileTheRobotMovesIsStale) {
-  const sim::Scene scene = SquareRoom();
-  sim::LaserOptions laser;
-  sim::World world(scene, {}, laser, 3);
-  const auto scan_at = [&](const Pose2& p) {
-    world.SetTruePose(p);
-    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
-                        {laser.mount_x_m, 0, 0});
-  };
+  RoomScanner scan_at;
   const Pose2 start{2.0, 3.5, 0.3};
   const Pose2 step{0.08, 0, 8.0 * M_PI / 180.0}, creep{0.0008, 0, 0};
   std::vector<Pose2> truth = {start};
@@ -315,14 +318,7 @@ TEST(LaserSlam, OdometryThatCreepsWhileTheRobotMovesIsStale) {
 // not taken for stale odometry (its 8 cm are far below stale_fraction of a 1.8 m "motion"), and
 // the pose follows the scans from the new place.
 TEST(LaserSlam, ResetPoseIsNoMotionForTheOdometryModels) {
-  const sim::Scene scene = SquareRoom();
-  sim::LaserOptions laser;
-  sim::World world(scene, {}, laser, 3);
-  const auto scan_at = [&](const Pose2& p) {
-    world.SetTruePose(p);
-    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
-                        {laser.mount_x_m, 0, 0});
-  };
+  RoomScanner scan_at;
   const Pose2 step{0.08, 0, 0};
   Pose2 truth{1.2, 1.0, 0.2};
   LaserSlam slam({}, truth);
@@ -347,14 +343,7 @@ TEST(LaserSlam, ResetPoseIsNoMotionForTheOdometryModels) {
 // update alone stays near the prediction, although the scan fits only 0.3 m on; the score check
 // widens the prediction and the update follows the scan.
 TEST(LaserSlam, UpdateThatScoresBelowTheScanIsRedone) {
-  const sim::Scene scene = SquareRoom();
-  sim::LaserOptions laser;
-  sim::World world(scene, {}, laser, 3);
-  const auto scan_at = [&](const Pose2& p) {
-    world.SetTruePose(p);
-    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m,
-                        laser.range_max_m, {laser.mount_x_m, 0, 0});
-  };
+  RoomScanner scan_at;
   const Pose2 start{2.0, 3.5, 0.3}, moved = start.Compose({0.3, 0, 0});
   for (const double margin : {0.05, 0.0}) {
     LaserSlamOptions options;
@@ -439,14 +428,7 @@ INSTANTIATE_TEST_SUITE_P(BothMetrics, LaserSlamMetric,
 // stamp instead, each scan is placed (and mapped) 5 cm ahead of where it was taken: the map
 // shifts along the travel (in a turn, it smears).
 TEST(LaserSlam, ScanLatencyMatchesTheScanWhereItWasTaken) {
-  const sim::Scene scene = SquareRoom();
-  sim::LaserOptions laser;
-  sim::World world(scene, {}, laser, 3);
-  const auto scan_at = [&](const Pose2& p) {
-    world.SetTruePose(p);
-    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
-                        {laser.mount_x_m, 0, 0});
-  };
+  RoomScanner scan_at;
   const Pose2 start{1.0, 1.0, 0.0};
   const double speed = 0.5, latency = 0.1;
   const auto truth = [&](double t) { return start.Compose({speed * t, 0, 0}); };
