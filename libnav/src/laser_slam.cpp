@@ -902,7 +902,6 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       u.measured = true;
       u.measurement = icp.estimate;
       u.measurement_covariance = info.inverse();
-      u.measurement_covariance += measurement_inflation_;
       const Pose2 predicted = pose_;
       const Eigen::Matrix3d predicted_covariance = covariance_;
       pose_ = EkfPoseUpdate(pose_, &covariance_, icp.estimate, u.measurement_covariance);
@@ -967,13 +966,6 @@ void LaserSlam::SetMapping(bool add_points, double min_fit) {
   if (!(min_fit >= 0 && min_fit <= 1)) throw std::invalid_argument("laser slam: mapping min_fit must be in [0, 1]");
   add_points_ = add_points;
   min_add_fit_ = min_fit;
-}
-
-void LaserSlam::SetMeasurementInflation(const Eigen::Matrix3d& add) {
-  if (!add.allFinite() || add(0, 0) < 0 || add(1, 1) < 0 || add(2, 2) < 0) {
-    throw std::invalid_argument("laser slam: measurement inflation must be finite with non-negative variances");
-  }
-  measurement_inflation_ = 0.5 * (add + add.transpose());
 }
 
 bool LaserSlam::MayAddPoints(const LaserSlamUpdate& u) const {

@@ -392,16 +392,11 @@ class LaserSlam {
   // builds the map, always does). Defaults: true, 0 (every scan maps, as before).
   void SetMapping(bool add_points, double min_fit = 0);
   bool adding_points() const { return add_points_; }
-  // Added to every scan's measurement covariance R before the EKF update (and reported in
-  // LaserSlamUpdate::measurement_covariance): the uncertainty of the map the scan was matched to,
-  // for a filter that also has measurements in another frame. Default zero.
-  void SetMeasurementInflation(const Eigen::Matrix3d& add);
 
  private:
   bool MayAddPoints(const LaserSlamUpdate& u) const;
   bool add_points_ = true;
   double min_add_fit_ = 0;
-  Eigen::Matrix3d measurement_inflation_ = Eigen::Matrix3d::Zero();
 };
 
 }  // namespace snapnav::nav
