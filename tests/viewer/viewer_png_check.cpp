@@ -12,8 +12,17 @@
 
 int main(int argc, char** argv) {
   using namespace snapnav::viewer;
+  const char* usage =
+      "usage: viewer_png_check PNG [--homing] CHANNEL...\n"
+      "Checks a viewer snapshot is not blank: each pose CHANNEL's colour covers at least 100 pixels of\n"
+      "the top view, the panorama is not uniform, and with --homing the homing arrow is drawn.\n"
+      "Exit 0 when all hold; 1 when a check fails; 2 on a usage error or an unreadable PNG.\n";
+  if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
+    std::cout << usage;
+    return 0;
+  }
   if (argc < 2) {
-    std::cerr << "usage: viewer_png_check PNG [--homing] CHANNEL...\n";
+    std::cerr << usage;
     return 2;
   }
   const cv::Mat img = cv::imread(argv[1], cv::IMREAD_COLOR);
