@@ -222,6 +222,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     fused_result.poses.push_back(fused.pose());
     out.fused_sigma.push_back(fused.covariance().diagonal().cwiseMax(0.0).cwiseSqrt());
     out.fused_covariance.push_back(fused.covariance());
+    out.fused_occluded_fraction.push_back(fused.occluded_fraction());
     {
       const double c = std::cos(fused.map_frame().theta_rad), sn = std::sin(fused.map_frame().theta_rad);
       const Eigen::Vector3d& u = fused.robot_offset();
@@ -274,6 +275,15 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
         out.fixes.push_back(loc->pose);
         out.fix_outcomes.push_back(nav::VisualOutcomeName(v.outcome));
         out.fix_time_s.push_back(t_s);
+        out.fix_truth.push_back(world.true_pose());
+        out.fix_mahalanobis2.push_back(v.mahalanobis2);
+        out.fix_occluded_fraction.push_back(fused.occluded_fraction());
+        double nearest = kNaN;
+        for (const auto& person : world.people()) {
+          const double dist = std::hypot(person.center.x() - world.true_pose().x_m, person.center.y() - world.true_pose().y_m);
+          if (!(dist >= nearest)) nearest = dist;
+        }
+        out.fix_nearest_person_m.push_back(nearest);
         fix_errors.push_back(Distance(loc->pose, world.true_pose()));
         if (v.outcome == nav::VisualOutcome::kRelocalized) {
           out.relocalization_time_s.push_back(t_s);
@@ -412,6 +422,8 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   out.relocalizations_refused = fused.refused_relocalizations();
   out.visual_stale = fused.stale();
   out.unmapped_scans = fused.unmapped_scans();
+  out.dynamic_points = fused.dynamic_points();
+  out.dynamic_overflow_scans = fused.dynamic_overflow_scans();
   const int64_t answered = out.visual_queries - out.visual_no_answer;
   out.ms_per_view = out.visual_queries ? view_ms / static_cast<double>(out.visual_queries) : 0;
   out.ms_per_localize = out.visual_queries ? localize_ms / static_cast<double>(out.visual_queries) : 0;
@@ -499,6 +511,8 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
   k.push_back({"relocalizations", static_cast<double>(run.relocalizations)});
   k.push_back({"relocalizations_refused", static_cast<double>(run.relocalizations_refused)});
   k.push_back({"unmapped_scans", static_cast<double>(run.unmapped_scans)});
+  k.push_back({"fused_slam_dynamic_points", static_cast<double>(run.dynamic_points)});
+  k.push_back({"fused_slam_dynamic_overflow_scans", static_cast<double>(run.dynamic_overflow_scans)});
   k.push_back({"fused_slam_nees_mean", run.fused_nees_mean});
   k.push_back({"fused_slam_nees_within_95", run.fused_nees_within_95});
   k.push_back({"visual_fix_error_mean_m", run.visual_error_mean_m});
@@ -607,7 +621,7 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
     }
     csv << ",fused_slam_sigma_x_m,fused_slam_sigma_y_m,fused_slam_sigma_theta_rad,fused_slam_map_offset_x_m,"
            "fused_slam_map_offset_y_m,fused_slam_map_offset_theta_rad,fused_slam_map_offset_sigma_x_m,"
-           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad\n"
+           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad,fused_slam_occluded_fraction\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.truth.size(); ++i) {
       csv << run.utime[i] << "," << run.time_s[i] << "," << run.truth[i].x_m << "," << run.truth[i].y_m << ","
@@ -620,15 +634,21 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
       const Eigen::Vector3d nan3 = Eigen::Vector3d::Constant(kNaN);
       const Eigen::Vector3d o = i < run.fused_map_offset.size() ? run.fused_map_offset[i] : nan3;
       const Eigen::Vector3d os = i < run.fused_map_offset_sigma.size() ? run.fused_map_offset_sigma[i] : nan3;
-      csv << "," << o.x() << "," << o.y() << "," << o.z() << "," << os.x() << "," << os.y() << "," << os.z() << "\n";
+      csv << "," << o.x() << "," << o.y() << "," << o.z() << "," << os.x() << "," << os.y() << "," << os.z() << ","
+          << (i < run.fused_occluded_fraction.size() ? run.fused_occluded_fraction[i] : kNaN) << "\n";
     }
   }
   {
     std::ofstream csv(out / "fixes.csv");
-    csv << "time_s,x_m,y_m,theta_rad,outcome\n" << std::setprecision(9);
+    csv << "time_s,x_m,y_m,theta_rad,outcome,truth_x_m,truth_y_m,truth_theta_rad,error_m,mahalanobis2,"
+           "occluded_fraction,nearest_person_m\n"
+        << std::setprecision(9);
     for (size_t i = 0; i < run.fixes.size(); ++i) {
-      csv << run.fix_time_s[i] << "," << run.fixes[i].x_m << "," << run.fixes[i].y_m << "," << run.fixes[i].theta_rad
-          << "," << run.fix_outcomes[i] << "\n";
+      const nav::Pose2& z = run.fixes[i];
+      const nav::Pose2& t = run.fix_truth[i];
+      csv << run.fix_time_s[i] << "," << z.x_m << "," << z.y_m << "," << z.theta_rad << "," << run.fix_outcomes[i] << ","
+          << t.x_m << "," << t.y_m << "," << t.theta_rad << "," << Distance(z, t) << "," << run.fix_mahalanobis2[i] << ","
+          << run.fix_occluded_fraction[i] << "," << run.fix_nearest_person_m[i] << "\n";
     }
   }
 }

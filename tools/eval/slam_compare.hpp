@@ -136,6 +136,13 @@ struct CompareRun {
   std::vector<nav::Pose2> fixes;      // place-cell fixes (scene frame)
   std::vector<std::string> fix_outcomes;
   std::vector<double> fix_time_s;
+  // Per fix: the true pose then, its Mahalanobis distance^2 against the filter, the last scan's
+  // occluded fraction (FusedSlam::occluded_fraction) and the distance to the nearest person (NaN
+  // without people) [m].
+  std::vector<double> fused_occluded_fraction;  // per scan: FusedSlam::occluded_fraction
+  std::vector<nav::Pose2> fix_truth;
+  std::vector<double> fix_mahalanobis2, fix_occluded_fraction, fix_nearest_person_m;
+  int64_t dynamic_points = 0, dynamic_overflow_scans = 0;  // FusedSlam's
   std::vector<double> relocalization_time_s;
   // Kidnapping.
   bool kidnapped = false;
