@@ -6,6 +6,7 @@
 #include <string>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 
 namespace snapnav::nav {
 namespace {
@@ -244,6 +245,12 @@ std::vector<bool> FusedSlam::DynamicPoints(const Pose2& m, const std::vector<Eig
   std::vector<bool> dynamic(points.size(), false);
   const double d = options_.dynamic_explain_m;
   if (d <= 0 || old_map_.size() == 0) return dynamic;
+  // Only from a prediction certain to d (one std. dev. of its position): just relocalised (a wide
+  // covariance) the walls themselves would stand "in front of" the map.
+  {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(laser_.covariance().topLeftCorner<2, 2>());
+    if (std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) > d) return dynamic;
+  }
   for (size_t i = 0; i < points.size(); ++i) {
     const double range = points[i].norm();
     if (!(range > 0)) continue;

@@ -66,7 +66,8 @@
 // update and its map (laser-only SLAM matches them and maps their trails: among walking people its
 // pose jumps by 1-3 cm). A new wall has nothing mapped behind it and is kept; so is everything when
 // more than dynamic_max_fraction of the scan is dynamic (the prediction is off: a kidnapping, a
-// relocalisation's wide covariance). Their share of the scan is the view's occluded fraction;
+// relocalisation's wide covariance), and no point is tested while the prediction's position std.
+// dev. exceeds dynamic_explain_m. Their share of the scan is the view's occluded fraction;
 // occlusion_fix_inflation widens the visual measurements by it.
 // Map protection: while the filter suspects it is lost (at least suspect_after consecutive
 // rejected visual measurements) scans do not add points to the map, nor does a scan whose ICP
@@ -132,14 +133,15 @@ struct FusedSlamOptions {
   // dynamic_max_behind_m beyond it, stands in front of a part of the map the laser has seen: an
   // obstacle that was not there when that part was mapped. Only map points at least
   // dynamic_map_age_s old count, for both (a walking person's points of the scans just before
-  // would explain it; a person who stands still that long becomes part of the map). Such points are left out of the
+  // would explain it; a person who stands still that long becomes part of the map). Not tested
+  // when the laser's predicted position std. dev. exceeds dynamic_explain_m (just relocalised). Such points are left out of the
   // laser's update and map (nav::LaserSlam gets the rest); their share of the scan is the
   // view's occluded fraction. More than dynamic_max_fraction of the scan so: the prediction is
   // off (a kidnapping, a slip), not people, and no point is left out. dynamic_explain_m 0: off.
-  double dynamic_explain_m = 0.2;
+  double dynamic_explain_m = 0.1;
   double dynamic_max_behind_m = 4.0;
   double dynamic_map_age_s = 1.0;
-  double dynamic_max_fraction = 0.7;
+  double dynamic_max_fraction = 1.0;
   // A visual measurement's covariance is multiplied by (1 + occlusion_fix_inflation f)^2, f the
   // last scan's occluded fraction: people in the view move the place cells' match (the memory was
   // recorded without them) [1, 0: off].
