@@ -108,7 +108,8 @@ double RecoveryTime(const std::vector<double>& time_s, const std::vector<double>
 }  // namespace
 
 const std::vector<std::string>& CompareMethodNames() {
-  static const std::vector<std::string> names = {"dead_reckoning", "laser_slam", "ratslam", "fused_slam"};
+  static const std::vector<std::string> names = {"dead_reckoning", "laser_slam", "ratslam", "fused_slam",
+                                                  "fused_no_vision"};
   return names;
 }
 
@@ -186,11 +187,15 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
   nav::FusedSlam fused(options.fused, start);
+  // The ablation: the same fused SLAM given no visual measurement (its laser with the people
+  // test): what the place cells add is fused's error against this one's.
+  nav::FusedSlam no_vision(options.fused, start);
   const bool with_ratslam = options.run_ratslam && RatSlamAvailable();
   std::optional<RatSlamRunner> ratslam;
   if (with_ratslam) ratslam.emplace(options.ratslam, start);
 
-  MethodResult fused_result, ratslam_result;
+  MethodResult fused_result, ratslam_result, no_vision_result;
+  double no_vision_ms = 0, no_vision_max_ms = 0;
   double fused_scan_ms = 0, fused_max_ms = 0, filter_visual_ms = 0, view_ms = 0, localize_ms = 0;
   double ratslam_frame_ms = 0, ratslam_odometry_ms = 0, ratslam_max_ms = 0;
   std::vector<double> fix_errors;
@@ -204,6 +209,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   sim.on_sensor = [&](const SlamStep& s) {
     if (!s.is_scan) {
       fused.Predict(s.utime, s.odometry_delta);
+      no_vision.Predict(s.utime, s.odometry_delta);
       if (ratslam) {
         const double dt = last_odometry_utime < 0 ? 0.0 : (s.utime - last_odometry_utime) * 1e-6;
         const auto t0 = Clock::now();
@@ -220,6 +226,15 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     fused_max_ms = std::max(fused_max_ms, ms);
     ++fused_result.updates;
     fused_result.poses.push_back(fused.pose());
+    {
+      const auto t1 = Clock::now();
+      no_vision.Update(s.points);
+      const double ms1 = Ms(t1);
+      no_vision_ms += ms1;
+      no_vision_max_ms = std::max(no_vision_max_ms, ms1);
+      ++no_vision_result.updates;
+      no_vision_result.poses.push_back(no_vision.pose());
+    }
     out.fused_sigma.push_back(fused.covariance().diagonal().cwiseMax(0.0).cwiseSqrt());
     out.fused_covariance.push_back(fused.covariance());
     out.fused_occluded_fraction.push_back(fused.occluded_fraction());
@@ -366,6 +381,13 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   fused_result.ms_max_update = fused_max_ms;
   fused_result.ms_per_frame =
       out.scans ? (fused_scan_ms + filter_visual_ms + view_ms + localize_ms) / static_cast<double>(out.scans) : 0;
+  no_vision_result.name = "fused_no_vision";
+  no_vision_result.ran = true;
+  no_vision_result.update_unit = "scan";
+  no_vision_result.ms_per_update =
+      no_vision_result.updates ? no_vision_ms / static_cast<double>(no_vision_result.updates) : 0;
+  no_vision_result.ms_max_update = no_vision_max_ms;
+  no_vision_result.ms_per_frame = out.scans ? no_vision_ms / static_cast<double>(out.scans) : 0;
   ratslam_result.name = "ratslam";
   if (with_ratslam) {
     ratslam_result.ran = true;
@@ -390,7 +412,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       }
     }
   }
-  for (MethodResult* m : {&dr, &laser, &ratslam_result, &fused_result}) {
+  for (MethodResult* m : {&dr, &laser, &ratslam_result, &fused_result, &no_vision_result}) {
     if (m->ran) Measure(m, out.truth, options.rpe_delta_m, split);
   }
   {
@@ -414,7 +436,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     out.recovery_s = RecoveryTime(out.time_s, fused_result.error_m, out.kidnap_at_s, options.recovery_error_m,
                                   options.recovery_hold_s, &out.first_under_s);
   }
-  out.methods = {dr, laser, ratslam_result, fused_result};
+  out.methods = {dr, laser, ratslam_result, fused_result, no_vision_result};
   out.map = fused.WorldMapPoints();
   out.visual_accepted = fused.accepted();
   out.visual_rejected = fused.rejected();
@@ -546,6 +568,7 @@ const char* Label(const std::string& method) {
   if (method == "dead_reckoning") return "dead reckoning";
   if (method == "laser_slam") return "laser SLAM";
   if (method == "ratslam") return "RatSLAM";
+  if (method == "fused_no_vision") return "fused, no visual fixes";
   return "fused SLAM";
 }
 
@@ -611,7 +634,7 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
   }
   plot::SavePng(DrawRun(tracks, names, run.map, title.str()), (out / "trajectories.png").string());
   plot::SavePng(DrawErrors(run), (out / "errors.png").string());
-  plot::SavePng(DrawErrors(run, {"laser_slam", "fused_slam"}), (out / "errors_laser_fused.png").string());
+  plot::SavePng(DrawErrors(run, {"laser_slam", "fused_slam", "fused_no_vision"}), (out / "errors_laser_fused.png").string());
   plot::SavePng(DrawTiming(run), (out / "timing.png").string());
   {
     std::ofstream csv(out / "trajectories.csv");
@@ -656,8 +679,9 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
 std::string CompareTableMarkdown(const std::vector<CompareRun>& runs, const std::vector<LogComparison>& logs) {
   std::ostringstream s;
   s << "ATE RMSE after SE(2) alignment [m] (scene frame, no alignment, in brackets); RPE per metre travelled.\n\n"
-    << "| run | distance | dead reckoning | laser SLAM | RatSLAM | fused SLAM | visual fixes accepted / rejected | "
-       "relocalisations | kidnap recovery |\n|---|---|---|---|---|---|---|---|---|\n";
+    << "| run | distance | dead reckoning | laser SLAM | RatSLAM | fused SLAM | fused SLAM without its visual fixes "
+       "(ablation) | visual fixes accepted / rejected | relocalisations | kidnap recovery |\n"
+       "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : runs) {
     s << "| " << r.name << " | " << Fixed(r.distance_m, 0) << " m";
     for (const auto& m : r.methods) {
@@ -680,7 +704,18 @@ std::string CompareTableMarkdown(const std::vector<CompareRun>& runs, const std:
     } else {
       s << " | no reference | no reference";
     }
-    s << " | n/a (no frames) | n/a (no frames) | - | - | - |\n";
+    s << " | n/a (no frames) | n/a (no frames) | n/a (no frames) | - | - | - |\n";
+  }
+  s << "\nThe ablation column is fused SLAM given no visual measurement: its laser SLAM with the people test "
+       "(dynamic_* keys of [fused_slam]). What the place cells add is fused SLAM's ATE against it; what the people "
+       "test adds is the ablation's against laser SLAM.\n\n| run | fused SLAM - ablation (vision's share) | "
+       "ablation - laser SLAM (the people test's share) |\n|---|---|---|\n";
+  for (const auto& r : runs) {
+    const MethodResult& f = r.method("fused_slam");
+    const MethodResult& a = r.method("fused_no_vision");
+    const MethodResult& l = r.method("laser_slam");
+    s << "| " << r.name << " | " << Fixed((f.errors.ate_aligned.rmse_m - a.errors.ate_aligned.rmse_m) * 1000, 2)
+      << " mm | " << Fixed((a.errors.ate_aligned.rmse_m - l.errors.ate_aligned.rmse_m) * 1000, 2) << " mm |\n";
   }
   s << "\nPer method: RPE translation [m] / rotation [deg] per metre, ms per update, ms per 10 Hz frame period "
        "(all of the method's work per scan; fused SLAM includes its place-cell views and queries).\n\n"
@@ -740,7 +775,8 @@ std::vector<std::string> MissedTargets(const CompareRun& run, double max_recover
   std::vector<std::string> missed;
   const MethodResult& fused = run.method("fused_slam");
   for (const auto& m : run.methods) {
-    if (!m.ran || m.name == "fused_slam") continue;
+    // The four methods; the ablation (fused_no_vision) is reported beside them.
+    if (!m.ran || m.name == "fused_slam" || m.name == "fused_no_vision") continue;
     if (!(fused.errors.ate_aligned.rmse_m < m.errors.ate_aligned.rmse_m)) {
       missed.push_back(run.name + ": fused SLAM ATE " + Fixed(fused.errors.ate_aligned.rmse_m, 4) + " m is not below " +
                        Label(m.name) + "'s " + Fixed(m.errors.ate_aligned.rmse_m, 4) + " m");
