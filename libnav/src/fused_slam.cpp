@@ -6,6 +6,7 @@
 #include <string>
 
 #include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 
 namespace snapnav::nav {
 namespace {
@@ -76,6 +77,12 @@ void FusedSlamOptions::Validate() const {
   Require(relocalize_max_fit_loss >= 0 && relocalize_max_fit_loss <= 1, "relocalize_max_fit_loss must be in [0, 1]");
   Require(suspect_after >= 0, "suspect_after must be >= 0 (0: never)");
   Require(map_min_fit >= 0 && map_min_fit <= 1, "map_min_fit must be in [0, 1]");
+  Require(dynamic_explain_m >= 0 && std::isfinite(dynamic_explain_m), "dynamic_explain_m must be >= 0 (0: off)");
+  Require(dynamic_max_behind_m >= 0 && std::isfinite(dynamic_max_behind_m), "dynamic_max_behind_m must be >= 0");
+  Require(dynamic_map_age_s >= 0 && std::isfinite(dynamic_map_age_s), "dynamic_map_age_s must be >= 0");
+  Require(dynamic_max_fraction >= 0 && dynamic_max_fraction <= 1, "dynamic_max_fraction must be in [0, 1]");
+  Require(occlusion_fix_inflation >= 0 && std::isfinite(occlusion_fix_inflation),
+          "occlusion_fix_inflation must be >= 0 (0: off)");
   Require(map_cell_m > 0 && std::isfinite(map_cell_m), "map_cell_m must be positive");
   Require(start_sigma_xy_m >= 0 && start_sigma_theta_rad >= 0 && std::isfinite(start_sigma_xy_m) &&
               std::isfinite(start_sigma_theta_rad),
@@ -89,7 +96,10 @@ FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start)
     : FusedSlam(options, start, Diagonal(options.start_sigma_xy_m, options.start_sigma_theta_rad)) {}
 
 FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start, const Eigen::Matrix3d& covariance)
-    : options_(options), start_(start), laser_((options.Validate(), options.laser), Pose2{}) {
+    : options_(options),
+      start_(start),
+      laser_((options.Validate(), options.laser), Pose2{}),
+      old_map_(options.laser.map_resolution_m, std::max(0.25, options.dynamic_explain_m)) {
   Require(Finite(start) && covariance.allFinite(), "start pose or covariance is not finite");
   start_.theta_rad = WrapAngle(start_.theta_rad);
   const double c = std::cos(start_.theta_rad), s = std::sin(start_.theta_rad);
@@ -219,16 +229,76 @@ double FusedSlam::ScanFit(const Pose2& m, double* judged) const {
   return covered > 0 ? static_cast<double>(close) / covered : 0.0;
 }
 
+void FusedSlam::AgeMap() {
+  // The map only grows: its first `old` points are those of the scans at least dynamic_map_age_s ago.
+  const int64_t age_us = static_cast<int64_t>(std::llround(options_.dynamic_map_age_s * 1e6));
+  size_t old = 0;
+  for (const auto& [utime, size] : map_sizes_) {
+    if (utime > utime_ - age_us) break;
+    old = size;
+  }
+  const auto& points = laser_.map().points();
+  for (; old_added_ < old && old_added_ < points.size(); ++old_added_) old_map_.Add(points[old_added_]);
+}
+
+std::vector<bool> FusedSlam::DynamicPoints(const Pose2& m, const std::vector<Eigen::Vector2d>& points) const {
+  std::vector<bool> dynamic(points.size(), false);
+  const double d = options_.dynamic_explain_m;
+  if (d <= 0 || old_map_.size() == 0) return dynamic;
+  // Only from a prediction certain to d (one std. dev. of its position): just relocalised (a wide
+  // covariance) the walls themselves would stand "in front of" the map.
+  {
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(laser_.covariance().topLeftCorner<2, 2>());
+    if (std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) > d) return dynamic;
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double range = points[i].norm();
+    if (!(range > 0)) continue;
+    const Eigen::Vector2d w = m.Transform(points[i]);
+    if (old_map_.HasPointWithin(w, d)) continue;  // the map explains it
+    // Along the beam beyond the point (steps of d, each looking d around): a mapped surface the
+    // point stands in front of.
+    const Eigen::Vector2d dir = (w - Eigen::Vector2d(m.x_m, m.y_m)) / range;
+    for (double s = 2 * d; s <= options_.dynamic_max_behind_m; s += d) {
+      if (old_map_.HasPointWithin(w + s * dir, d)) {
+        dynamic[i] = true;
+        break;
+      }
+    }
+  }
+  return dynamic;
+}
+
 LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_robot) {
+  // Dynamic obstacles at the predicted pose, left out of the laser's update and map.
+  std::vector<Eigen::Vector2d> kept;
+  const std::vector<Eigen::Vector2d>* points = &points_robot;
+  occluded_fraction_ = 0;
+  if (options_.dynamic_explain_m > 0 && !points_robot.empty()) {
+    AgeMap();
+    const std::vector<bool> dynamic = DynamicPoints(laser_.pose(), points_robot);
+    const int64_t n = std::count(dynamic.begin(), dynamic.end(), true);
+    occluded_fraction_ = static_cast<double>(n) / static_cast<double>(points_robot.size());
+    if (occluded_fraction_ > options_.dynamic_max_fraction) {
+      ++dynamic_overflow_scans_;  // the prediction is off, not people: the whole scan
+    } else if (n > 0) {
+      kept.reserve(points_robot.size() - static_cast<size_t>(n));
+      for (size_t i = 0; i < points_robot.size(); ++i) {
+        if (!dynamic[i]) kept.push_back(points_robot[i]);
+      }
+      dynamic_points_ += n;
+      points = &kept;
+    }
+  }
   {
     // A sample of the scan, for the map offset and for judging a relocalisation.
     last_points_.clear();
-    const size_t stride = std::max<size_t>(1, points_robot.size() / kMapSamples);
-    for (size_t i = 0; i < points_robot.size(); i += stride) last_points_.push_back(points_robot[i]);
+    const size_t stride = std::max<size_t>(1, points->size() / kMapSamples);
+    for (size_t i = 0; i < points->size(); i += stride) last_points_.push_back((*points)[i]);
   }
   laser_.SetMapping(!suspect(), options_.map_min_fit);
   const bool map_empty = laser_.map().size() == 0;
-  const LaserSlamUpdate u = laser_.Update(points_robot);  // the laser SLAM, as it runs alone
+  const LaserSlamUpdate u = laser_.Update(*points);  // the laser SLAM, as it runs alone, on the static points
   const Pose2& m = laser_.pose();
   const Eigen::Vector2d p(m.x_m, m.y_m);
   // The robot's offset: the seen cells' (or, where none has one yet, carried with the robot).
@@ -270,6 +340,10 @@ LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
     }
   }
   travelled_since_scan_m_ = 0;
+  // The map's size after this scan, for the age of its points (DynamicPoints).
+  map_sizes_.emplace_back(utime_, laser_.map().size());
+  const int64_t keep_us = static_cast<int64_t>(std::llround(options_.dynamic_map_age_s * 1e6));
+  while (map_sizes_.size() > 1 && map_sizes_[1].first <= utime_ - keep_us) map_sizes_.pop_front();
   Refresh();
   return u;
 }
@@ -309,6 +383,9 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   const double fp = options_.min_fix_sigma_xy_m, fh = options_.min_fix_sigma_theta_rad;
   const Eigen::Vector3d floor(fp * fp, fp * fp, fh * fh);
   for (int i = 0; i < 3; ++i) r(i, i) += std::max(0.0, floor(i) - r(i, i));
+  // People in the view (the laser's occluded fraction) move the place cells' match.
+  const double inflate = 1 + options_.occlusion_fix_inflation * occluded_fraction_;
+  r *= inflate * inflate;
   Pose2 z{z_in.x_m, z_in.y_m, WrapAngle(z_in.theta_rad)};
   if (!CarryForward(utime, &z, &r)) {
     ++stale_;

@@ -3,7 +3,8 @@
 # corridor route (down the left wing, along the corridor) and the kidnapped robot (carried at 10 s
 # to the mirrored place in the right wing, 40 s). Fused SLAM's ATE (aligned, and in the scene
 # frame) is the lowest of the four (below laser-only SLAM's, RatSLAM's and dead reckoning's), the
-# visual measurements are mostly accepted, and the kidnapping is recovered within 10 s of simulated
+# visual measurements are mostly accepted, they make fused SLAM clearly better than itself without
+# them (the ablation), and the kidnapping is recovered within 10 s of simulated
 # time (laser-only is not).
 set -euo pipefail
 BIN="$1"
@@ -28,6 +29,10 @@ for m in methods[1:]:
     assert ate_u["fused_slam"] < ate_u[m], f"fused SLAM's scene-frame ATE {ate_u['fused_slam']} is not below {m}'s {ate_u[m]}"
 # Locally as good as the laser, globally anchored: well below laser-only SLAM aligned.
 assert ate["fused_slam"] < 0.8 * ate["laser_slam"], f"fused {ate['fused_slam']} not clearly below laser {ate['laser_slam']}"
+# What the place cells add (the ablation: the same fused SLAM without visual measurements).
+a, a_u = s[c + "fused_no_vision_ate_rmse_m"], s[c + "fused_no_vision_ate_unaligned_rmse_m"]
+print(f"corridor ablation (fused SLAM without its visual fixes): {a:.4f} m aligned, {a_u:.4f} m scene frame")
+assert ate["fused_slam"] < 0.8 * a and ate_u["fused_slam"] < 0.5 * a_u, "the visual fixes add little in the corridor"
 acc, rej = s[c + "visual_measurements_accepted"], s[c + "visual_measurements_rejected"]
 assert acc > 2 * rej, f"visual measurements {acc} accepted, {rej} rejected"
 k = "corridor_kidnap_"

@@ -126,6 +126,19 @@ TEST(FusedSlamConfig, ShippedConfigLoadsAndMissingOrUnknownKeysAreErrors) {
   EXPECT_EQ(again.pose_channel, "P_POSE_EKF");
   EXPECT_EQ(again.options.relocalize_after, c.options.relocalize_after);
   EXPECT_EQ(again.options.laser.match_distance_m, c.options.laser.match_distance_m);
+  // The people test: shipped = libnav defaults, printed back the same.
+  const nav::FusedSlamOptions d;
+  EXPECT_DOUBLE_EQ(c.options.dynamic_explain_m, d.dynamic_explain_m);
+  EXPECT_DOUBLE_EQ(c.options.dynamic_max_behind_m, d.dynamic_max_behind_m);
+  EXPECT_DOUBLE_EQ(c.options.dynamic_map_age_s, d.dynamic_map_age_s);
+  EXPECT_DOUBLE_EQ(c.options.dynamic_max_fraction, d.dynamic_max_fraction);
+  EXPECT_DOUBLE_EQ(c.options.occlusion_fix_inflation, d.occlusion_fix_inflation);
+  EXPECT_DOUBLE_EQ(again.options.dynamic_explain_m, c.options.dynamic_explain_m);
+  EXPECT_DOUBLE_EQ(again.options.dynamic_map_age_s, c.options.dynamic_map_age_s);
+  EXPECT_THROW(FusedSlamConfig::FromIni(glue::IniFile::Parse(Edited("dynamic_map_age_s", ""), "f.ini"), ""),
+               glue::ConfigError);
+  EXPECT_THROW(FusedSlamConfig::FromIni(glue::IniFile::Parse(Edited("dynamic_max_fraction", "dynamic_max_fraction = 2"), "f.ini"), ""),
+               glue::ConfigError);
   try {
     FusedSlamConfig::FromIni(glue::IniFile::Parse(Edited("gate_chi2", ""), "f.ini"), "");
     FAIL() << "a missing key must be an error";

@@ -39,6 +39,28 @@ std::vector<Eigen::Vector2d> RoomScan(const Pose2& robot, double w, double h) {
   return points;
 }
 
+// RoomScan with a person (a disc at `person`, radius r) in the room: the beams that hit the disc
+// end on it. `hits` (optional) gets how many do.
+std::vector<Eigen::Vector2d> RoomScanWithPerson(const Pose2& robot, double w, double h, const Eigen::Vector2d& person,
+                                                double r, int* hits = nullptr) {
+  std::vector<Eigen::Vector2d> points = RoomScan(robot, w, h);
+  int n = 0;
+  const Eigen::Vector2d o(robot.x_m, robot.y_m);
+  for (int i = 0; i < 360; ++i) {
+    const double a = robot.theta_rad + i * M_PI / 180.0;
+    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+    const double along = (person - o).dot(dir);
+    const double across2 = (person - o).squaredNorm() - along * along;
+    if (along <= 0 || across2 >= r * r) continue;
+    const double t = along - std::sqrt(r * r - across2);
+    if (t >= points[static_cast<size_t>(i)].norm()) continue;
+    points[static_cast<size_t>(i)] = robot.Inverse().Transform(o + t * dir);
+    ++n;
+  }
+  if (hits) *hits = n;
+  return points;
+}
+
 // Options with no uncertainty of the laser's pose relative to its own map at the start: the fused
 // covariance is then the start's alone (the map's offset from the world), and the visual updates
 // are plain Kalman updates of that offset.
@@ -280,6 +302,108 @@ TEST(FusedSlam, ConsistentFixesPullAMapThatIsOffBackAndTheLaserStaysOnIt) {
   EXPECT_EQ(f.pose().x_m, before.x_m);
 }
 
+// Builds the map of the 6 x 4 room from (2, 1.5) over 1.1 s of scans (standing still), so that its
+// points are older than dynamic_map_age_s (1 s).
+void MapTheRoom(FusedSlam* f) {
+  for (int k = 0; k <= 11; ++k) {
+    f->Predict(kT0 + k * 100000, {0.0, 0.0, 0.0});
+    f->Update(RoomScan({2.0, 1.5, 0.0}, 6, 4));
+  }
+}
+
+TEST(FusedSlam, PersonInFrontOfAMappedWallIsLeftOutOfTheLasersScanAndMap) {
+  // A person (0.25 m radius) steps 1 m in front of the robot, between it and the mapped wall: the
+  // beams that end on them are dynamic (the wall behind is in the map, 1.1 s old), left out of the
+  // laser's update and map; their share is the occluded fraction. The pose stays where it was.
+  FusedSlamOptions o;
+  ASSERT_GT(o.dynamic_explain_m, 0.0);  // on by default
+  FusedSlam f(o, {2.0, 1.5, 0.0}, Diag(0.01, 0.01));
+  MapTheRoom(&f);
+  EXPECT_EQ(f.dynamic_points(), 0);  // the room alone: nothing dynamic
+  EXPECT_EQ(f.occluded_fraction(), 0.0);
+  int hits = 0;
+  const auto scan = RoomScanWithPerson({2.0, 1.5, 0.0}, 6, 4, {3.0, 1.5}, 0.25, &hits);
+  ASSERT_GT(hits, 20);
+  const Pose2 before = f.pose();
+  f.Predict(kT0 + 1'200'000, {0.0, 0.0, 0.0});
+  f.Update(scan);
+  EXPECT_EQ(f.dynamic_points(), hits);
+  EXPECT_NEAR(f.occluded_fraction(), hits / 360.0, 1e-12);
+  EXPECT_EQ(f.dynamic_overflow_scans(), 0);
+  // The map frame is the start's: the person stands at (1, 0) in it.
+  EXPECT_FALSE(f.map().Nearest({1.0, 0.0}, 0.3).has_value());
+  EXPECT_NEAR(f.pose().x_m, before.x_m, 0.001);  // the scan of the rest holds the pose
+  EXPECT_NEAR(f.pose().y_m, before.y_m, 0.001);
+  // Without the test (dynamic_explain_m 0) the person joins the map.
+  o.dynamic_explain_m = 0;
+  FusedSlam plain(o, {2.0, 1.5, 0.0}, Diag(0.01, 0.01));
+  MapTheRoom(&plain);
+  plain.Predict(kT0 + 1'200'000, {0.0, 0.0, 0.0});
+  plain.Update(scan);
+  EXPECT_EQ(plain.dynamic_points(), 0);
+  EXPECT_TRUE(plain.map().Nearest({1.0, 0.0}, 0.3).has_value());
+}
+
+TEST(FusedSlam, APersonTheMapHasJustSeenIsStillDynamic) {
+  // The person walks along in front of the wall, 5 cm per scan: the map points of the scans just
+  // before (younger than dynamic_map_age_s) do not explain them, so they stay out of the map.
+  FusedSlamOptions o;
+  FusedSlam f(o, {2.0, 1.5, 0.0}, Diag(0.01, 0.01));
+  MapTheRoom(&f);
+  int total = 0;
+  for (int k = 0; k < 10; ++k) {
+    int hits = 0;
+    f.Predict(kT0 + 1'200'000 + k * 100000, {0.0, 0.0, 0.0});
+    f.Update(RoomScanWithPerson({2.0, 1.5, 0.0}, 6, 4, {3.0, 1.2 + 0.05 * k}, 0.25, &hits));
+    total += hits;
+  }
+  EXPECT_EQ(f.dynamic_points(), total);
+  for (int k = 0; k < 10; ++k) EXPECT_FALSE(f.map().Nearest({1.0, -0.3 + 0.05 * k}, 0.3).has_value()) << k;
+}
+
+TEST(FusedSlam, TooManyDynamicPointsMeanTheWholeScanIsKept) {
+  // More of the scan dynamic than dynamic_max_fraction: the prediction is off, not people; no
+  // point is left out. A person 0.6 m away hides ~49 deg (13.6 %) of the 360 deg scan.
+  FusedSlamOptions o;
+  o.dynamic_max_fraction = 0.1;
+  FusedSlam f(o, {2.0, 1.5, 0.0}, Diag(0.01, 0.01));
+  MapTheRoom(&f);
+  int hits = 0;
+  f.Predict(kT0 + 1'200'000, {0.0, 0.0, 0.0});
+  f.Update(RoomScanWithPerson({2.0, 1.5, 0.0}, 6, 4, {2.6, 1.5}, 0.25, &hits));
+  ASSERT_GT(hits / 360.0, 0.1);
+  EXPECT_NEAR(f.occluded_fraction(), hits / 360.0, 1e-12);
+  EXPECT_EQ(f.dynamic_overflow_scans(), 1);
+  EXPECT_EQ(f.dynamic_points(), 0);
+  EXPECT_TRUE(f.map().Nearest({0.6, 0.0}, 0.3).has_value());  // the person joined the map
+}
+
+TEST(FusedSlam, AnOccludedViewsFixIsDownWeighted) {
+  // occlusion_fix_inflation k: a fix taken while the last scan was occluded by a fraction f has its
+  // covariance times (1 + k f)^2, so it moves the pose less than the same fix in a clear view.
+  FusedSlamOptions o;
+  o.occlusion_fix_inflation = 2;
+  FusedSlam occluded(o, {2.0, 1.5, 0.0}, Diag(0.1, 0.05));
+  FusedSlam clear(o, {2.0, 1.5, 0.0}, Diag(0.1, 0.05));
+  MapTheRoom(&occluded);
+  MapTheRoom(&clear);
+  occluded.Predict(kT0 + 1'200'000, {0.0, 0.0, 0.0});
+  clear.Predict(kT0 + 1'200'000, {0.0, 0.0, 0.0});
+  occluded.Update(RoomScanWithPerson({2.0, 1.5, 0.0}, 6, 4, {3.0, 1.5}, 0.25));
+  clear.Update(RoomScan({2.0, 1.5, 0.0}, 6, 4));
+  const double f = occluded.occluded_fraction();
+  ASSERT_GT(f, 0.05);
+  ASSERT_EQ(clear.occluded_fraction(), 0.0);
+  const VisualUpdate vo = occluded.AddVisual(kT0 + 1'200'000, {2.1, 1.5, 0.0}, Diag(0.1, 0.05));
+  const VisualUpdate vc = clear.AddVisual(kT0 + 1'200'000, {2.1, 1.5, 0.0}, Diag(0.1, 0.05));
+  ASSERT_EQ(vo.outcome, VisualOutcome::kAccepted);
+  ASSERT_EQ(vc.outcome, VisualOutcome::kAccepted);
+  EXPECT_NEAR(vc.measurement_covariance(0, 0), 0.01, 1e-12);
+  EXPECT_NEAR(vo.measurement_covariance(0, 0), 0.01 * (1 + 2 * f) * (1 + 2 * f), 1e-12);
+  EXPECT_GT(clear.pose().x_m - 2.0, occluded.pose().x_m - 2.0);
+  EXPECT_GT(occluded.pose().x_m, 2.0);  // still pulled, less
+}
+
 TEST(FusedSlam, InvalidInputThrows) {
   FusedSlamOptions o;
   FusedSlam f(o);
@@ -295,6 +419,15 @@ TEST(FusedSlam, InvalidInputThrows) {
   EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
   o = {};
   o.map_min_fit = 1.5;
+  EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
+  o = {};
+  o.dynamic_explain_m = -0.1;
+  EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
+  o = {};
+  o.dynamic_max_fraction = 1.5;
+  EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
+  o = {};
+  o.occlusion_fix_inflation = -1;
   EXPECT_THROW(FusedSlam{o}, std::invalid_argument);
   o = {};
   o.relocalize_after = -1;

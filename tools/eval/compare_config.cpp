@@ -1,6 +1,7 @@
 #include "compare_config.hpp"
 
 #include <ostream>
+#include <string>
 
 #include "fused_slam_node.hpp"
 #include "laser_slam_node.hpp"
@@ -39,7 +40,11 @@ void PrintCompareOptions(std::ostream& out, const CompareConfigPaths& paths, con
       << " rad, fix sigma floor " << f.min_fix_sigma_xy_m << " m / " << f.min_fix_sigma_theta_rad << " rad, start sigma "
       << f.start_sigma_xy_m << " m / " << f.start_sigma_theta_rad << " rad, map offset cells " << f.map_cell_m
       << " m (drift " << f.map_drift_xy_m << " m / " << f.map_drift_theta_rad << " rad per sqrt m)"
-      << ", suspect_after " << f.suspect_after << ", map_min_fit " << f.map_min_fit << "\n";
+      << ", suspect_after " << f.suspect_after << ", map_min_fit " << f.map_min_fit << ", dynamic points "
+      << (f.dynamic_explain_m > 0 ? "left out" : "kept") << " (explain " << f.dynamic_explain_m << " m, behind "
+      << f.dynamic_max_behind_m << " m, map age " << f.dynamic_map_age_s << " s, max fraction " << f.dynamic_max_fraction
+      << ")"
+      << ", occlusion fix inflation " << f.occlusion_fix_inflation << "\n";
 }
 
 }  // namespace snapnav::eval

@@ -108,7 +108,8 @@ double RecoveryTime(const std::vector<double>& time_s, const std::vector<double>
 }  // namespace
 
 const std::vector<std::string>& CompareMethodNames() {
-  static const std::vector<std::string> names = {"dead_reckoning", "laser_slam", "ratslam", "fused_slam"};
+  static const std::vector<std::string> names = {"dead_reckoning", "laser_slam", "ratslam", "fused_slam",
+                                                  "fused_no_vision"};
   return names;
 }
 
@@ -186,11 +187,15 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
   nav::FusedSlam fused(options.fused, start);
+  // The ablation: the same fused SLAM given no visual measurement (its laser with the people
+  // test): what the place cells add is fused's error against this one's.
+  nav::FusedSlam no_vision(options.fused, start);
   const bool with_ratslam = options.run_ratslam && RatSlamAvailable();
   std::optional<RatSlamRunner> ratslam;
   if (with_ratslam) ratslam.emplace(options.ratslam, start);
 
-  MethodResult fused_result, ratslam_result;
+  MethodResult fused_result, ratslam_result, no_vision_result;
+  double no_vision_ms = 0, no_vision_max_ms = 0;
   double fused_scan_ms = 0, fused_max_ms = 0, filter_visual_ms = 0, view_ms = 0, localize_ms = 0;
   double ratslam_frame_ms = 0, ratslam_odometry_ms = 0, ratslam_max_ms = 0;
   std::vector<double> fix_errors;
@@ -204,6 +209,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   sim.on_sensor = [&](const SlamStep& s) {
     if (!s.is_scan) {
       fused.Predict(s.utime, s.odometry_delta);
+      no_vision.Predict(s.utime, s.odometry_delta);
       if (ratslam) {
         const double dt = last_odometry_utime < 0 ? 0.0 : (s.utime - last_odometry_utime) * 1e-6;
         const auto t0 = Clock::now();
@@ -220,8 +226,18 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     fused_max_ms = std::max(fused_max_ms, ms);
     ++fused_result.updates;
     fused_result.poses.push_back(fused.pose());
+    {
+      const auto t1 = Clock::now();
+      no_vision.Update(s.points);
+      const double ms1 = Ms(t1);
+      no_vision_ms += ms1;
+      no_vision_max_ms = std::max(no_vision_max_ms, ms1);
+      ++no_vision_result.updates;
+      no_vision_result.poses.push_back(no_vision.pose());
+    }
     out.fused_sigma.push_back(fused.covariance().diagonal().cwiseMax(0.0).cwiseSqrt());
     out.fused_covariance.push_back(fused.covariance());
+    out.fused_occluded_fraction.push_back(fused.occluded_fraction());
     {
       const double c = std::cos(fused.map_frame().theta_rad), sn = std::sin(fused.map_frame().theta_rad);
       const Eigen::Vector3d& u = fused.robot_offset();
@@ -274,6 +290,15 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
         out.fixes.push_back(loc->pose);
         out.fix_outcomes.push_back(nav::VisualOutcomeName(v.outcome));
         out.fix_time_s.push_back(t_s);
+        out.fix_truth.push_back(world.true_pose());
+        out.fix_mahalanobis2.push_back(v.mahalanobis2);
+        out.fix_occluded_fraction.push_back(fused.occluded_fraction());
+        double nearest = kNaN;
+        for (const auto& person : world.people()) {
+          const double dist = std::hypot(person.center.x() - world.true_pose().x_m, person.center.y() - world.true_pose().y_m);
+          if (!(dist >= nearest)) nearest = dist;
+        }
+        out.fix_nearest_person_m.push_back(nearest);
         fix_errors.push_back(Distance(loc->pose, world.true_pose()));
         if (v.outcome == nav::VisualOutcome::kRelocalized) {
           out.relocalization_time_s.push_back(t_s);
@@ -356,6 +381,13 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   fused_result.ms_max_update = fused_max_ms;
   fused_result.ms_per_frame =
       out.scans ? (fused_scan_ms + filter_visual_ms + view_ms + localize_ms) / static_cast<double>(out.scans) : 0;
+  no_vision_result.name = "fused_no_vision";
+  no_vision_result.ran = true;
+  no_vision_result.update_unit = "scan";
+  no_vision_result.ms_per_update =
+      no_vision_result.updates ? no_vision_ms / static_cast<double>(no_vision_result.updates) : 0;
+  no_vision_result.ms_max_update = no_vision_max_ms;
+  no_vision_result.ms_per_frame = out.scans ? no_vision_ms / static_cast<double>(out.scans) : 0;
   ratslam_result.name = "ratslam";
   if (with_ratslam) {
     ratslam_result.ran = true;
@@ -380,7 +412,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       }
     }
   }
-  for (MethodResult* m : {&dr, &laser, &ratslam_result, &fused_result}) {
+  for (MethodResult* m : {&dr, &laser, &ratslam_result, &fused_result, &no_vision_result}) {
     if (m->ran) Measure(m, out.truth, options.rpe_delta_m, split);
   }
   {
@@ -404,7 +436,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     out.recovery_s = RecoveryTime(out.time_s, fused_result.error_m, out.kidnap_at_s, options.recovery_error_m,
                                   options.recovery_hold_s, &out.first_under_s);
   }
-  out.methods = {dr, laser, ratslam_result, fused_result};
+  out.methods = {dr, laser, ratslam_result, fused_result, no_vision_result};
   out.map = fused.WorldMapPoints();
   out.visual_accepted = fused.accepted();
   out.visual_rejected = fused.rejected();
@@ -412,6 +444,8 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   out.relocalizations_refused = fused.refused_relocalizations();
   out.visual_stale = fused.stale();
   out.unmapped_scans = fused.unmapped_scans();
+  out.dynamic_points = fused.dynamic_points();
+  out.dynamic_overflow_scans = fused.dynamic_overflow_scans();
   const int64_t answered = out.visual_queries - out.visual_no_answer;
   out.ms_per_view = out.visual_queries ? view_ms / static_cast<double>(out.visual_queries) : 0;
   out.ms_per_localize = out.visual_queries ? localize_ms / static_cast<double>(out.visual_queries) : 0;
@@ -499,6 +533,8 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
   k.push_back({"relocalizations", static_cast<double>(run.relocalizations)});
   k.push_back({"relocalizations_refused", static_cast<double>(run.relocalizations_refused)});
   k.push_back({"unmapped_scans", static_cast<double>(run.unmapped_scans)});
+  k.push_back({"fused_slam_dynamic_points", static_cast<double>(run.dynamic_points)});
+  k.push_back({"fused_slam_dynamic_overflow_scans", static_cast<double>(run.dynamic_overflow_scans)});
   k.push_back({"fused_slam_nees_mean", run.fused_nees_mean});
   k.push_back({"fused_slam_nees_within_95", run.fused_nees_within_95});
   k.push_back({"visual_fix_error_mean_m", run.visual_error_mean_m});
@@ -532,6 +568,7 @@ const char* Label(const std::string& method) {
   if (method == "dead_reckoning") return "dead reckoning";
   if (method == "laser_slam") return "laser SLAM";
   if (method == "ratslam") return "RatSLAM";
+  if (method == "fused_no_vision") return "fused, no visual fixes";
   return "fused SLAM";
 }
 
@@ -597,7 +634,7 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
   }
   plot::SavePng(DrawRun(tracks, names, run.map, title.str()), (out / "trajectories.png").string());
   plot::SavePng(DrawErrors(run), (out / "errors.png").string());
-  plot::SavePng(DrawErrors(run, {"laser_slam", "fused_slam"}), (out / "errors_laser_fused.png").string());
+  plot::SavePng(DrawErrors(run, {"laser_slam", "fused_slam", "fused_no_vision"}), (out / "errors_laser_fused.png").string());
   plot::SavePng(DrawTiming(run), (out / "timing.png").string());
   {
     std::ofstream csv(out / "trajectories.csv");
@@ -607,7 +644,7 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
     }
     csv << ",fused_slam_sigma_x_m,fused_slam_sigma_y_m,fused_slam_sigma_theta_rad,fused_slam_map_offset_x_m,"
            "fused_slam_map_offset_y_m,fused_slam_map_offset_theta_rad,fused_slam_map_offset_sigma_x_m,"
-           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad\n"
+           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad,fused_slam_occluded_fraction\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.truth.size(); ++i) {
       csv << run.utime[i] << "," << run.time_s[i] << "," << run.truth[i].x_m << "," << run.truth[i].y_m << ","
@@ -620,15 +657,21 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
       const Eigen::Vector3d nan3 = Eigen::Vector3d::Constant(kNaN);
       const Eigen::Vector3d o = i < run.fused_map_offset.size() ? run.fused_map_offset[i] : nan3;
       const Eigen::Vector3d os = i < run.fused_map_offset_sigma.size() ? run.fused_map_offset_sigma[i] : nan3;
-      csv << "," << o.x() << "," << o.y() << "," << o.z() << "," << os.x() << "," << os.y() << "," << os.z() << "\n";
+      csv << "," << o.x() << "," << o.y() << "," << o.z() << "," << os.x() << "," << os.y() << "," << os.z() << ","
+          << (i < run.fused_occluded_fraction.size() ? run.fused_occluded_fraction[i] : kNaN) << "\n";
     }
   }
   {
     std::ofstream csv(out / "fixes.csv");
-    csv << "time_s,x_m,y_m,theta_rad,outcome\n" << std::setprecision(9);
+    csv << "time_s,x_m,y_m,theta_rad,outcome,truth_x_m,truth_y_m,truth_theta_rad,error_m,mahalanobis2,"
+           "occluded_fraction,nearest_person_m\n"
+        << std::setprecision(9);
     for (size_t i = 0; i < run.fixes.size(); ++i) {
-      csv << run.fix_time_s[i] << "," << run.fixes[i].x_m << "," << run.fixes[i].y_m << "," << run.fixes[i].theta_rad
-          << "," << run.fix_outcomes[i] << "\n";
+      const nav::Pose2& z = run.fixes[i];
+      const nav::Pose2& t = run.fix_truth[i];
+      csv << run.fix_time_s[i] << "," << z.x_m << "," << z.y_m << "," << z.theta_rad << "," << run.fix_outcomes[i] << ","
+          << t.x_m << "," << t.y_m << "," << t.theta_rad << "," << Distance(z, t) << "," << run.fix_mahalanobis2[i] << ","
+          << run.fix_occluded_fraction[i] << "," << run.fix_nearest_person_m[i] << "\n";
     }
   }
 }
@@ -636,8 +679,9 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
 std::string CompareTableMarkdown(const std::vector<CompareRun>& runs, const std::vector<LogComparison>& logs) {
   std::ostringstream s;
   s << "ATE RMSE after SE(2) alignment [m] (scene frame, no alignment, in brackets); RPE per metre travelled.\n\n"
-    << "| run | distance | dead reckoning | laser SLAM | RatSLAM | fused SLAM | visual fixes accepted / rejected | "
-       "relocalisations | kidnap recovery |\n|---|---|---|---|---|---|---|---|---|\n";
+    << "| run | distance | dead reckoning | laser SLAM | RatSLAM | fused SLAM | fused SLAM without its visual fixes "
+       "(ablation) | visual fixes accepted / rejected | relocalisations | kidnap recovery |\n"
+       "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& r : runs) {
     s << "| " << r.name << " | " << Fixed(r.distance_m, 0) << " m";
     for (const auto& m : r.methods) {
@@ -660,7 +704,18 @@ std::string CompareTableMarkdown(const std::vector<CompareRun>& runs, const std:
     } else {
       s << " | no reference | no reference";
     }
-    s << " | n/a (no frames) | n/a (no frames) | - | - | - |\n";
+    s << " | n/a (no frames) | n/a (no frames) | n/a (no frames) | - | - | - |\n";
+  }
+  s << "\nThe ablation column is fused SLAM given no visual measurement: its laser SLAM with the people test "
+       "(dynamic_* keys of [fused_slam]). What the place cells add is fused SLAM's ATE against it; what the people "
+       "test adds is the ablation's against laser SLAM.\n\n| run | fused SLAM - ablation (vision's share) | "
+       "ablation - laser SLAM (the people test's share) |\n|---|---|---|\n";
+  for (const auto& r : runs) {
+    const MethodResult& f = r.method("fused_slam");
+    const MethodResult& a = r.method("fused_no_vision");
+    const MethodResult& l = r.method("laser_slam");
+    s << "| " << r.name << " | " << Fixed((f.errors.ate_aligned.rmse_m - a.errors.ate_aligned.rmse_m) * 1000, 2)
+      << " mm | " << Fixed((a.errors.ate_aligned.rmse_m - l.errors.ate_aligned.rmse_m) * 1000, 2) << " mm |\n";
   }
   s << "\nPer method: RPE translation [m] / rotation [deg] per metre, ms per update, ms per 10 Hz frame period "
        "(all of the method's work per scan; fused SLAM includes its place-cell views and queries).\n\n"
@@ -720,7 +775,8 @@ std::vector<std::string> MissedTargets(const CompareRun& run, double max_recover
   std::vector<std::string> missed;
   const MethodResult& fused = run.method("fused_slam");
   for (const auto& m : run.methods) {
-    if (!m.ran || m.name == "fused_slam") continue;
+    // The four methods; the ablation (fused_no_vision) is reported beside them.
+    if (!m.ran || m.name == "fused_slam" || m.name == "fused_no_vision") continue;
     if (!(fused.errors.ate_aligned.rmse_m < m.errors.ate_aligned.rmse_m)) {
       missed.push_back(run.name + ": fused SLAM ATE " + Fixed(fused.errors.ate_aligned.rmse_m, 4) + " m is not below " +
                        Label(m.name) + "'s " + Fixed(m.errors.ate_aligned.rmse_m, 4) + " m");

@@ -12,7 +12,8 @@
 //            scans by eval::RunSlam, as eval-slam does; fused SLAM runs beside the simulation on
 //            the same odometry and scans, with a place-cell fix every 1 / visual_rate_hz s (the
 //            view rendered at the true pose with the scene's people, localized against the
-//            memory); RatSLAM gets every frame at ratslam_rate_hz (a grey panorama) and the
+//            memory); beside it the same fused SLAM with no visual measurement (fused_no_vision,
+//            the ablation: what the place cells add); RatSLAM gets every frame at ratslam_rate_hz (a grey panorama) and the
 //            odometry. The scene's people walk through camera and laser views but do not block the
 //            robot (DriveOptions::people_block_robot = false: otherwise robot and people wait for
 //            each other for ever).
@@ -46,7 +47,9 @@
 namespace snapnav::eval {
 
 // The methods in table order (summary.json keys start with these names).
-const std::vector<std::string>& CompareMethodNames();  // dead_reckoning, laser_slam, ratslam, fused_slam
+// dead_reckoning, laser_slam, ratslam, fused_slam, and the ablation fused_no_vision (fused SLAM given
+// no visual measurement: what the place cells add is fused_slam against it).
+const std::vector<std::string>& CompareMethodNames();
 // Whether this build has RatSLAM (nav::RatSlam, library snapnav_ratslam): it has, since the
 // ratslam branch was merged; kept for the summary's "ratslam" entry.
 bool RatSlamAvailable();
@@ -136,6 +139,13 @@ struct CompareRun {
   std::vector<nav::Pose2> fixes;      // place-cell fixes (scene frame)
   std::vector<std::string> fix_outcomes;
   std::vector<double> fix_time_s;
+  // Per fix: the true pose then, its Mahalanobis distance^2 against the filter, the last scan's
+  // occluded fraction (FusedSlam::occluded_fraction) and the distance to the nearest person (NaN
+  // without people) [m].
+  std::vector<double> fused_occluded_fraction;  // per scan: FusedSlam::occluded_fraction
+  std::vector<nav::Pose2> fix_truth;
+  std::vector<double> fix_mahalanobis2, fix_occluded_fraction, fix_nearest_person_m;
+  int64_t dynamic_points = 0, dynamic_overflow_scans = 0;  // FusedSlam's
   std::vector<double> relocalization_time_s;
   // Kidnapping.
   bool kidnapped = false;

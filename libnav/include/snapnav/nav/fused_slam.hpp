@@ -58,6 +58,17 @@
 //      clearly worse at the new pose than at the filter's (relocalize_max_fit_loss): aliasing
 //      that moves with the robot (the views a metre behind along a straight wall look alike)
 //      agrees with itself too.
+// Dynamic obstacles: before the laser's update, every scan point is tested at the predicted pose
+// against the map points at least dynamic_map_age_s old. One the map does not explain (none within
+// dynamic_explain_m) but that stands in front of a mapped surface (a map point within
+// dynamic_explain_m of its beam, up to dynamic_max_behind_m beyond it) is something that was not
+// there when that part of the map was built: a person. Those points are left out of the laser's
+// update and its map (laser-only SLAM matches them and maps their trails: among walking people its
+// pose jumps by 1-3 cm). A new wall has nothing mapped behind it and is kept; so is everything when
+// more than dynamic_max_fraction of the scan is dynamic (the prediction is off: a kidnapping, a
+// relocalisation's wide covariance), and no point is tested while the prediction's position std.
+// dev. exceeds dynamic_explain_m. Their share of the scan is the view's occluded fraction;
+// occlusion_fix_inflation widens the visual measurements by it.
 // Map protection: while the filter suspects it is lost (at least suspect_after consecutive
 // rejected visual measurements) scans do not add points to the map, nor does a scan whose ICP
 // fit is below map_min_fit.
@@ -117,6 +128,24 @@ struct FusedSlamOptions {
   // map has nothing yet (just relocalised into an unexplored part) every fit is poor, and the map
   // could never grow there.
   double map_min_fit = 0;
+  // Dynamic obstacles (people) in the scan. A scan point farther than dynamic_explain_m from the
+  // map at the predicted pose, with a map point within dynamic_explain_m of its beam's line up to
+  // dynamic_max_behind_m beyond it, stands in front of a part of the map the laser has seen: an
+  // obstacle that was not there when that part was mapped. Only map points at least
+  // dynamic_map_age_s old count, for both (a walking person's points of the scans just before
+  // would explain it; a person who stands still that long becomes part of the map). Not tested
+  // when the laser's predicted position std. dev. exceeds dynamic_explain_m (just relocalised). Such points are left out of the
+  // laser's update and map (nav::LaserSlam gets the rest); their share of the scan is the
+  // view's occluded fraction. More than dynamic_max_fraction of the scan so: the prediction is
+  // off (a kidnapping, a slip), not people, and no point is left out. dynamic_explain_m 0: off.
+  double dynamic_explain_m = 0.1;
+  double dynamic_max_behind_m = 4.0;
+  double dynamic_map_age_s = 1.0;
+  double dynamic_max_fraction = 1.0;
+  // A visual measurement's covariance is multiplied by (1 + occlusion_fix_inflation f)^2, f the
+  // last scan's occluded fraction: people in the view move the place cells' match (the memory was
+  // recorded without them) [1, 0: off].
+  double occlusion_fix_inflation = 0;
   void Validate() const;              // throws std::invalid_argument naming the option
 };
 
@@ -189,6 +218,11 @@ class FusedSlam {
   int agreeing_rejections() const { return hypothesis_ ? hypothesis_count_ : 0; }
   bool suspect() const;             // the map is protected: consecutive rejections >= suspect_after
   int64_t unmapped_scans() const { return unmapped_scans_; }  // scans that added no points by protection
+  // Dynamic points (see dynamic_explain_m): the last scan's share, the points left out so far, and
+  // the scans where too many were dynamic to leave any out.
+  double occluded_fraction() const { return occluded_fraction_; }
+  int64_t dynamic_points() const { return dynamic_points_; }
+  int64_t dynamic_overflow_scans() const { return dynamic_overflow_scans_; }
   // The fused pose (and covariance) of the latest rejected measurement and those agreeing with it;
   // none once a measurement is accepted or after relocalising.
   std::optional<std::pair<Pose2, Eigen::Matrix3d>> hypothesis() const;
@@ -245,6 +279,14 @@ class FusedSlam {
   int consecutive_rejections_ = 0;
   int64_t accepted_ = 0, rejected_ = 0, relocalizations_ = 0, stale_ = 0, unmapped_scans_ = 0;
   int64_t refused_relocalizations_ = 0, small_disagreements_ = 0;
+  // The points of `points` (robot frame) that are dynamic at the laser's map-frame pose m.
+  std::vector<bool> DynamicPoints(const Pose2& m, const std::vector<Eigen::Vector2d>& points) const;
+  void AgeMap();  // moves the laser map's points older than dynamic_map_age_s into old_map_
+  std::deque<std::pair<int64_t, size_t>> map_sizes_;  // (utime, map size) after the recent scans, oldest first
+  PointGridMap old_map_;  // the laser map's points at least dynamic_map_age_s old (its first old_added_)
+  size_t old_added_ = 0;
+  double occluded_fraction_ = 0;
+  int64_t dynamic_points_ = 0, dynamic_overflow_scans_ = 0;
   double travelled_since_scan_m_ = 0;  // odometry distance since the last scan [m]
   std::vector<Eigen::Vector2d> last_points_;  // a sample of the last scan (robot frame)
 };
