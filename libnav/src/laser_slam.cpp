@@ -275,6 +275,27 @@ double PointGridMap::Likelihood(const Eigen::Vector2d& p) const {
          255.0;
 }
 
+namespace {
+
+// Adds to acc[a * shifts + b] the bilinear interpolation, with the weights w.., of the nodes at
+// base + a * step + b * step * row_stride (shifts x shifts of them). SHIFTS > 0: known at compile
+// time (the loops unrolled); 0: `shifts`.
+template <int SHIFTS>
+inline void AccumulateShifts(const uint8_t* base, int row_stride, int step, int shifts, float w00, float w10,
+                             float w01, float w11, float* acc) {
+  const int count = SHIFTS > 0 ? SHIFTS : shifts;
+  for (int a = 0; a < count; ++a) {
+    const uint8_t* col = base + a * step;
+    float* out = acc + a * count;
+    for (int b = 0; b < count; ++b) {
+      const uint8_t* q = col + b * step * row_stride;
+      out[b] += w00 * q[0] + w10 * q[1] + w01 * q[row_stride] + w11 * q[row_stride + 1];
+    }
+  }
+}
+
+}  // namespace
+
 void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes,
                                          double* sums) const {
   if (!has_likelihood()) throw std::logic_error("point map: no likelihood raster");
@@ -283,10 +304,21 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   const int w = 2 * n * step_nodes + 2;
   const int64_t mask = kNodes - 1;
   const double inv_node = 1.0 / node_;
+  // The raster tile of a tile key (nullptr: none), the last one remembered.
   uint64_t cached_key = 0;
-  uint32_t cached_tile = kNone;
+  const uint8_t* cached_nodes = nullptr;
   bool cached = false;
-  std::vector<uint8_t> block;  // the block, where it spans tiles
+  const auto nodes_of = [&](int64_t tx, int64_t ty) {
+    const uint64_t key = Key(tx, ty);
+    if (!cached || key != cached_key) {
+      cached_key = key;
+      const uint32_t tile = tile_index_.Find(key);
+      cached_nodes = tile == kNone ? nullptr : rasters_[tile].node;
+      cached = true;
+    }
+    return cached_nodes;
+  };
+  std::vector<uint8_t> block(static_cast<size_t>(w) * w);  // the block, where it spans tiles
   const int cells = shifts * shifts;
   std::vector<float> acc(static_cast<size_t>(cells), 0.0f);  // per shift, in units of 1/255
   for (const Eigen::Vector2d& p : points) {
@@ -295,48 +327,48 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     const float fx = static_cast<float>(u - static_cast<double>(i)), fy = static_cast<float>(v - static_cast<double>(j));
     const int64_t lx = i - static_cast<int64_t>(n) * step_nodes, ly = j - static_cast<int64_t>(n) * step_nodes;
     const int64_t hx = lx + w - 1, hy = ly + w - 1;
+    const int64_t tx0 = lx >> kNodeBits, tx1 = hx >> kNodeBits, ty0 = ly >> kNodeBits, ty1 = hy >> kNodeBits;
     const uint8_t* base;  // the block's first node
     int row_stride;     // nodes from one block row to the next
-    if ((lx >> kNodeBits) == (hx >> kNodeBits) && (ly >> kNodeBits) == (hy >> kNodeBits)) {
+    if (tx0 == tx1 && ty0 == ty1) {
       // One tile holds the block (mostly: a tile is kNodes nodes wide): read it in place.
-      const uint64_t key = Key(lx >> kNodeBits, ly >> kNodeBits);
-      if (!cached || key != cached_key) {
-        cached_key = key;
-        cached_tile = tile_index_.Find(key);
-        cached = true;
-      }
-      if (cached_tile == kNone) continue;  // no map point within reach of any shift
-      base = rasters_[cached_tile].node + ((ly & mask) << kNodeBits) + (lx & mask);
+      const uint8_t* nodes = nodes_of(tx0, ty0);
+      if (!nodes) continue;  // no map point within reach of any shift
+      base = nodes + ((ly & mask) << kNodeBits) + (lx & mask);
       row_stride = kNodes;
     } else {
-      block.resize(static_cast<size_t>(w) * w);
-      // The block spans tiles: node by node, the tile looked up when it changes.
-      for (int r = 0; r < w; ++r) {
-        const int64_t iy = ly + r;
-        for (int c = 0; c < w; ++c) {
-          const int64_t ix = lx + c;
-          const uint64_t key = Key(ix >> kNodeBits, iy >> kNodeBits);
-          if (!cached || key != cached_key) {
-            cached_key = key;
-            cached_tile = tile_index_.Find(key);
-            cached = true;
+      // The block spans 2 or 4 tiles: copied together, row pieces of each tile (zeros where there is none).
+      bool any = false;
+      for (int64_t ty = ty0; ty <= ty1; ++ty) {
+        const int64_t y0 = std::max(ly, ty << kNodeBits), y1 = std::min(hy, ((ty + 1) << kNodeBits) - 1);
+        for (int64_t tx = tx0; tx <= tx1; ++tx) {
+          const int64_t x0 = std::max(lx, tx << kNodeBits), x1 = std::min(hx, ((tx + 1) << kNodeBits) - 1);
+          const size_t len = static_cast<size_t>(x1 - x0 + 1);
+          const uint8_t* nodes = nodes_of(tx, ty);
+          any = any || nodes;
+          for (int64_t iy = y0; iy <= y1; ++iy) {
+            uint8_t* to = block.data() + (iy - ly) * w + (x0 - lx);
+            // (Short pieces: a loop, not a library call.)
+            const uint8_t* from = nodes ? nodes + ((iy & mask) << kNodeBits) + (x0 & mask) : nullptr;
+            for (size_t k = 0; k < len; ++k) to[k] = from ? from[k] : uint8_t{0};
           }
-          block[static_cast<size_t>(r) * w + c] =
-              cached_tile == kNone ? uint8_t{0} : rasters_[cached_tile].node[((iy & mask) << kNodeBits) | (ix & mask)];
         }
       }
+      if (!any) continue;
       base = block.data();
       row_stride = w;
     }
     // Bilinear weights, the same for every shift.
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
-    for (int a = 0; a < shifts; ++a) {
-      const uint8_t* col = base + a * step_nodes;
-      float* out = acc.data() + a * shifts;
-      for (int b = 0; b < shifts; ++b) {
-        const uint8_t* q = col + b * step_nodes * row_stride;
-        out[b] += w00 * q[0] + w10 * q[1] + w01 * q[row_stride] + w11 * q[row_stride + 1];
-      }
+    switch (shifts) {
+      case 3:
+        AccumulateShifts<3>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
+        break;
+      case 5:
+        AccumulateShifts<5>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
+        break;
+      default:
+        AccumulateShifts<0>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
     }
   }
   for (int c = 0; c < cells; ++c) sums[c] += acc[static_cast<size_t>(c)] / 255.0;
