@@ -5,6 +5,10 @@
 #include <limits>
 #include <stdexcept>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <Eigen/Dense>
 
 namespace snapnav::nav {
@@ -177,6 +181,7 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
     if (has_likelihood()) {
       rasters_.emplace_back();
       std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
+      std::fill(std::begin(rasters_.back().padding), std::end(rasters_.back().padding), uint8_t{0});
     }
   }
   return &tiles_[slot];
@@ -294,6 +299,38 @@ inline void AccumulateShifts(const uint8_t* base, int row_stride, int step, int 
   }
 }
 
+#if defined(__SSE2__)
+struct Lanes {  // 4 floats (a struct: a vector of __m128 would drop its alignment attribute)
+  __m128 v;
+};
+
+// The same sums, for shifts of 2 nodes (PointGridMap::kLikelihoodSub), 4 x-shifts a at a time
+// (SSE2): acc[b * groups + g] holds a = 4 g .. 4 g + 3 (lanes past `shifts` unused). Each shift's
+// sum takes the same float operations in the same order as AccumulateShifts: the same bits. Reads
+// up to 6 nodes past the block's last row (the raster tiles and the copied block are padded).
+template <int SHIFTS>
+inline void AccumulateShiftsStep2(const uint8_t* base, int row_stride, int shifts, __m128 w00, __m128 w10,
+                                  __m128 w01, __m128 w11, Lanes* acc) {
+  const int count = SHIFTS > 0 ? SHIFTS : shifts;
+  const int groups = (count + 3) / 4;
+  const __m128i zero = _mm_setzero_si128(), low = _mm_set1_epi32(0xffff);
+  for (int b = 0; b < count; ++b) {
+    const uint8_t* row0 = base + 2 * b * row_stride;
+    const uint8_t* row1 = row0 + row_stride;
+    for (int g = 0; g < groups; ++g) {
+      // 8 nodes of each row as 16-bit lanes; even nodes (x = 2 a) and odd ones (2 a + 1) as floats.
+      const __m128i v0 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row0 + 8 * g)), zero);
+      const __m128i v1 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row1 + 8 * g)), zero);
+      const __m128 e0 = _mm_cvtepi32_ps(_mm_and_si128(v0, low)), o0 = _mm_cvtepi32_ps(_mm_srli_epi32(v0, 16));
+      const __m128 e1 = _mm_cvtepi32_ps(_mm_and_si128(v1, low)), o1 = _mm_cvtepi32_ps(_mm_srli_epi32(v1, 16));
+      const __m128 v = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(w00, e0), _mm_mul_ps(w10, o0)), _mm_mul_ps(w01, e1)),
+                                  _mm_mul_ps(w11, o1));
+      acc[b * groups + g].v = _mm_add_ps(acc[b * groups + g].v, v);
+    }
+  }
+}
+#endif
+
 }  // namespace
 
 void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes,
@@ -318,9 +355,14 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     }
     return cached_nodes;
   };
-  std::vector<uint8_t> block(static_cast<size_t>(w) * w);  // the block, where it spans tiles
+  std::vector<uint8_t> block(static_cast<size_t>(w) * w + kRasterPadding);  // the block, where it spans tiles
   const int cells = shifts * shifts;
   std::vector<float> acc(static_cast<size_t>(cells), 0.0f);  // per shift, in units of 1/255
+#if defined(__SSE2__)
+  const bool simd = step_nodes == 2;
+  const int groups = (shifts + 3) / 4;
+  std::vector<Lanes> acc4(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
+#endif
   for (const Eigen::Vector2d& p : points) {
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
     const int64_t i = FloorToInt(u), j = FloorToInt(v);
@@ -360,6 +402,22 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     }
     // Bilinear weights, the same for every shift.
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
+#if defined(__SSE2__)
+    if (simd) {
+      const __m128 v00 = _mm_set1_ps(w00), v10 = _mm_set1_ps(w10), v01 = _mm_set1_ps(w01), v11 = _mm_set1_ps(w11);
+      switch (shifts) {
+        case 3:
+          AccumulateShiftsStep2<3>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
+          break;
+        case 5:
+          AccumulateShiftsStep2<5>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
+          break;
+        default:
+          AccumulateShiftsStep2<0>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
+      }
+      continue;
+    }
+#endif
     switch (shifts) {
       case 3:
         AccumulateShifts<3>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
@@ -371,7 +429,61 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
         AccumulateShifts<0>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
     }
   }
+#if defined(__SSE2__)
+  if (simd) {
+    for (int b = 0; b < shifts; ++b) {
+      for (int g = 0; g < groups; ++g) {
+        alignas(16) float lanes[4];
+        _mm_store_ps(lanes, acc4[static_cast<size_t>(b * groups + g)].v);
+        for (int l = 0; l < 4 && 4 * g + l < shifts; ++l) acc[static_cast<size_t>((4 * g + l) * shifts + b)] = lanes[l];
+      }
+    }
+  }
+#endif
   for (int c = 0; c < cells; ++c) sums[c] += acc[static_cast<size_t>(c)] / 255.0;
+}
+
+void PointGridMap::LookupIndices(const Eigen::Vector2d* q, size_t n, double max_distance_m, int* out) const {
+  if (!(max_distance_m <= lookup_radius_)) {
+    for (size_t i = 0; i < n; ++i) out[i] = NearestIndex(q[i], max_distance_m);
+    return;
+  }
+  // 1. Each point's cell candidates (nullptr: no tile), the tile of the last point remembered.
+  thread_local std::vector<const uint32_t*> cells;
+  cells.resize(n);
+  uint64_t cached_key = 0;
+  const Tile* cached_tile = nullptr;
+  bool cached = false;
+  for (size_t i = 0; i < n; ++i) {
+    const int64_t cx = FloorToInt(q[i].x() * inv_lookup_cell_);
+    const int64_t cy = FloorToInt(q[i].y() * inv_lookup_cell_);
+    const uint64_t key = Key(cx >> kTileBits, cy >> kTileBits);
+    if (!cached || key != cached_key) {
+      cached_key = key;
+      const uint32_t tile = tile_index_.Find(key);
+      cached_tile = tile == kNone ? nullptr : &tiles_[tile];
+      cached = true;
+    }
+    cells[i] = cached_tile ? cached_tile->index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))] : nullptr;
+    if (cells[i]) __builtin_prefetch(cells[i]);
+  }
+  // 2. The nearest of each cell's candidates, as LookupIndex takes it.
+  const double limit = max_distance_m * max_distance_m;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t* candidates = cells[i];
+    int found = -1;
+    if (candidates) {
+      double best = limit;
+      for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
+        const double d = (points_[candidates[k]] - q[i]).squaredNorm();
+        if (d <= best) {
+          best = d;
+          found = static_cast<int>(candidates[k]);
+        }
+      }
+    }
+    out[i] = found;
+  }
 }
 
 int PointGridMap::NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const {
@@ -473,6 +585,16 @@ struct Rigid {
   Eigen::Vector2d t;
 };
 
+// Every stride-th point at `to_map` in *world, and the index of each one's nearest map point
+// within max_distance_m (PointGridMap::LookupIndex; -1: none) in *nearest.
+void LookupAt(const PointGridMap& map, const Rigid& to_map, const std::vector<Eigen::Vector2d>& points, size_t stride,
+              double max_distance_m, std::vector<Eigen::Vector2d>* world, std::vector<int>* nearest) {
+  world->clear();
+  for (size_t i = 0; i < points.size(); i += stride) world->push_back(to_map(points[i]));
+  nearest->resize(world->size());
+  map.LookupIndices(world->data(), world->size(), max_distance_m, nearest->data());
+}
+
 }  // namespace
 
 LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
@@ -485,16 +607,18 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
     // Gauss-Newton on sum w_i (n_i . (R p_i + t - q_i))^2, n_i the map point's normal (or the
     // scan point's, rotated, if the map point has none), w_i a Cauchy weight of the residual.
     const double scale2 = options_.robust_scale_m * options_.robust_scale_m;
+    std::vector<Eigen::Vector2d> world;  // the points at the estimate
+    std::vector<int> nearest;            // their nearest map points
     for (int it = 0; it < options_.icp_iterations; ++it) {
       const double c = std::cos(r.estimate.theta_rad), s = std::sin(r.estimate.theta_rad);
       Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
       int matches = 0;
       double residual2 = 0, weight_sum = 0;
-      const Rigid to_map(r.estimate);
+      LookupAt(map_, Rigid(r.estimate), points, 1, distance, &world, &nearest);
       for (size_t i = 0; i < points.size(); ++i) {
-        const Eigen::Vector2d w = to_map(points[i]);
-        const int j = map_.LookupIndex(w, distance);
+        const Eigen::Vector2d& w = world[i];
+        const int j = nearest[i];
         if (j < 0) continue;
         const Eigen::Vector2d scan_normal = Rotate(c, s, normals[i]);
         Eigen::Vector2d n = map_.normals()[static_cast<size_t>(j)];
@@ -529,13 +653,15 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
     // Thesis 5.3.1: nearest map point of every scan point, closed-form alignment, repeated.
     std::vector<Eigen::Vector2d> src, dst;
     std::vector<size_t> index;
+    std::vector<Eigen::Vector2d> world;  // the points at the estimate
+    std::vector<int> nearest;            // their nearest map points
     for (int it = 0; it < options_.icp_iterations; ++it) {
       src.clear();
       dst.clear();
       index.clear();
-      const Rigid to_map(r.estimate);
+      LookupAt(map_, Rigid(r.estimate), points, 1, distance, &world, &nearest);
       for (size_t i = 0; i < points.size(); ++i) {
-        const int j = map_.LookupIndex(to_map(points[i]), distance);
+        const int j = nearest[i];
         if (j < 0) continue;
         src.push_back(points[i]);
         dst.push_back(map_.points()[static_cast<size_t>(j)]);
@@ -577,11 +703,12 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
 double LaserSlam::Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
   const double tau = options_.match_distance_m, tau2 = tau * tau;
   double score = 0;
-  const Rigid to_map(pose);
-  for (size_t i = 0; i < points.size(); i += stride) {
-    const Eigen::Vector2d w = to_map(points[i]);
-    const int j = map_.LookupIndex(w, tau);
-    if (j >= 0) score += 1.0 - (map_.points()[static_cast<size_t>(j)] - w).squaredNorm() / tau2;
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(pose), points, stride, tau, &world, &nearest);
+  for (size_t i = 0; i < world.size(); ++i) {
+    const int j = nearest[i];
+    if (j >= 0) score += 1.0 - (map_.points()[static_cast<size_t>(j)] - world[i]).squaredNorm() / tau2;
   }
   return score;
 }
@@ -659,13 +786,18 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
       rotated.push_back(Rotate(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
     }
   };
+  std::vector<Eigen::Vector2d> shifted;  // the rotated points, shifted
+  std::vector<int> nearest;              // their nearest map points
   // A shift's score: the sum of the points' kernels (the rotated points), less the prior.
   const auto exact = [&](const Eigen::Vector2d& shift) {
     double score = 0;
-    for (const Eigen::Vector2d& q0 : rotated) {
-      const Eigen::Vector2d q = q0 + shift;
-      const int j = map_.LookupIndex(q, reach);
-      if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+    shifted.clear();
+    for (const Eigen::Vector2d& q0 : rotated) shifted.push_back(q0 + shift);
+    nearest.resize(shifted.size());
+    map_.LookupIndices(shifted.data(), shifted.size(), reach, nearest.data());
+    for (size_t i = 0; i < shifted.size(); ++i) {
+      const int j = nearest[i];
+      if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - shifted[i]).squaredNorm() * inv2s2);
     }
     return score;
   };
@@ -743,11 +875,12 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
 double LaserSlam::KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
   const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
   double score = 0;
-  const Rigid to_map(pose);
-  for (size_t i = 0; i < points.size(); i += stride) {
-    const Eigen::Vector2d q = to_map(points[i]);
-    const int j = map_.LookupIndex(q, reach);
-    if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(pose), points, stride, reach, &world, &nearest);
+  for (size_t i = 0; i < world.size(); ++i) {
+    const int j = nearest[i];
+    if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - world[i]).squaredNorm() * inv2s2);
   }
   return score;
 }
@@ -776,11 +909,11 @@ LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
 }
 
 double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
-  size_t near = 0, total = 0;
-  const Rigid to_map(pose);
-  for (size_t i = 0; i < points.size(); i += stride, ++total) {
-    near += map_.HasPointWithin(to_map(points[i]), 0.5 * options_.match_distance_m);
-  }
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(pose), points, stride, 0.5 * options_.match_distance_m, &world, &nearest);
+  const size_t total = world.size();
+  const size_t near = static_cast<size_t>(std::count_if(nearest.begin(), nearest.end(), [](int j) { return j >= 0; }));
   return total > 0 ? static_cast<double>(near) / static_cast<double>(total) : 0.0;
 }
 

@@ -102,6 +102,17 @@ TEST(PointGridMap, LookupGridFindsTheNearestPoint) {
   EXPECT_EQ(lookup.LookupIndex({1.0, 1.6}, 1.5), exact.NearestIndex({1.0, 1.6}, 1.5));
   EXPECT_GE(lookup.LookupIndex({1.0, 1.6}, 1.5), 0);
   EXPECT_THROW(PointGridMap(0.05, 0.25, -1), std::invalid_argument);
+  // Many points at once: the same answers as one by one (within the radius and beyond it).
+  std::vector<Eigen::Vector2d> queries;
+  for (double x = -0.3; x < 2.3; x += 0.031) {
+    for (double y = -0.7; y < 0.7; y += 0.029) queries.emplace_back(x, y);
+  }
+  queries.emplace_back(5, 5);
+  for (const double radius : {0.1, 0.4, 1.5}) {
+    std::vector<int> batch(queries.size(), -2);
+    lookup.LookupIndices(queries.data(), queries.size(), radius, batch.data());
+    for (size_t i = 0; i < queries.size(); ++i) EXPECT_EQ(batch[i], lookup.LookupIndex(queries[i], radius)) << i;
+  }
 }
 
 TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
@@ -133,19 +144,27 @@ TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
   EXPECT_LT(worst, 2 * 2 * h * h / (8 * sigma * sigma) + 0.02);
   EXPECT_LT(sum / count, 0.01);
   EXPECT_EQ(raster.Likelihood({5, 5}), 0.0);
-  // The shifted sums are the sums of the likelihoods at the shifted points.
-  const std::vector<Eigen::Vector2d> scan = {{-1.21, 0.02}, {-0.03, 0.11}, {0.52, -0.17}, {1.17, 0.29}, {0.0, 0.5}};
-  const int n = 2, step = PointGridMap::kLikelihoodSub;
-  std::vector<double> sums((2 * n + 1) * (2 * n + 1), 0.0);
-  raster.AddShiftedLikelihoods(scan, n, step, sums.data());
-  for (int a = -n; a <= n; ++a) {
-    for (int b = -n; b <= n; ++b) {
-      double expected = 0;
-      for (const Eigen::Vector2d& p : scan) expected += raster.Likelihood(p + Eigen::Vector2d(a, b) * step * h);
-      EXPECT_NEAR(sums[(a + n) * (2 * n + 1) + (b + n)], expected, 1e-5) << a << " " << b;
+  // The shifted sums are the sums of the likelihoods at the shifted points: for each window
+  // (3 x 3 and 5 x 5 shifts have kernels of their own, 13 x 13 the general one), for the raster's
+  // step (SIMD where there is SSE2) and others, with blocks inside a tile and across tile borders
+  // (x = 0 and y = 0 are tile borders; (5, 5) has no tile).
+  const std::vector<Eigen::Vector2d> scan = {{-1.21, 0.02}, {-0.03, 0.11}, {0.52, -0.17}, {1.17, 0.29},
+                                             {0.0, 0.5},    {0.4, 0.01},   {-0.02, -0.01}, {5, 5}};
+  for (const int n : {1, 2, 3, 6}) {
+    for (const int step : {PointGridMap::kLikelihoodSub, 1, 3}) {
+      std::vector<double> sums((2 * n + 1) * (2 * n + 1), 0.0);
+      raster.AddShiftedLikelihoods(scan, n, step, sums.data());
+      for (int a = -n; a <= n; ++a) {
+        for (int b = -n; b <= n; ++b) {
+          double expected = 0;
+          for (const Eigen::Vector2d& p : scan) expected += raster.Likelihood(p + Eigen::Vector2d(a, b) * step * h);
+          EXPECT_NEAR(sums[(a + n) * (2 * n + 1) + (b + n)], expected, 1e-5) << n << " " << step << ": " << a << " " << b;
+        }
+      }
     }
   }
-  EXPECT_THROW(exact.AddShiftedLikelihoods(scan, n, step, sums.data()), std::logic_error);
+  std::vector<double> sums(9, 0.0);
+  EXPECT_THROW(exact.AddShiftedLikelihoods(scan, 1, 2, sums.data()), std::logic_error);
 }
 
 sim::Scene SquareRoom() {

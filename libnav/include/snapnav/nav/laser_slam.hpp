@@ -93,6 +93,9 @@ class PointGridMap {
   // plus half a cell diagonal. Without a lookup grid, or for max_distance_m beyond its radius,
   // it is NearestIndex.
   int LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const;
+  // LookupIndex of each of the n points q in out[0..n): the same answers, faster for a scan's
+  // points (their cells are located first, all of them, then resolved: the memory reads overlap).
+  void LookupIndices(const Eigen::Vector2d* q, size_t n, double max_distance_m, int* out) const;
   // Whether a stored point lies within `distance_m` of p (through the lookup grid if there is one).
   bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return LookupIndex(p, distance_m) >= 0; }
   size_t size() const { return points_.size(); }
@@ -128,7 +131,9 @@ class PointGridMap {
   // raster of the area a scan covers stays in the cache). rasters_[i] belongs to tiles_[i].
   struct RasterTile {
     uint8_t node[kNodes * kNodes];
+    uint8_t padding[8];  // AddShiftedLikelihoods reads up to 6 nodes past a block
   };
+  static constexpr size_t kRasterPadding = 8;
   static constexpr uint32_t kNone = 0xffffffffu;
   static uint64_t Key(int64_t ix, int64_t iy) {
     return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
