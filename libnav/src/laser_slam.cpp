@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -203,18 +204,26 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
       const int64_t cy0 = std::max(y0, ty << kTileBits), cy1 = std::min(y1, ((ty + 1) << kTileBits) - 1);
       for (int64_t cy = cy0; cy <= cy1; ++cy) {
         const double dy = (static_cast<double>(cy) + 0.5) * lookup_cell_ - p.y();
+        const double dy2 = dy * dy;
+        if (dy2 > reach2) continue;  // every cell of the row is farther
+        // The row's cells within reach, |dx| <= sqrt(reach2 - dy2), and one more on each side
+        // against rounding (the test below decides).
+        const double half = std::sqrt(reach2 - dy2) / lookup_cell_, centre = p.x() / lookup_cell_ - 0.5;
+        const int64_t lo = std::max(cx0, static_cast<int64_t>(std::floor(centre - half)) - 1);
+        const int64_t hi = std::min(cx1, static_cast<int64_t>(std::floor(centre + half)) + 1);
         const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
-        for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        for (int64_t cx = lo; cx <= hi; ++cx) {
           const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
-          const double d2 = dx * dx + dy * dy;
-          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          const double d2 = dx * dx + dy2;
           if (d2 > reach2) continue;
-          // Insert into the cell's candidates, nearest first.
+          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          // Insert into the cell's candidates, nearest first (mostly it is farther than all three).
           float* dist = tile->d2[c];
+          const float f = static_cast<float>(d2);
+          if (!(f < dist[kLookupCandidates - 1])) continue;
           uint32_t* idx = tile->index[c];
-          int k = kLookupCandidates;
-          while (k > 0 && static_cast<float>(d2) < dist[k - 1]) --k;
-          if (k == kLookupCandidates) continue;
+          int k = kLookupCandidates - 1;
+          while (k > 0 && f < dist[k - 1]) --k;
           for (int j = kLookupCandidates - 1; j > k; --j) {
             dist[j] = dist[j - 1];
             idx[j] = idx[j - 1];
@@ -355,7 +364,10 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     }
     return cached_nodes;
   };
-  std::vector<uint8_t> block(static_cast<size_t>(w) * w + kRasterPadding);  // the block, where it spans tiles
+  // The block, where it spans tiles; its rows bw apart, 8 nodes or more longer than the block (for
+  // the copies of 8 nodes at a time below).
+  const int bw = ((w + 7) & ~7) + 8;
+  std::vector<uint8_t> block(static_cast<size_t>(bw) * w + kRasterPadding);
   const int cells = shifts * shifts;
   std::vector<float> acc(static_cast<size_t>(cells), 0.0f);  // per shift, in units of 1/255
 #if defined(__SSE2__)
@@ -389,16 +401,22 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
           const uint8_t* nodes = nodes_of(tx, ty);
           any = any || nodes;
           for (int64_t iy = y0; iy <= y1; ++iy) {
-            uint8_t* to = block.data() + (iy - ly) * w + (x0 - lx);
-            // (Short pieces: a loop, not a library call.)
+            // 8 nodes at a time: a piece may write (and read) up to 7 nodes past its end, into the
+            // next piece of the row (copied after it) or the row's slack (and the tile's next row
+            // or its padding).
+            uint8_t* to = block.data() + (iy - ly) * bw + (x0 - lx);
             const uint8_t* from = nodes ? nodes + ((iy & mask) << kNodeBits) + (x0 & mask) : nullptr;
-            for (size_t k = 0; k < len; ++k) to[k] = from ? from[k] : uint8_t{0};
+            for (size_t k = 0; k < len; k += 8) {
+              uint64_t eight = 0;
+              if (from) std::memcpy(&eight, from + k, 8);
+              std::memcpy(to + k, &eight, 8);
+            }
           }
         }
       }
       if (!any) continue;
       base = block.data();
-      row_stride = w;
+      row_stride = bw;
     }
     // Bilinear weights, the same for every shift.
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
