@@ -132,6 +132,23 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_r
     throw std::invalid_argument("point map: lookup radius must be >= 0 and its cell > 0");
   }
   if (!(likelihood_sigma_m >= 0)) throw std::invalid_argument("point map: likelihood sigma must be >= 0 (0: none)");
+  if (has_likelihood()) {
+    // The raster's byte of exp(-x), x = d^2 / (2 sigma^2) in [0, 4.5] (d within 3 sigma), by bins of
+    // x: where no rounding boundary (255 exp(-x) = k + 1/2) lies within 1e-9 of a bin, its byte;
+    // elsewhere -1 (computed).
+    kernel_bytes_.assign(kKernelBins, -1);
+    const double width = kKernelMaxX / kKernelBins;
+    size_t k = 0;  // boundaries by increasing x: x_k = ln(255 / (k + 1/2)), k from 254 down
+    std::vector<double> bounds;
+    for (int v = 254; v >= 0; --v) bounds.push_back(std::log(255.0 / (v + 0.5)));
+    for (int b = 0; b < kKernelBins; ++b) {
+      const double lo = b * width - 1e-9, hi = (b + 1) * width + 1e-9;
+      while (k < bounds.size() && bounds[k] < lo) ++k;
+      if (k < bounds.size() && bounds[k] <= hi) continue;
+      kernel_bytes_[static_cast<size_t>(b)] =
+          static_cast<int16_t>(std::lround(255 * std::exp(-(b + 0.5) * width)));
+    }
+  }
 }
 
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
@@ -266,7 +283,10 @@ void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
           const double d2 = dx * dx + dy * dy;
           if (d2 > reach2) continue;
           uint8_t& v = row[ix - (tx << kNodeBits)];
-          v = std::max(v, static_cast<uint8_t>(std::lround(255 * std::exp(-d2 * inv2s2))));
+          const double x = d2 * inv2s2;
+          const int bin = static_cast<int>(x * (kKernelBins / kKernelMaxX));
+          const int16_t byte = bin < kKernelBins ? kernel_bytes_[static_cast<size_t>(bin)] : int16_t{-1};
+          v = std::max(v, byte >= 0 ? static_cast<uint8_t>(byte) : static_cast<uint8_t>(std::lround(255 * std::exp(-x))));
         }
       }
     }
@@ -607,10 +627,12 @@ struct Rigid {
 // within max_distance_m (PointGridMap::LookupIndex; -1: none) in *nearest.
 void LookupAt(const PointGridMap& map, const Rigid& to_map, const std::vector<Eigen::Vector2d>& points, size_t stride,
               double max_distance_m, std::vector<Eigen::Vector2d>* world, std::vector<int>* nearest) {
-  world->clear();
-  for (size_t i = 0; i < points.size(); i += stride) world->push_back(to_map(points[i]));
-  nearest->resize(world->size());
-  map.LookupIndices(world->data(), world->size(), max_distance_m, nearest->data());
+  const size_t n = (points.size() + stride - 1) / stride;
+  world->resize(n);
+  Eigen::Vector2d* out = world->data();
+  for (size_t k = 0; k < n; ++k) out[k] = to_map(points[k * stride]);
+  nearest->resize(n);
+  map.LookupIndices(out, n, max_distance_m, nearest->data());
 }
 
 }  // namespace
@@ -674,17 +696,23 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
     std::vector<Eigen::Vector2d> world;  // the points at the estimate
     std::vector<int> nearest;            // their nearest map points
     for (int it = 0; it < options_.icp_iterations; ++it) {
-      src.clear();
-      dst.clear();
-      index.clear();
       LookupAt(map_, Rigid(r.estimate), points, 1, distance, &world, &nearest);
+      src.resize(points.size());
+      dst.resize(points.size());
+      index.resize(points.size());
+      size_t m = 0;
+      const std::vector<Eigen::Vector2d>& map_points = map_.points();
       for (size_t i = 0; i < points.size(); ++i) {
         const int j = nearest[i];
         if (j < 0) continue;
-        src.push_back(points[i]);
-        dst.push_back(map_.points()[static_cast<size_t>(j)]);
-        index.push_back(i);
+        src[m] = points[i];
+        dst[m] = map_points[static_cast<size_t>(j)];
+        index[m] = i;
+        ++m;
       }
+      src.resize(m);
+      dst.resize(m);
+      index.resize(m);
       ++r.iterations;
       r.matches = static_cast<int>(src.size());
       if (r.matches < options_.min_matches) break;

@@ -159,6 +159,10 @@ class PointGridMap {
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
   std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
   std::deque<RasterTile> rasters_;  // with a likelihood raster: one per tile
+  // The raster's byte by bins of d^2 / (2 sigma^2) (-1: a rounding boundary in the bin, computed).
+  static constexpr int kKernelBins = 4096;
+  static constexpr double kKernelMaxX = 4.5;
+  std::vector<int16_t> kernel_bytes_;
   std::vector<Eigen::Vector2d> points_, normals_;
 };
 
