@@ -584,6 +584,10 @@ void LaserSlamOptions::Validate() const {
   if (!(stale_fraction >= 0 && stale_fraction <= 1))
     throw std::invalid_argument("laser slam: stale_fraction must be in [0, 1]");
   if (refine_starts < 1) throw std::invalid_argument("laser slam: refine_starts must be >= 1");
+  if (refine_prune_iterations < 0) throw std::invalid_argument("laser slam: refine_prune_iterations must be >= 0");
+  if (!(refine_prune_fraction > 0 && refine_prune_fraction <= 1)) {
+    throw std::invalid_argument("laser slam: refine_prune_fraction must be in (0, 1]");
+  }
   if (!(search_prior_weight >= 0)) throw std::invalid_argument("laser slam: search_prior_weight must be >= 0");
 }
 
@@ -638,9 +642,15 @@ void LookupAt(const PointGridMap& map, const Rigid& to_map, const std::vector<Ei
 }  // namespace
 
 LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
-                                const std::vector<Eigen::Vector2d>& normals) const {
+                                const std::vector<Eigen::Vector2d>& normals, double prune_below) const {
   Icp r;
   r.estimate = start;
+  // After refine_prune_iterations iterations: whether this start is pruned (ends, not ok).
+  const auto prune = [&](int iterations) {
+    if (prune_below <= 0 || iterations != options_.refine_prune_iterations) return false;
+    r.pruned = KernelScore(r.estimate, points, 1) < prune_below;
+    return r.pruned;
+  };
   double distance = options_.match_distance_start_m;
   const auto next_distance = [&] { distance = std::max(options_.match_distance_m, 0.5 * distance); };
   if (options_.metric == IcpMetric::kPointToLine) {
@@ -688,6 +698,7 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       const bool coarse = distance > options_.match_distance_m;
       next_distance();
       if (!coarse && std::hypot(step.x(), step.y()) + std::abs(step.z()) < options_.icp_convergence_m) break;
+      if (prune(r.iterations)) break;
     }
   } else {
     // Thesis 5.3.1: nearest map point of every scan point, closed-form alignment, repeated.
@@ -725,6 +736,7 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       const bool coarse = distance > options_.match_distance_m;
       next_distance();
       if (!coarse && step < options_.icp_convergence_m) break;
+      if (prune(r.iterations)) break;
     }
     if (r.matches >= options_.min_matches) {
       // Information from the point-to-line geometry of the matches: the normal of the scan's
@@ -742,7 +754,7 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       }
     }
   }
-  r.ok = r.matches >= options_.min_matches && r.weight_sum > 0;
+  r.ok = !r.pruned && r.matches >= options_.min_matches && r.weight_sum > 0;
   return r;
 }
 
@@ -933,12 +945,18 @@ double LaserSlam::KernelScore(const Pose2& pose, const std::vector<Eigen::Vector
 
 LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
                                      const std::vector<Eigen::Vector2d>& points,
-                                     const std::vector<Eigen::Vector2d>& normals, Pose2* start) const {
+                                     const std::vector<Eigen::Vector2d>& normals, Pose2* start,
+                                     LaserSlamUpdate* u) const {
   Icp best;
   double best_score = -1;
   const size_t n = std::min(candidates.size(), static_cast<size_t>(std::max(1, options_.refine_starts)));
   for (size_t k = 0; k < n; ++k) {
-    Icp icp = Align(candidates[k].pose, points, normals);
+    // A later start may be pruned once it is clearly worse than the best so far.
+    const double prune_below =
+        options_.refine_prune_iterations > 0 && best_score > 0 ? options_.refine_prune_fraction * best_score : 0.0;
+    Icp icp = Align(candidates[k].pose, points, normals, prune_below);
+    ++u->starts;
+    u->pruned += icp.pruned;
     if (!icp.ok) continue;
     const double score = n > 1 ? KernelScore(icp.estimate, points, 1) : 0.0;
     if (score > best_score) {
@@ -1079,7 +1097,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       ++u.searches;
     }
     if (candidates.empty()) candidates.push_back({pose_, 0});
-    Icp icp = RefineBest(candidates, points, normals, &start);
+    Icp icp = RefineBest(candidates, points, normals, &start, &u);
     u.start = start;
     u.fit = icp.ok ? Fit(icp.estimate, points, 1) : 0.0;
     if (u.fit < options_.recovery_fit && options_.search_window_max_rad >= step) {
@@ -1090,7 +1108,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
                       : SearchHeading(pose_, options_.search_window_max_rad, options_.match_distance_start_m / 2,
                                       points, stride);
       Pose2 again_start = pose_;
-      const Icp again = RefineBest(again_candidates, points, normals, &again_start);
+      const Icp again = RefineBest(again_candidates, points, normals, &again_start, &u);
       const double again_fit = again.ok ? Fit(again.estimate, points, 1) : 0.0;
       ++u.recoveries;
       if (again_fit > u.fit) {

@@ -435,6 +435,54 @@ TEST_P(LaserSlamMetric, StaysOnTheTruthWhereDeadReckoningDrifts) {
   EXPECT_GT(slam.covariance()(0, 0), 0.0);
 }
 
+// Pruning the later ICP starts: off, every start runs (the results as before); on, starts that
+// still fit clearly worse than the best after refine_prune_iterations end there, and the SLAM
+// still follows the truth.
+TEST(LaserSlam, LaterStartsThatFitWorseArePruned) {
+  const sim::Scene scene = SquareRoom();
+  sim::DriveOptions drive;
+  drive.heading_drift_deg_per_m = 2.0;
+  drive.odometry_angular_noise_frac = 0.05;
+  sim::LaserOptions laser;
+  for (const int prune : {0, 2}) {
+    sim::World world(scene, drive, laser, 5);
+    world.SetTruePose({1.2, 1.0, 0});
+    sim::RouteDriver driver({{4.8, 1.2}, {4.8, 3.8}, {1.2, 3.8}, {1.2, 1.2}}, 0.4, 0.15, true);
+    LaserSlamOptions options;
+    options.refine_prune_iterations = prune;
+    options.refine_prune_fraction = 1.0;  // pruned unless already the best
+    LaserSlam slam(options, world.true_pose());
+    int starts = 0, pruned = 0;
+    double slam_max = 0;
+    for (int step = 0; step < 400 && driver.laps() < 1; ++step) {
+      const Eigen::Vector2d cmd = driver.Command(world.true_pose());
+      for (int k = 0; k < 10; ++k) world.Step(cmd.x(), cmd.y(), 0.01);
+      slam.Predict(world.TakeOdometry().delta);
+      const auto u = slam.Update(ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(),
+                                              laser.range_min_m, laser.range_max_m, {laser.mount_x_m, 0, 0}));
+      starts += u.starts;
+      pruned += u.pruned;
+      EXPECT_LE(u.pruned, std::max(0, u.starts - 1)) << "the first start is never pruned";
+      const Pose2& t = world.true_pose();
+      slam_max = std::max(slam_max, std::hypot(slam.pose().x_m - t.x_m, slam.pose().y_m - t.y_m));
+    }
+    EXPECT_EQ(driver.laps(), 1);
+    EXPECT_GT(starts, 0);
+    if (prune == 0) {
+      EXPECT_EQ(pruned, 0);
+    } else {
+      EXPECT_GT(pruned, 0) << starts << " starts";
+    }
+    EXPECT_LT(slam_max, 0.15) << "prune " << prune;
+  }
+  LaserSlamOptions bad;
+  bad.refine_prune_iterations = -1;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+  bad.refine_prune_iterations = 5;
+  bad.refine_prune_fraction = 0;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+}
+
 INSTANTIATE_TEST_SUITE_P(BothMetrics, LaserSlamMetric,
                          ::testing::Values(IcpMetric::kPointToPoint, IcpMetric::kPointToLine),
                          [](const auto& info) { return std::string(IcpMetricName(info.param)); });

@@ -249,6 +249,12 @@ struct LaserSlamOptions {
   // measurement: the nearest local minimum of ICP is not the best one when two lie close (a fast
   // turn: two minima 1 deg apart, taken by turns as the search grid moves by a quarter step).
   int refine_starts = 3;
+  // Pruning the later starts: ICP from the 2nd and later maxima stops after this many iterations
+  // when the KernelScore (the fit used to pick the best start) of its estimate is then below
+  // refine_prune_fraction of the best result so far; a start that is still worse that late
+  // seldom ends better (0: off, every start runs to convergence or icp_iterations).
+  int refine_prune_iterations = 0;
+  double refine_prune_fraction = 0.8;
   // Fast turns: odometry that lags the laser reports a turn a scan late (CSAIL: 21 deg, then 0.2
   // where the laser saw 15, then 20), so the prediction's heading also gets this std. dev. per
   // radian of the larger of odometry's turn since the last scan and its turn over the interval
@@ -297,6 +303,8 @@ struct LaserSlamUpdate {
   int points = 0, matches = 0, added = 0, iterations = 0;
   double fit = 0;              // fraction of the points within match_distance_m / 2 of the map after ICP
   int searches = 0;            // 1 if the heading was searched before ICP
+  int starts = 0;              // ICP runs from the search's maxima (refine_starts; a recovery's included)
+  int pruned = 0;              // ... of them ended early as clearly worse (refine_prune_iterations)
   int recoveries = 0;          // 1 if a poor fit started a wider search
   bool stale_odometry = false; // odometry had not moved since the last scan: predicted from the last motion
   bool widened = false;        // the update scored below the ICP pose: the prediction was widened
@@ -335,13 +343,16 @@ class LaserSlam {
  private:
   struct Icp {
     bool ok = false;
+    bool pruned = false;  // ended early: after refine_prune_iterations it scored below the best start
     Pose2 estimate;
     int matches = 0, iterations = 0;
     Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // unscaled information (sum of J^T J)
     double residual2 = 0, weight_sum = 0;
   };
+  // ICP from `start`. With prune_below > 0: after refine_prune_iterations iterations (if it has not
+  // converged by then), a KernelScore of the estimate below prune_below ends it: not ok, pruned.
   Icp Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
-            const std::vector<Eigen::Vector2d>& normals) const;
+            const std::vector<Eigen::Vector2d>& normals, double prune_below = 0) const;
   // Sum over every stride-th point of 1 - (d / match_distance)^2, d its distance to the map.
   double Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
   // A search's candidates: the local maxima of its score over the heading, best first.
@@ -362,9 +373,10 @@ class LaserSlam {
                                      size_t stride) const;
   // Sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest map point.
   double KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
-  // ICP from each of the first refine_starts candidates; the result with the best KernelScore.
+  // ICP from each of the first refine_starts candidates; the result with the best KernelScore
+  // (the starts run and pruned counted in *u).
   Icp RefineBest(const std::vector<Candidate>& candidates, const std::vector<Eigen::Vector2d>& points,
-                 const std::vector<Eigen::Vector2d>& normals, Pose2* start) const;
+                 const std::vector<Eigen::Vector2d>& normals, Pose2* start, LaserSlamUpdate* u) const;
 
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
