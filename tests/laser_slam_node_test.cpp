@@ -47,6 +47,8 @@ const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translatio
                                                                     {"search_sigma_m", "0.05"},
                                                                     {"search_prior_weight", "1"},
                                                                     {"refine_starts", "3"},
+                                                                    {"refine_prune_iterations", "0"},
+                                                                    {"refine_prune_fraction", "0.8"},
                                                                     {"scan_latency_s", "0"},
                                                                     {"recovery_fit", "0.6"},
                                                                     {"turn_noise_rad_per_rad", "1"},

@@ -2,8 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include <Eigen/Dense>
 
@@ -127,6 +132,23 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_r
     throw std::invalid_argument("point map: lookup radius must be >= 0 and its cell > 0");
   }
   if (!(likelihood_sigma_m >= 0)) throw std::invalid_argument("point map: likelihood sigma must be >= 0 (0: none)");
+  if (has_likelihood()) {
+    // The raster's byte of exp(-x), x = d^2 / (2 sigma^2) in [0, 4.5] (d within 3 sigma), by bins of
+    // x: where no rounding boundary (255 exp(-x) = k + 1/2) lies within 1e-9 of a bin, its byte;
+    // elsewhere -1 (computed).
+    kernel_bytes_.assign(kKernelBins, -1);
+    const double width = kKernelMaxX / kKernelBins;
+    size_t k = 0;  // boundaries by increasing x: x_k = ln(255 / (k + 1/2)), k from 254 down
+    std::vector<double> bounds;
+    for (int v = 254; v >= 0; --v) bounds.push_back(std::log(255.0 / (v + 0.5)));
+    for (int b = 0; b < kKernelBins; ++b) {
+      const double lo = b * width - 1e-9, hi = (b + 1) * width + 1e-9;
+      while (k < bounds.size() && bounds[k] < lo) ++k;
+      if (k < bounds.size() && bounds[k] <= hi) continue;
+      kernel_bytes_[static_cast<size_t>(b)] =
+          static_cast<int16_t>(std::lround(255 * std::exp(-(b + 0.5) * width)));
+    }
+  }
 }
 
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
@@ -177,6 +199,7 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
     if (has_likelihood()) {
       rasters_.emplace_back();
       std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
+      std::fill(std::begin(rasters_.back().padding), std::end(rasters_.back().padding), uint8_t{0});
     }
   }
   return &tiles_[slot];
@@ -198,18 +221,26 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
       const int64_t cy0 = std::max(y0, ty << kTileBits), cy1 = std::min(y1, ((ty + 1) << kTileBits) - 1);
       for (int64_t cy = cy0; cy <= cy1; ++cy) {
         const double dy = (static_cast<double>(cy) + 0.5) * lookup_cell_ - p.y();
+        const double dy2 = dy * dy;
+        if (dy2 > reach2) continue;  // every cell of the row is farther
+        // The row's cells within reach, |dx| <= sqrt(reach2 - dy2), and one more on each side
+        // against rounding (the test below decides).
+        const double half = std::sqrt(reach2 - dy2) / lookup_cell_, centre = p.x() / lookup_cell_ - 0.5;
+        const int64_t lo = std::max(cx0, static_cast<int64_t>(std::floor(centre - half)) - 1);
+        const int64_t hi = std::min(cx1, static_cast<int64_t>(std::floor(centre + half)) + 1);
         const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
-        for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        for (int64_t cx = lo; cx <= hi; ++cx) {
           const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
-          const double d2 = dx * dx + dy * dy;
-          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          const double d2 = dx * dx + dy2;
           if (d2 > reach2) continue;
-          // Insert into the cell's candidates, nearest first.
+          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          // Insert into the cell's candidates, nearest first (mostly it is farther than all three).
           float* dist = tile->d2[c];
+          const float f = static_cast<float>(d2);
+          if (!(f < dist[kLookupCandidates - 1])) continue;
           uint32_t* idx = tile->index[c];
-          int k = kLookupCandidates;
-          while (k > 0 && static_cast<float>(d2) < dist[k - 1]) --k;
-          if (k == kLookupCandidates) continue;
+          int k = kLookupCandidates - 1;
+          while (k > 0 && f < dist[k - 1]) --k;
           for (int j = kLookupCandidates - 1; j > k; --j) {
             dist[j] = dist[j - 1];
             idx[j] = idx[j - 1];
@@ -252,7 +283,10 @@ void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
           const double d2 = dx * dx + dy * dy;
           if (d2 > reach2) continue;
           uint8_t& v = row[ix - (tx << kNodeBits)];
-          v = std::max(v, static_cast<uint8_t>(std::lround(255 * std::exp(-d2 * inv2s2))));
+          const double x = d2 * inv2s2;
+          const int bin = static_cast<int>(x * (kKernelBins / kKernelMaxX));
+          const int16_t byte = bin < kKernelBins ? kernel_bytes_[static_cast<size_t>(bin)] : int16_t{-1};
+          v = std::max(v, byte >= 0 ? static_cast<uint8_t>(byte) : static_cast<uint8_t>(std::lround(255 * std::exp(-x))));
         }
       }
     }
@@ -275,6 +309,59 @@ double PointGridMap::Likelihood(const Eigen::Vector2d& p) const {
          255.0;
 }
 
+namespace {
+
+// Adds to acc[a * shifts + b] the bilinear interpolation, with the weights w.., of the nodes at
+// base + a * step + b * step * row_stride (shifts x shifts of them). SHIFTS > 0: known at compile
+// time (the loops unrolled); 0: `shifts`.
+template <int SHIFTS>
+inline void AccumulateShifts(const uint8_t* base, int row_stride, int step, int shifts, float w00, float w10,
+                             float w01, float w11, float* acc) {
+  const int count = SHIFTS > 0 ? SHIFTS : shifts;
+  for (int a = 0; a < count; ++a) {
+    const uint8_t* col = base + a * step;
+    float* out = acc + a * count;
+    for (int b = 0; b < count; ++b) {
+      const uint8_t* q = col + b * step * row_stride;
+      out[b] += w00 * q[0] + w10 * q[1] + w01 * q[row_stride] + w11 * q[row_stride + 1];
+    }
+  }
+}
+
+#if defined(__SSE2__)
+struct Lanes {  // 4 floats (a struct: a vector of __m128 would drop its alignment attribute)
+  __m128 v;
+};
+
+// The same sums, for shifts of 2 nodes (PointGridMap::kLikelihoodSub), 4 x-shifts a at a time
+// (SSE2): acc[b * groups + g] holds a = 4 g .. 4 g + 3 (lanes past `shifts` unused). Each shift's
+// sum takes the same float operations in the same order as AccumulateShifts: the same bits. Reads
+// up to 6 nodes past the block's last row (the raster tiles and the copied block are padded).
+template <int SHIFTS>
+inline void AccumulateShiftsStep2(const uint8_t* base, int row_stride, int shifts, __m128 w00, __m128 w10,
+                                  __m128 w01, __m128 w11, Lanes* acc) {
+  const int count = SHIFTS > 0 ? SHIFTS : shifts;
+  const int groups = (count + 3) / 4;
+  const __m128i zero = _mm_setzero_si128(), low = _mm_set1_epi32(0xffff);
+  for (int b = 0; b < count; ++b) {
+    const uint8_t* row0 = base + 2 * b * row_stride;
+    const uint8_t* row1 = row0 + row_stride;
+    for (int g = 0; g < groups; ++g) {
+      // 8 nodes of each row as 16-bit lanes; even nodes (x = 2 a) and odd ones (2 a + 1) as floats.
+      const __m128i v0 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row0 + 8 * g)), zero);
+      const __m128i v1 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row1 + 8 * g)), zero);
+      const __m128 e0 = _mm_cvtepi32_ps(_mm_and_si128(v0, low)), o0 = _mm_cvtepi32_ps(_mm_srli_epi32(v0, 16));
+      const __m128 e1 = _mm_cvtepi32_ps(_mm_and_si128(v1, low)), o1 = _mm_cvtepi32_ps(_mm_srli_epi32(v1, 16));
+      const __m128 v = _mm_add_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(w00, e0), _mm_mul_ps(w10, o0)), _mm_mul_ps(w01, e1)),
+                                  _mm_mul_ps(w11, o1));
+      acc[b * groups + g].v = _mm_add_ps(acc[b * groups + g].v, v);
+    }
+  }
+}
+#endif
+
+}  // namespace
+
 void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes,
                                          double* sums) const {
   if (!has_likelihood()) throw std::logic_error("point map: no likelihood raster");
@@ -283,63 +370,158 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   const int w = 2 * n * step_nodes + 2;
   const int64_t mask = kNodes - 1;
   const double inv_node = 1.0 / node_;
+  // The raster tile of a tile key (nullptr: none), the last one remembered.
   uint64_t cached_key = 0;
-  uint32_t cached_tile = kNone;
+  const uint8_t* cached_nodes = nullptr;
   bool cached = false;
-  std::vector<uint8_t> block;  // the block, where it spans tiles
+  const auto nodes_of = [&](int64_t tx, int64_t ty) {
+    const uint64_t key = Key(tx, ty);
+    if (!cached || key != cached_key) {
+      cached_key = key;
+      const uint32_t tile = tile_index_.Find(key);
+      cached_nodes = tile == kNone ? nullptr : rasters_[tile].node;
+      cached = true;
+    }
+    return cached_nodes;
+  };
+  // The block, where it spans tiles; its rows bw apart, 8 nodes or more longer than the block (for
+  // the copies of 8 nodes at a time below).
+  const int bw = ((w + 7) & ~7) + 8;
+  std::vector<uint8_t> block(static_cast<size_t>(bw) * w + kRasterPadding);
   const int cells = shifts * shifts;
   std::vector<float> acc(static_cast<size_t>(cells), 0.0f);  // per shift, in units of 1/255
+#if defined(__SSE2__)
+  const bool simd = step_nodes == 2;
+  const int groups = (shifts + 3) / 4;
+  std::vector<Lanes> acc4(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
+#endif
   for (const Eigen::Vector2d& p : points) {
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
     const int64_t i = FloorToInt(u), j = FloorToInt(v);
     const float fx = static_cast<float>(u - static_cast<double>(i)), fy = static_cast<float>(v - static_cast<double>(j));
     const int64_t lx = i - static_cast<int64_t>(n) * step_nodes, ly = j - static_cast<int64_t>(n) * step_nodes;
     const int64_t hx = lx + w - 1, hy = ly + w - 1;
+    const int64_t tx0 = lx >> kNodeBits, tx1 = hx >> kNodeBits, ty0 = ly >> kNodeBits, ty1 = hy >> kNodeBits;
     const uint8_t* base;  // the block's first node
     int row_stride;     // nodes from one block row to the next
-    if ((lx >> kNodeBits) == (hx >> kNodeBits) && (ly >> kNodeBits) == (hy >> kNodeBits)) {
+    if (tx0 == tx1 && ty0 == ty1) {
       // One tile holds the block (mostly: a tile is kNodes nodes wide): read it in place.
-      const uint64_t key = Key(lx >> kNodeBits, ly >> kNodeBits);
-      if (!cached || key != cached_key) {
-        cached_key = key;
-        cached_tile = tile_index_.Find(key);
-        cached = true;
-      }
-      if (cached_tile == kNone) continue;  // no map point within reach of any shift
-      base = rasters_[cached_tile].node + ((ly & mask) << kNodeBits) + (lx & mask);
+      const uint8_t* nodes = nodes_of(tx0, ty0);
+      if (!nodes) continue;  // no map point within reach of any shift
+      base = nodes + ((ly & mask) << kNodeBits) + (lx & mask);
       row_stride = kNodes;
     } else {
-      block.resize(static_cast<size_t>(w) * w);
-      // The block spans tiles: node by node, the tile looked up when it changes.
-      for (int r = 0; r < w; ++r) {
-        const int64_t iy = ly + r;
-        for (int c = 0; c < w; ++c) {
-          const int64_t ix = lx + c;
-          const uint64_t key = Key(ix >> kNodeBits, iy >> kNodeBits);
-          if (!cached || key != cached_key) {
-            cached_key = key;
-            cached_tile = tile_index_.Find(key);
-            cached = true;
+      // The block spans 2 or 4 tiles: copied together, row pieces of each tile (zeros where there is none).
+      bool any = false;
+      for (int64_t ty = ty0; ty <= ty1; ++ty) {
+        const int64_t y0 = std::max(ly, ty << kNodeBits), y1 = std::min(hy, ((ty + 1) << kNodeBits) - 1);
+        for (int64_t tx = tx0; tx <= tx1; ++tx) {
+          const int64_t x0 = std::max(lx, tx << kNodeBits), x1 = std::min(hx, ((tx + 1) << kNodeBits) - 1);
+          const size_t len = static_cast<size_t>(x1 - x0 + 1);
+          const uint8_t* nodes = nodes_of(tx, ty);
+          any = any || nodes;
+          for (int64_t iy = y0; iy <= y1; ++iy) {
+            // 8 nodes at a time: a piece may write (and read) up to 7 nodes past its end, into the
+            // next piece of the row (copied after it) or the row's slack (and the tile's next row
+            // or its padding).
+            uint8_t* to = block.data() + (iy - ly) * bw + (x0 - lx);
+            const uint8_t* from = nodes ? nodes + ((iy & mask) << kNodeBits) + (x0 & mask) : nullptr;
+            for (size_t k = 0; k < len; k += 8) {
+              uint64_t eight = 0;
+              if (from) std::memcpy(&eight, from + k, 8);
+              std::memcpy(to + k, &eight, 8);
+            }
           }
-          block[static_cast<size_t>(r) * w + c] =
-              cached_tile == kNone ? uint8_t{0} : rasters_[cached_tile].node[((iy & mask) << kNodeBits) | (ix & mask)];
         }
       }
+      if (!any) continue;
       base = block.data();
-      row_stride = w;
+      row_stride = bw;
     }
     // Bilinear weights, the same for every shift.
     const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
-    for (int a = 0; a < shifts; ++a) {
-      const uint8_t* col = base + a * step_nodes;
-      float* out = acc.data() + a * shifts;
-      for (int b = 0; b < shifts; ++b) {
-        const uint8_t* q = col + b * step_nodes * row_stride;
-        out[b] += w00 * q[0] + w10 * q[1] + w01 * q[row_stride] + w11 * q[row_stride + 1];
+#if defined(__SSE2__)
+    if (simd) {
+      const __m128 v00 = _mm_set1_ps(w00), v10 = _mm_set1_ps(w10), v01 = _mm_set1_ps(w01), v11 = _mm_set1_ps(w11);
+      switch (shifts) {
+        case 3:
+          AccumulateShiftsStep2<3>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
+          break;
+        case 5:
+          AccumulateShiftsStep2<5>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
+          break;
+        default:
+          AccumulateShiftsStep2<0>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
+      }
+      continue;
+    }
+#endif
+    switch (shifts) {
+      case 3:
+        AccumulateShifts<3>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
+        break;
+      case 5:
+        AccumulateShifts<5>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
+        break;
+      default:
+        AccumulateShifts<0>(base, row_stride, step_nodes, shifts, w00, w10, w01, w11, acc.data());
+    }
+  }
+#if defined(__SSE2__)
+  if (simd) {
+    for (int b = 0; b < shifts; ++b) {
+      for (int g = 0; g < groups; ++g) {
+        alignas(16) float lanes[4];
+        _mm_store_ps(lanes, acc4[static_cast<size_t>(b * groups + g)].v);
+        for (int l = 0; l < 4 && 4 * g + l < shifts; ++l) acc[static_cast<size_t>((4 * g + l) * shifts + b)] = lanes[l];
       }
     }
   }
+#endif
   for (int c = 0; c < cells; ++c) sums[c] += acc[static_cast<size_t>(c)] / 255.0;
+}
+
+void PointGridMap::LookupIndices(const Eigen::Vector2d* q, size_t n, double max_distance_m, int* out) const {
+  if (!(max_distance_m <= lookup_radius_)) {
+    for (size_t i = 0; i < n; ++i) out[i] = NearestIndex(q[i], max_distance_m);
+    return;
+  }
+  // 1. Each point's cell candidates (nullptr: no tile), the tile of the last point remembered.
+  thread_local std::vector<const uint32_t*> cells;
+  cells.resize(n);
+  uint64_t cached_key = 0;
+  const Tile* cached_tile = nullptr;
+  bool cached = false;
+  for (size_t i = 0; i < n; ++i) {
+    const int64_t cx = FloorToInt(q[i].x() * inv_lookup_cell_);
+    const int64_t cy = FloorToInt(q[i].y() * inv_lookup_cell_);
+    const uint64_t key = Key(cx >> kTileBits, cy >> kTileBits);
+    if (!cached || key != cached_key) {
+      cached_key = key;
+      const uint32_t tile = tile_index_.Find(key);
+      cached_tile = tile == kNone ? nullptr : &tiles_[tile];
+      cached = true;
+    }
+    cells[i] = cached_tile ? cached_tile->index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))] : nullptr;
+    if (cells[i]) __builtin_prefetch(cells[i]);
+  }
+  // 2. The nearest of each cell's candidates, as LookupIndex takes it.
+  const double limit = max_distance_m * max_distance_m;
+  for (size_t i = 0; i < n; ++i) {
+    const uint32_t* candidates = cells[i];
+    int found = -1;
+    if (candidates) {
+      double best = limit;
+      for (int k = 0; k < kLookupCandidates && candidates[k] != kNone; ++k) {
+        const double d = (points_[candidates[k]] - q[i]).squaredNorm();
+        if (d <= best) {
+          best = d;
+          found = static_cast<int>(candidates[k]);
+        }
+      }
+    }
+    out[i] = found;
+  }
 }
 
 int PointGridMap::NearestIndex(const Eigen::Vector2d& p, double max_distance_m) const {
@@ -402,6 +584,10 @@ void LaserSlamOptions::Validate() const {
   if (!(stale_fraction >= 0 && stale_fraction <= 1))
     throw std::invalid_argument("laser slam: stale_fraction must be in [0, 1]");
   if (refine_starts < 1) throw std::invalid_argument("laser slam: refine_starts must be >= 1");
+  if (refine_prune_iterations < 0) throw std::invalid_argument("laser slam: refine_prune_iterations must be >= 0");
+  if (!(refine_prune_fraction > 0 && refine_prune_fraction <= 1)) {
+    throw std::invalid_argument("laser slam: refine_prune_fraction must be in (0, 1]");
+  }
   if (!(search_prior_weight >= 0)) throw std::invalid_argument("laser slam: search_prior_weight must be >= 0");
 }
 
@@ -441,28 +627,48 @@ struct Rigid {
   Eigen::Vector2d t;
 };
 
+// Every stride-th point at `to_map` in *world, and the index of each one's nearest map point
+// within max_distance_m (PointGridMap::LookupIndex; -1: none) in *nearest.
+void LookupAt(const PointGridMap& map, const Rigid& to_map, const std::vector<Eigen::Vector2d>& points, size_t stride,
+              double max_distance_m, std::vector<Eigen::Vector2d>* world, std::vector<int>* nearest) {
+  const size_t n = (points.size() + stride - 1) / stride;
+  world->resize(n);
+  Eigen::Vector2d* out = world->data();
+  for (size_t k = 0; k < n; ++k) out[k] = to_map(points[k * stride]);
+  nearest->resize(n);
+  map.LookupIndices(out, n, max_distance_m, nearest->data());
+}
+
 }  // namespace
 
 LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
-                                const std::vector<Eigen::Vector2d>& normals) const {
+                                const std::vector<Eigen::Vector2d>& normals, double prune_below) const {
   Icp r;
   r.estimate = start;
+  // After refine_prune_iterations iterations: whether this start is pruned (ends, not ok).
+  const auto prune = [&](int iterations) {
+    if (prune_below <= 0 || iterations != options_.refine_prune_iterations) return false;
+    r.pruned = KernelScore(r.estimate, points, 1) < prune_below;
+    return r.pruned;
+  };
   double distance = options_.match_distance_start_m;
   const auto next_distance = [&] { distance = std::max(options_.match_distance_m, 0.5 * distance); };
   if (options_.metric == IcpMetric::kPointToLine) {
     // Gauss-Newton on sum w_i (n_i . (R p_i + t - q_i))^2, n_i the map point's normal (or the
     // scan point's, rotated, if the map point has none), w_i a Cauchy weight of the residual.
     const double scale2 = options_.robust_scale_m * options_.robust_scale_m;
+    std::vector<Eigen::Vector2d> world;  // the points at the estimate
+    std::vector<int> nearest;            // their nearest map points
     for (int it = 0; it < options_.icp_iterations; ++it) {
       const double c = std::cos(r.estimate.theta_rad), s = std::sin(r.estimate.theta_rad);
       Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
       int matches = 0;
       double residual2 = 0, weight_sum = 0;
-      const Rigid to_map(r.estimate);
+      LookupAt(map_, Rigid(r.estimate), points, 1, distance, &world, &nearest);
       for (size_t i = 0; i < points.size(); ++i) {
-        const Eigen::Vector2d w = to_map(points[i]);
-        const int j = map_.LookupIndex(w, distance);
+        const Eigen::Vector2d& w = world[i];
+        const int j = nearest[i];
         if (j < 0) continue;
         const Eigen::Vector2d scan_normal = Rotate(c, s, normals[i]);
         Eigen::Vector2d n = map_.normals()[static_cast<size_t>(j)];
@@ -492,23 +698,32 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       const bool coarse = distance > options_.match_distance_m;
       next_distance();
       if (!coarse && std::hypot(step.x(), step.y()) + std::abs(step.z()) < options_.icp_convergence_m) break;
+      if (prune(r.iterations)) break;
     }
   } else {
     // Thesis 5.3.1: nearest map point of every scan point, closed-form alignment, repeated.
     std::vector<Eigen::Vector2d> src, dst;
     std::vector<size_t> index;
+    std::vector<Eigen::Vector2d> world;  // the points at the estimate
+    std::vector<int> nearest;            // their nearest map points
     for (int it = 0; it < options_.icp_iterations; ++it) {
-      src.clear();
-      dst.clear();
-      index.clear();
-      const Rigid to_map(r.estimate);
+      LookupAt(map_, Rigid(r.estimate), points, 1, distance, &world, &nearest);
+      src.resize(points.size());
+      dst.resize(points.size());
+      index.resize(points.size());
+      size_t m = 0;
+      const std::vector<Eigen::Vector2d>& map_points = map_.points();
       for (size_t i = 0; i < points.size(); ++i) {
-        const int j = map_.LookupIndex(to_map(points[i]), distance);
+        const int j = nearest[i];
         if (j < 0) continue;
-        src.push_back(points[i]);
-        dst.push_back(map_.points()[static_cast<size_t>(j)]);
-        index.push_back(i);
+        src[m] = points[i];
+        dst[m] = map_points[static_cast<size_t>(j)];
+        index[m] = i;
+        ++m;
       }
+      src.resize(m);
+      dst.resize(m);
+      index.resize(m);
       ++r.iterations;
       r.matches = static_cast<int>(src.size());
       if (r.matches < options_.min_matches) break;
@@ -521,6 +736,7 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       const bool coarse = distance > options_.match_distance_m;
       next_distance();
       if (!coarse && step < options_.icp_convergence_m) break;
+      if (prune(r.iterations)) break;
     }
     if (r.matches >= options_.min_matches) {
       // Information from the point-to-line geometry of the matches: the normal of the scan's
@@ -538,18 +754,19 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       }
     }
   }
-  r.ok = r.matches >= options_.min_matches && r.weight_sum > 0;
+  r.ok = !r.pruned && r.matches >= options_.min_matches && r.weight_sum > 0;
   return r;
 }
 
 double LaserSlam::Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
   const double tau = options_.match_distance_m, tau2 = tau * tau;
   double score = 0;
-  const Rigid to_map(pose);
-  for (size_t i = 0; i < points.size(); i += stride) {
-    const Eigen::Vector2d w = to_map(points[i]);
-    const int j = map_.LookupIndex(w, tau);
-    if (j >= 0) score += 1.0 - (map_.points()[static_cast<size_t>(j)] - w).squaredNorm() / tau2;
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(pose), points, stride, tau, &world, &nearest);
+  for (size_t i = 0; i < world.size(); ++i) {
+    const int j = nearest[i];
+    if (j >= 0) score += 1.0 - (map_.points()[static_cast<size_t>(j)] - world[i]).squaredNorm() / tau2;
   }
   return score;
 }
@@ -627,13 +844,18 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
       rotated.push_back(Rotate(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
     }
   };
+  std::vector<Eigen::Vector2d> shifted;  // the rotated points, shifted
+  std::vector<int> nearest;              // their nearest map points
   // A shift's score: the sum of the points' kernels (the rotated points), less the prior.
   const auto exact = [&](const Eigen::Vector2d& shift) {
     double score = 0;
-    for (const Eigen::Vector2d& q0 : rotated) {
-      const Eigen::Vector2d q = q0 + shift;
-      const int j = map_.LookupIndex(q, reach);
-      if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+    shifted.clear();
+    for (const Eigen::Vector2d& q0 : rotated) shifted.push_back(q0 + shift);
+    nearest.resize(shifted.size());
+    map_.LookupIndices(shifted.data(), shifted.size(), reach, nearest.data());
+    for (size_t i = 0; i < shifted.size(); ++i) {
+      const int j = nearest[i];
+      if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - shifted[i]).squaredNorm() * inv2s2);
     }
     return score;
   };
@@ -711,23 +933,30 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
 double LaserSlam::KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
   const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
   double score = 0;
-  const Rigid to_map(pose);
-  for (size_t i = 0; i < points.size(); i += stride) {
-    const Eigen::Vector2d q = to_map(points[i]);
-    const int j = map_.LookupIndex(q, reach);
-    if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - q).squaredNorm() * inv2s2);
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(pose), points, stride, reach, &world, &nearest);
+  for (size_t i = 0; i < world.size(); ++i) {
+    const int j = nearest[i];
+    if (j >= 0) score += std::exp(-(map_.points()[static_cast<size_t>(j)] - world[i]).squaredNorm() * inv2s2);
   }
   return score;
 }
 
 LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
                                      const std::vector<Eigen::Vector2d>& points,
-                                     const std::vector<Eigen::Vector2d>& normals, Pose2* start) const {
+                                     const std::vector<Eigen::Vector2d>& normals, Pose2* start,
+                                     LaserSlamUpdate* u) const {
   Icp best;
   double best_score = -1;
   const size_t n = std::min(candidates.size(), static_cast<size_t>(std::max(1, options_.refine_starts)));
   for (size_t k = 0; k < n; ++k) {
-    Icp icp = Align(candidates[k].pose, points, normals);
+    // A later start may be pruned once it is clearly worse than the best so far.
+    const double prune_below =
+        options_.refine_prune_iterations > 0 && best_score > 0 ? options_.refine_prune_fraction * best_score : 0.0;
+    Icp icp = Align(candidates[k].pose, points, normals, prune_below);
+    ++u->starts;
+    u->pruned += icp.pruned;
     if (!icp.ok) continue;
     const double score = n > 1 ? KernelScore(icp.estimate, points, 1) : 0.0;
     if (score > best_score) {
@@ -744,11 +973,11 @@ LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
 }
 
 double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
-  size_t near = 0, total = 0;
-  const Rigid to_map(pose);
-  for (size_t i = 0; i < points.size(); i += stride, ++total) {
-    near += map_.HasPointWithin(to_map(points[i]), 0.5 * options_.match_distance_m);
-  }
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(pose), points, stride, 0.5 * options_.match_distance_m, &world, &nearest);
+  const size_t total = world.size();
+  const size_t near = static_cast<size_t>(std::count_if(nearest.begin(), nearest.end(), [](int j) { return j >= 0; }));
   return total > 0 ? static_cast<double>(near) / static_cast<double>(total) : 0.0;
 }
 
@@ -868,7 +1097,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       ++u.searches;
     }
     if (candidates.empty()) candidates.push_back({pose_, 0});
-    Icp icp = RefineBest(candidates, points, normals, &start);
+    Icp icp = RefineBest(candidates, points, normals, &start, &u);
     u.start = start;
     u.fit = icp.ok ? Fit(icp.estimate, points, 1) : 0.0;
     if (u.fit < options_.recovery_fit && options_.search_window_max_rad >= step) {
@@ -879,7 +1108,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
                       : SearchHeading(pose_, options_.search_window_max_rad, options_.match_distance_start_m / 2,
                                       points, stride);
       Pose2 again_start = pose_;
-      const Icp again = RefineBest(again_candidates, points, normals, &again_start);
+      const Icp again = RefineBest(again_candidates, points, normals, &again_start, &u);
       const double again_fit = again.ok ? Fit(again.estimate, points, 1) : 0.0;
       ++u.recoveries;
       if (again_fit > u.fit) {

@@ -54,6 +54,8 @@ nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::
   o.search_sigma_m = ini.GetDouble(s, "search_sigma_m");
   o.search_prior_weight = ini.GetDouble(s, "search_prior_weight");
   o.refine_starts = ini.GetInt(s, "refine_starts");
+  o.refine_prune_iterations = ini.GetInt(s, "refine_prune_iterations");
+  o.refine_prune_fraction = ini.GetDouble(s, "refine_prune_fraction");
   o.scan_latency_s = ini.GetDouble(s, "scan_latency_s");
   o.recovery_fit = ini.GetDouble(s, "recovery_fit");
   o.turn_noise_rad_per_rad = ini.GetDouble(s, "turn_noise_rad_per_rad");
@@ -89,6 +91,8 @@ void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& o) {
       << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nmatcher = " << nav::ScanMatcherName(o.matcher)
       << "\nsearch_window_xy_m = " << o.search_window_xy_m << "\nsearch_sigma_m = " << o.search_sigma_m
       << "\nsearch_prior_weight = " << o.search_prior_weight << "\nrefine_starts = " << o.refine_starts
+      << "\nrefine_prune_iterations = " << o.refine_prune_iterations
+      << "\nrefine_prune_fraction = " << o.refine_prune_fraction
       << "\nscan_latency_s = " << o.scan_latency_s << "\nrecovery_fit = " << o.recovery_fit
       << "\nturn_noise_rad_per_rad = " << o.turn_noise_rad_per_rad
       << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false") << "\nstale_fraction = " << o.stale_fraction

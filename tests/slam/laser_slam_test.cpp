@@ -102,6 +102,17 @@ TEST(PointGridMap, LookupGridFindsTheNearestPoint) {
   EXPECT_EQ(lookup.LookupIndex({1.0, 1.6}, 1.5), exact.NearestIndex({1.0, 1.6}, 1.5));
   EXPECT_GE(lookup.LookupIndex({1.0, 1.6}, 1.5), 0);
   EXPECT_THROW(PointGridMap(0.05, 0.25, -1), std::invalid_argument);
+  // Many points at once: the same answers as one by one (within the radius and beyond it).
+  std::vector<Eigen::Vector2d> queries;
+  for (double x = -0.3; x < 2.3; x += 0.031) {
+    for (double y = -0.7; y < 0.7; y += 0.029) queries.emplace_back(x, y);
+  }
+  queries.emplace_back(5, 5);
+  for (const double radius : {0.1, 0.4, 1.5}) {
+    std::vector<int> batch(queries.size(), -2);
+    lookup.LookupIndices(queries.data(), queries.size(), radius, batch.data());
+    for (size_t i = 0; i < queries.size(); ++i) EXPECT_EQ(batch[i], lookup.LookupIndex(queries[i], radius)) << i;
+  }
 }
 
 TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
@@ -133,19 +144,27 @@ TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
   EXPECT_LT(worst, 2 * 2 * h * h / (8 * sigma * sigma) + 0.02);
   EXPECT_LT(sum / count, 0.01);
   EXPECT_EQ(raster.Likelihood({5, 5}), 0.0);
-  // The shifted sums are the sums of the likelihoods at the shifted points.
-  const std::vector<Eigen::Vector2d> scan = {{-1.21, 0.02}, {-0.03, 0.11}, {0.52, -0.17}, {1.17, 0.29}, {0.0, 0.5}};
-  const int n = 2, step = PointGridMap::kLikelihoodSub;
-  std::vector<double> sums((2 * n + 1) * (2 * n + 1), 0.0);
-  raster.AddShiftedLikelihoods(scan, n, step, sums.data());
-  for (int a = -n; a <= n; ++a) {
-    for (int b = -n; b <= n; ++b) {
-      double expected = 0;
-      for (const Eigen::Vector2d& p : scan) expected += raster.Likelihood(p + Eigen::Vector2d(a, b) * step * h);
-      EXPECT_NEAR(sums[(a + n) * (2 * n + 1) + (b + n)], expected, 1e-5) << a << " " << b;
+  // The shifted sums are the sums of the likelihoods at the shifted points: for each window
+  // (3 x 3 and 5 x 5 shifts have kernels of their own, 13 x 13 the general one), for the raster's
+  // step (SIMD where there is SSE2) and others, with blocks inside a tile and across tile borders
+  // (x = 0 and y = 0 are tile borders; (5, 5) has no tile).
+  const std::vector<Eigen::Vector2d> scan = {{-1.21, 0.02}, {-0.03, 0.11}, {0.52, -0.17}, {1.17, 0.29},
+                                             {0.0, 0.5},    {0.4, 0.01},   {-0.02, -0.01}, {5, 5}};
+  for (const int n : {1, 2, 3, 6}) {
+    for (const int step : {PointGridMap::kLikelihoodSub, 1, 3}) {
+      std::vector<double> sums((2 * n + 1) * (2 * n + 1), 0.0);
+      raster.AddShiftedLikelihoods(scan, n, step, sums.data());
+      for (int a = -n; a <= n; ++a) {
+        for (int b = -n; b <= n; ++b) {
+          double expected = 0;
+          for (const Eigen::Vector2d& p : scan) expected += raster.Likelihood(p + Eigen::Vector2d(a, b) * step * h);
+          EXPECT_NEAR(sums[(a + n) * (2 * n + 1) + (b + n)], expected, 1e-5) << n << " " << step << ": " << a << " " << b;
+        }
+      }
     }
   }
-  EXPECT_THROW(exact.AddShiftedLikelihoods(scan, n, step, sums.data()), std::logic_error);
+  std::vector<double> sums(9, 0.0);
+  EXPECT_THROW(exact.AddShiftedLikelihoods(scan, 1, 2, sums.data()), std::logic_error);
 }
 
 sim::Scene SquareRoom() {
@@ -414,6 +433,54 @@ TEST_P(LaserSlamMetric, StaysOnTheTruthWhereDeadReckoningDrifts) {
   EXPECT_GT(dr_final, 2 * slam_max);
   EXPECT_LT(slam.map().size(), 20000u);  // bounded by the explored area
   EXPECT_GT(slam.covariance()(0, 0), 0.0);
+}
+
+// Pruning the later ICP starts: off, every start runs (the results as before); on, starts that
+// still fit clearly worse than the best after refine_prune_iterations end there, and the SLAM
+// still follows the truth.
+TEST(LaserSlam, LaterStartsThatFitWorseArePruned) {
+  const sim::Scene scene = SquareRoom();
+  sim::DriveOptions drive;
+  drive.heading_drift_deg_per_m = 2.0;
+  drive.odometry_angular_noise_frac = 0.05;
+  sim::LaserOptions laser;
+  for (const int prune : {0, 2}) {
+    sim::World world(scene, drive, laser, 5);
+    world.SetTruePose({1.2, 1.0, 0});
+    sim::RouteDriver driver({{4.8, 1.2}, {4.8, 3.8}, {1.2, 3.8}, {1.2, 1.2}}, 0.4, 0.15, true);
+    LaserSlamOptions options;
+    options.refine_prune_iterations = prune;
+    options.refine_prune_fraction = 1.0;  // pruned unless already the best
+    LaserSlam slam(options, world.true_pose());
+    int starts = 0, pruned = 0;
+    double slam_max = 0;
+    for (int step = 0; step < 400 && driver.laps() < 1; ++step) {
+      const Eigen::Vector2d cmd = driver.Command(world.true_pose());
+      for (int k = 0; k < 10; ++k) world.Step(cmd.x(), cmd.y(), 0.01);
+      slam.Predict(world.TakeOdometry().delta);
+      const auto u = slam.Update(ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(),
+                                              laser.range_min_m, laser.range_max_m, {laser.mount_x_m, 0, 0}));
+      starts += u.starts;
+      pruned += u.pruned;
+      EXPECT_LE(u.pruned, std::max(0, u.starts - 1)) << "the first start is never pruned";
+      const Pose2& t = world.true_pose();
+      slam_max = std::max(slam_max, std::hypot(slam.pose().x_m - t.x_m, slam.pose().y_m - t.y_m));
+    }
+    EXPECT_EQ(driver.laps(), 1);
+    EXPECT_GT(starts, 0);
+    if (prune == 0) {
+      EXPECT_EQ(pruned, 0);
+    } else {
+      EXPECT_GT(pruned, 0) << starts << " starts";
+    }
+    EXPECT_LT(slam_max, 0.15) << "prune " << prune;
+  }
+  LaserSlamOptions bad;
+  bad.refine_prune_iterations = -1;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+  bad.refine_prune_iterations = 5;
+  bad.refine_prune_fraction = 0;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
 }
 
 INSTANTIATE_TEST_SUITE_P(BothMetrics, LaserSlamMetric,

@@ -93,6 +93,9 @@ class PointGridMap {
   // plus half a cell diagonal. Without a lookup grid, or for max_distance_m beyond its radius,
   // it is NearestIndex.
   int LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const;
+  // LookupIndex of each of the n points q in out[0..n): the same answers, faster for a scan's
+  // points (their cells are located first, all of them, then resolved: the memory reads overlap).
+  void LookupIndices(const Eigen::Vector2d* q, size_t n, double max_distance_m, int* out) const;
   // Whether a stored point lies within `distance_m` of p (through the lookup grid if there is one).
   bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return LookupIndex(p, distance_m) >= 0; }
   size_t size() const { return points_.size(); }
@@ -128,7 +131,9 @@ class PointGridMap {
   // raster of the area a scan covers stays in the cache). rasters_[i] belongs to tiles_[i].
   struct RasterTile {
     uint8_t node[kNodes * kNodes];
+    uint8_t padding[8];  // AddShiftedLikelihoods reads up to 6 nodes past a block
   };
+  static constexpr size_t kRasterPadding = 8;
   static constexpr uint32_t kNone = 0xffffffffu;
   static uint64_t Key(int64_t ix, int64_t iy) {
     return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
@@ -154,6 +159,10 @@ class PointGridMap {
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
   std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
   std::deque<RasterTile> rasters_;  // with a likelihood raster: one per tile
+  // The raster's byte by bins of d^2 / (2 sigma^2) (-1: a rounding boundary in the bin, computed).
+  static constexpr int kKernelBins = 4096;
+  static constexpr double kKernelMaxX = 4.5;
+  std::vector<int16_t> kernel_bytes_;
   std::vector<Eigen::Vector2d> points_, normals_;
 };
 
@@ -240,6 +249,12 @@ struct LaserSlamOptions {
   // measurement: the nearest local minimum of ICP is not the best one when two lie close (a fast
   // turn: two minima 1 deg apart, taken by turns as the search grid moves by a quarter step).
   int refine_starts = 3;
+  // Pruning the later starts: ICP from the 2nd and later maxima stops after this many iterations
+  // when the KernelScore (the fit used to pick the best start) of its estimate is then below
+  // refine_prune_fraction of the best result so far; a start that is still worse that late
+  // seldom ends better (0: off, every start runs to convergence or icp_iterations).
+  int refine_prune_iterations = 0;
+  double refine_prune_fraction = 0.8;
   // Fast turns: odometry that lags the laser reports a turn a scan late (CSAIL: 21 deg, then 0.2
   // where the laser saw 15, then 20), so the prediction's heading also gets this std. dev. per
   // radian of the larger of odometry's turn since the last scan and its turn over the interval
@@ -288,6 +303,8 @@ struct LaserSlamUpdate {
   int points = 0, matches = 0, added = 0, iterations = 0;
   double fit = 0;              // fraction of the points within match_distance_m / 2 of the map after ICP
   int searches = 0;            // 1 if the heading was searched before ICP
+  int starts = 0;              // ICP runs from the search's maxima (refine_starts; a recovery's included)
+  int pruned = 0;              // ... of them ended early as clearly worse (refine_prune_iterations)
   int recoveries = 0;          // 1 if a poor fit started a wider search
   bool stale_odometry = false; // odometry had not moved since the last scan: predicted from the last motion
   bool widened = false;        // the update scored below the ICP pose: the prediction was widened
@@ -326,13 +343,16 @@ class LaserSlam {
  private:
   struct Icp {
     bool ok = false;
+    bool pruned = false;  // ended early: after refine_prune_iterations it scored below the best start
     Pose2 estimate;
     int matches = 0, iterations = 0;
     Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // unscaled information (sum of J^T J)
     double residual2 = 0, weight_sum = 0;
   };
+  // ICP from `start`. With prune_below > 0: after refine_prune_iterations iterations (if it has not
+  // converged by then), a KernelScore of the estimate below prune_below ends it: not ok, pruned.
   Icp Align(const Pose2& start, const std::vector<Eigen::Vector2d>& points,
-            const std::vector<Eigen::Vector2d>& normals) const;
+            const std::vector<Eigen::Vector2d>& normals, double prune_below = 0) const;
   // Sum over every stride-th point of 1 - (d / match_distance)^2, d its distance to the map.
   double Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
   // A search's candidates: the local maxima of its score over the heading, best first.
@@ -353,9 +373,10 @@ class LaserSlam {
                                      size_t stride) const;
   // Sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest map point.
   double KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
-  // ICP from each of the first refine_starts candidates; the result with the best KernelScore.
+  // ICP from each of the first refine_starts candidates; the result with the best KernelScore
+  // (the starts run and pruned counted in *u).
   Icp RefineBest(const std::vector<Candidate>& candidates, const std::vector<Eigen::Vector2d>& points,
-                 const std::vector<Eigen::Vector2d>& normals, Pose2* start) const;
+                 const std::vector<Eigen::Vector2d>& normals, Pose2* start, LaserSlamUpdate* u) const;
 
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
