@@ -307,20 +307,8 @@ int Main(int argc, char** argv) {
        << ",\n  \"icp_slam_dense_vs_laser_slam_rms_m\": " << (dense ? dense_cmp->difference.rmse_m : -1)
        << ",\n  \"icp_slam_dense_map_consistency_m\": " << (dense ? dense_consistency->median_m : -1)
        << ",\n  \"icp_slam_dense_ms_per_scan\": " << (dense ? dense->ms_per_scan() : -1)
-       << ",\n  \"laser_slam_ms_per_scan_runs\": [" <<
-      [&] {
-        std::ostringstream v;
-        for (size_t i = 0; i < ours_runs.size(); ++i) v << (i ? ", " : "") << ours_runs[i];
-        return v.str();
-      }()
-       << "]"
-       << ",\n  \"icp_slam_ms_per_scan_runs\": [" <<
-      [&] {
-        std::ostringstream v;
-        for (size_t i = 0; i < icp_ms.size(); ++i) v << (i ? ", " : "") << icp_ms[i];
-        return v.str();
-      }()
-       << "]"
+       << ",\n  \"laser_slam_ms_per_scan_runs\": [" << eval::JsonNumbers(ours_runs) << "]"
+       << ",\n  \"icp_slam_ms_per_scan_runs\": [" << eval::JsonNumbers(icp_ms) << "]"
        << ",\n  \"sim_scene\": " << JsonString(sim.scene_name) << ",\n  \"sim_beams\": " << sim.log.beams
        << ",\n  \"sim_scans\": " << sim.log.scans << ",\n  \"sim_laser_slam_ms_per_scan\": " << sim_ms
        << ",\n  \"sim_laser_slam_scans_per_s\": " << sim_scans_per_s

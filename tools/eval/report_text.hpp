@@ -3,6 +3,7 @@
 #include <iomanip>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace snapnav::eval {
 
@@ -21,6 +22,13 @@ inline std::string JsonString(const std::string& s) {
     out += c;
   }
   return out + "\"";
+}
+
+// v as the inside of a JSON array of numbers: "1.5, 2, 3".
+inline std::string JsonNumbers(const std::vector<double>& v) {
+  std::ostringstream s;
+  for (size_t i = 0; i < v.size(); ++i) s << (i ? ", " : "") << v[i];
+  return s.str();
 }
 
 }  // namespace snapnav::eval

@@ -219,22 +219,18 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       last_odometry_utime = s.utime;
       return;
     }
-    const auto t0 = Clock::now();
-    fused.Update(s.points);
-    const double ms = Ms(t0);
-    fused_scan_ms += ms;
-    fused_max_ms = std::max(fused_max_ms, ms);
-    ++fused_result.updates;
-    fused_result.poses.push_back(fused.pose());
-    {
-      const auto t1 = Clock::now();
-      no_vision.Update(s.points);
-      const double ms1 = Ms(t1);
-      no_vision_ms += ms1;
-      no_vision_max_ms = std::max(no_vision_max_ms, ms1);
-      ++no_vision_result.updates;
-      no_vision_result.poses.push_back(no_vision.pose());
-    }
+    // A scan for fused SLAM and for its ablation, each timed.
+    const auto update = [&](nav::FusedSlam* f, MethodResult* result, double* total_ms, double* max_ms) {
+      const auto t0 = Clock::now();
+      f->Update(s.points);
+      const double ms = Ms(t0);
+      *total_ms += ms;
+      *max_ms = std::max(*max_ms, ms);
+      ++result->updates;
+      result->poses.push_back(f->pose());
+    };
+    update(&fused, &fused_result, &fused_scan_ms, &fused_max_ms);
+    update(&no_vision, &no_vision_result, &no_vision_ms, &no_vision_max_ms);
     out.fused_sigma.push_back(fused.covariance().diagonal().cwiseMax(0.0).cwiseSqrt());
     out.fused_covariance.push_back(fused.covariance());
     out.fused_occluded_fraction.push_back(fused.occluded_fraction());
