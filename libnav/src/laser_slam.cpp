@@ -387,13 +387,17 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   // The block, where it spans tiles; its rows bw apart, 8 nodes or more longer than the block (for
   // the copies of 8 nodes at a time below).
   const int bw = ((w + 7) & ~7) + 8;
-  std::vector<uint8_t> block(static_cast<size_t>(bw) * w + kRasterPadding);
+  // (Called for every heading of every scan's search: the buffers are kept, zeroed each call.)
+  thread_local std::vector<uint8_t> block;
+  block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);
   const int cells = shifts * shifts;
-  std::vector<float> acc(static_cast<size_t>(cells), 0.0f);  // per shift, in units of 1/255
+  thread_local std::vector<float> acc;  // per shift, in units of 1/255
+  acc.assign(static_cast<size_t>(cells), 0.0f);
 #if defined(__SSE2__)
   const bool simd = step_nodes == 2;
   const int groups = (shifts + 3) / 4;
-  std::vector<Lanes> acc4(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
+  thread_local std::vector<Lanes> acc4;
+  acc4.assign(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
 #endif
   for (const Eigen::Vector2d& p : points) {
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
