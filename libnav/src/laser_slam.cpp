@@ -154,7 +154,8 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_r
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
   const uint64_t fine = Key(static_cast<int64_t>(std::floor(p.x() / resolution_)),
                             static_cast<int64_t>(std::floor(p.y() / resolution_)));
-  if (!cells_.emplace(fine, static_cast<uint32_t>(points_.size())).second) return false;
+  // (try_emplace: no node allocated when the cell is taken, as it mostly is.)
+  if (!cells_.try_emplace(fine, static_cast<uint32_t>(points_.size())).second) return false;
   buckets_[Key(static_cast<int64_t>(std::floor(p.x() / bucket_)), static_cast<int64_t>(std::floor(p.y() / bucket_)))]
       .push_back(static_cast<uint32_t>(points_.size()));
   if (lookup_radius_ > 0) AddToLookup(p, static_cast<uint32_t>(points_.size()));
@@ -192,17 +193,22 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
   if (slot == tiles_.size()) {
     tiles_.emplace_back();
     Tile& t = tiles_.back();
-    for (int c = 0; c < kTile * kTile; ++c) {
-      std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
-      std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
-    }
-    if (has_likelihood()) {
-      rasters_.emplace_back();
-      std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
-      std::fill(std::begin(rasters_.back().padding), std::end(rasters_.back().padding), uint8_t{0});
+    for (int c = 0; c < kTile * kTile; ++c) std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
+    for (int k = 0; k < kLookupCandidates; ++k) {
+      std::fill(std::begin(t.d2[k]), std::end(t.d2[k]), std::numeric_limits<float>::infinity());
     }
   }
   return &tiles_[slot];
+}
+
+PointGridMap::RasterTile* PointGridMap::RasterAt(int64_t tx, int64_t ty) {
+  const uint32_t slot = raster_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(rasters_.size()));
+  if (slot == rasters_.size()) {
+    rasters_.emplace_back();
+    std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
+    std::fill(std::begin(rasters_.back().padding), std::end(rasters_.back().padding), uint8_t{0});
+  }
+  return &rasters_[slot];
 }
 
 void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
@@ -229,24 +235,50 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
         const int64_t lo = std::max(cx0, static_cast<int64_t>(std::floor(centre - half)) - 1);
         const int64_t hi = std::min(cx1, static_cast<int64_t>(std::floor(centre + half)) + 1);
         const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
-        for (int64_t cx = lo; cx <= hi; ++cx) {
+        const float* farthest = tile->d2[kLookupCandidates - 1] + row - (tx << kTileBits);  // by cx
+        // Inserts into cell cx's candidates, nearest first.
+        const auto insert = [&](int64_t cx, double d2) {
+          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          uint32_t* idx = tile->index[c];
+          const float f = static_cast<float>(d2);
+          int k = kLookupCandidates - 1;
+          while (k > 0 && f < tile->d2[k - 1][c]) --k;
+          for (int j = kLookupCandidates - 1; j > k; --j) {
+            tile->d2[j][c] = tile->d2[j - 1][c];
+            idx[j] = idx[j - 1];
+          }
+          tile->d2[k][c] = f;
+          idx[k] = index;
+        };
+        int64_t cx = lo;
+#if defined(__SSE2__)
+        // Two cells at a time: the same double and float operations as below, then the (few)
+        // insertions one by one.
+        const __m128d half_v = _mm_set1_pd(0.5), cell_v = _mm_set1_pd(lookup_cell_), px_v = _mm_set1_pd(p.x());
+        const __m128d dy2_v = _mm_set1_pd(dy2), reach2_v = _mm_set1_pd(reach2);
+        for (; cx + 1 <= hi; cx += 2) {
+          const __m128d x_v = _mm_set_pd(static_cast<double>(cx + 1), static_cast<double>(cx));
+          const __m128d dx_v = _mm_sub_pd(_mm_mul_pd(_mm_add_pd(x_v, half_v), cell_v), px_v);
+          const __m128d d2_v = _mm_add_pd(_mm_mul_pd(dx_v, dx_v), dy2_v);
+          const __m128 f_v = _mm_cvtpd_ps(d2_v);  // lanes 0, 1
+          const __m128 far_v = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(farthest + cx)));
+          const int near = _mm_movemask_ps(_mm_cmplt_ps(f_v, far_v)) & 3;
+          const int within = ~_mm_movemask_pd(_mm_cmpgt_pd(d2_v, reach2_v)) & 3;
+          const int hits = near & within;
+          if (!hits) continue;
+          alignas(16) double d2s[2];
+          _mm_store_pd(d2s, d2_v);
+          if (hits & 1) insert(cx, d2s[0]);
+          if (hits & 2) insert(cx + 1, d2s[1]);
+        }
+#endif
+        for (; cx <= hi; ++cx) {
           const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
           const double d2 = dx * dx + dy2;
           if (d2 > reach2) continue;
-          const int c = row + static_cast<int>(cx - (tx << kTileBits));
-          // Insert into the cell's candidates, nearest first (mostly it is farther than all three).
-          float* dist = tile->d2[c];
-          const float f = static_cast<float>(d2);
-          if (!(f < dist[kLookupCandidates - 1])) continue;
-          uint32_t* idx = tile->index[c];
-          int k = kLookupCandidates - 1;
-          while (k > 0 && f < dist[k - 1]) --k;
-          for (int j = kLookupCandidates - 1; j > k; --j) {
-            dist[j] = dist[j - 1];
-            idx[j] = idx[j - 1];
-          }
-          dist[k] = static_cast<float>(d2);
-          idx[k] = index;
+          // Mostly the point is farther than all three candidates.
+          if (!(static_cast<float>(d2) < farthest[cx])) continue;
+          insert(cx, d2);
         }
       }
     }
@@ -269,34 +301,44 @@ void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
   // Nodes sit at the centres of cells of node_: node i at (i + 0.5) node_.
   const int64_t x0 = FloorToInt((p.x() - reach) / node_), x1 = FloorToInt((p.x() + reach) / node_);
   const int64_t y0 = FloorToInt((p.y() - reach) / node_), y1 = FloorToInt((p.y() + reach) / node_);
-  for (int64_t tx = x0 >> kNodeBits; tx <= x1 >> kNodeBits; ++tx) {
-    for (int64_t ty = y0 >> kNodeBits; ty <= y1 >> kNodeBits; ++ty) {
-      TileAt(tx, ty);
-      RasterTile& raster = rasters_[tile_index_.Find(Key(tx, ty))];
-      const int64_t ix0 = std::max(x0, tx << kNodeBits), ix1 = std::min(x1, ((tx + 1) << kNodeBits) - 1);
-      const int64_t iy0 = std::max(y0, ty << kNodeBits), iy1 = std::min(y1, ((ty + 1) << kNodeBits) - 1);
+  // The box's bytes (0 beyond reach: a node within it is at least 255 exp(-4.5), 3), computed once.
+  const int nx = static_cast<int>(x1 - x0 + 1), ny = static_cast<int>(y1 - y0 + 1);
+  thread_local std::vector<uint8_t> bytes;
+  bytes.assign(static_cast<size_t>(nx) * ny, 0);
+  for (int64_t iy = y0; iy <= y1; ++iy) {
+    const double dy = (static_cast<double>(iy) + 0.5) * node_ - p.y();
+    uint8_t* out = bytes.data() + (iy - y0) * nx;
+    for (int64_t ix = x0; ix <= x1; ++ix) {
+      const double dx = (static_cast<double>(ix) + 0.5) * node_ - p.x();
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > reach2) continue;
+      const double x = d2 * inv2s2;
+      const int bin = static_cast<int>(x * (kKernelBins / kKernelMaxX));
+      const int16_t byte = bin < kKernelBins ? kernel_bytes_[static_cast<size_t>(bin)] : int16_t{-1};
+      out[ix - x0] = byte >= 0 ? static_cast<uint8_t>(byte) : static_cast<uint8_t>(std::lround(255 * std::exp(-x)));
+    }
+  }
+  // Into every tile whose nodes or apron (kRasterRow nodes from its origin) meet the box: the same
+  // value in each copy of a node.
+  for (int64_t tx = (x0 - kRasterApron) >> kNodeBits; tx <= x1 >> kNodeBits; ++tx) {
+    for (int64_t ty = (y0 - kRasterApron) >> kNodeBits; ty <= y1 >> kNodeBits; ++ty) {
+      RasterTile& raster = *RasterAt(tx, ty);
+      const int64_t ox = tx << kNodeBits, oy = ty << kNodeBits;  // its first node
+      const int64_t ix0 = std::max(x0, ox), ix1 = std::min(x1, ox + kRasterRow - 1);
+      const int64_t iy0 = std::max(y0, oy), iy1 = std::min(y1, oy + kRasterRow - 1);
       for (int64_t iy = iy0; iy <= iy1; ++iy) {
-        const double dy = (static_cast<double>(iy) + 0.5) * node_ - p.y();
-        uint8_t* row = raster.node + (static_cast<int>(iy - (ty << kNodeBits)) << kNodeBits);
-        for (int64_t ix = ix0; ix <= ix1; ++ix) {
-          const double dx = (static_cast<double>(ix) + 0.5) * node_ - p.x();
-          const double d2 = dx * dx + dy * dy;
-          if (d2 > reach2) continue;
-          uint8_t& v = row[ix - (tx << kNodeBits)];
-          const double x = d2 * inv2s2;
-          const int bin = static_cast<int>(x * (kKernelBins / kKernelMaxX));
-          const int16_t byte = bin < kKernelBins ? kernel_bytes_[static_cast<size_t>(bin)] : int16_t{-1};
-          v = std::max(v, byte >= 0 ? static_cast<uint8_t>(byte) : static_cast<uint8_t>(std::lround(255 * std::exp(-x))));
-        }
+        uint8_t* row = raster.node + static_cast<ptrdiff_t>(iy - oy) * kRasterRow - ox;
+        const uint8_t* in = bytes.data() + (iy - y0) * nx - x0;
+        for (int64_t ix = ix0; ix <= ix1; ++ix) row[ix] = std::max(row[ix], in[ix]);
       }
     }
   }
 }
 
 float PointGridMap::Node(int64_t ix, int64_t iy) const {
-  const uint32_t tile = tile_index_.Find(Key(ix >> kNodeBits, iy >> kNodeBits));
+  const uint32_t tile = raster_index_.Find(Key(ix >> kNodeBits, iy >> kNodeBits));
   if (tile == kNone) return 0.0f;
-  return rasters_[tile].node[((iy & (kNodes - 1)) << kNodeBits) | (ix & (kNodes - 1))];
+  return rasters_[tile].node[(iy & (kNodes - 1)) * kRasterRow + (ix & (kNodes - 1))];
 }
 
 double PointGridMap::Likelihood(const Eigen::Vector2d& p) const {
@@ -378,7 +420,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     const uint64_t key = Key(tx, ty);
     if (!cached || key != cached_key) {
       cached_key = key;
-      const uint32_t tile = tile_index_.Find(key);
+      const uint32_t tile = raster_index_.Find(key);
       cached_nodes = tile == kNone ? nullptr : rasters_[tile].node;
       cached = true;
     }
@@ -389,7 +431,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   const int bw = ((w + 7) & ~7) + 8;
   // (Called for every heading of every scan's search: the buffers are kept, zeroed each call.)
   thread_local std::vector<uint8_t> block;
-  block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);
+  block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);  // (used only by blocks wider than the apron)
   const int cells = shifts * shifts;
   thread_local std::vector<float> acc;  // per shift, in units of 1/255
   acc.assign(static_cast<size_t>(cells), 0.0f);
@@ -398,7 +440,12 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   const int groups = (shifts + 3) / 4;
   thread_local std::vector<Lanes> acc4;
   acc4.assign(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
+  const int read_x = simd ? std::max(w, 8 * groups) : w;  // nodes of a block row read (SSE2: 8 at a time)
+#else
+  const int read_x = w;
 #endif
+  // Whether a block is read in place: it fits in the apron of the tile it starts in.
+  const bool in_place = read_x <= kRasterApron && w <= kRasterApron;
   for (const Eigen::Vector2d& p : points) {
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
     const int64_t i = FloorToInt(u), j = FloorToInt(v);
@@ -408,14 +455,15 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     const int64_t tx0 = lx >> kNodeBits, tx1 = hx >> kNodeBits, ty0 = ly >> kNodeBits, ty1 = hy >> kNodeBits;
     const uint8_t* base;  // the block's first node
     int row_stride;     // nodes from one block row to the next
-    if (tx0 == tx1 && ty0 == ty1) {
-      // One tile holds the block (mostly: a tile is kNodes nodes wide): read it in place.
+    if (in_place || (tx0 == tx1 && ty0 == ty1)) {
+      // The tile the block starts in holds it (with its apron): read it in place.
       const uint8_t* nodes = nodes_of(tx0, ty0);
       if (!nodes) continue;  // no map point within reach of any shift
-      base = nodes + ((ly & mask) << kNodeBits) + (lx & mask);
-      row_stride = kNodes;
+      base = nodes + (ly & mask) * kRasterRow + (lx & mask);
+      row_stride = kRasterRow;
     } else {
-      // The block spans 2 or 4 tiles: copied together, row pieces of each tile (zeros where there is none).
+      // A block wider than the apron that spans 2 or 4 tiles: copied together, row pieces of each
+      // tile (zeros where there is none).
       bool any = false;
       for (int64_t ty = ty0; ty <= ty1; ++ty) {
         const int64_t y0 = std::max(ly, ty << kNodeBits), y1 = std::min(hy, ((ty + 1) << kNodeBits) - 1);
@@ -426,10 +474,9 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
           any = any || nodes;
           for (int64_t iy = y0; iy <= y1; ++iy) {
             // 8 nodes at a time: a piece may write (and read) up to 7 nodes past its end, into the
-            // next piece of the row (copied after it) or the row's slack (and the tile's next row
-            // or its padding).
+            // next piece of the row (copied after it) or the row's slack (and the tile's apron).
             uint8_t* to = block.data() + (iy - ly) * bw + (x0 - lx);
-            const uint8_t* from = nodes ? nodes + ((iy & mask) << kNodeBits) + (x0 & mask) : nullptr;
+            const uint8_t* from = nodes ? nodes + (iy & mask) * kRasterRow + (x0 & mask) : nullptr;
             for (size_t k = 0; k < len; k += 8) {
               uint64_t eight = 0;
               if (from) std::memcpy(&eight, from + k, 8);

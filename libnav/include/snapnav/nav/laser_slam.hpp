@@ -125,13 +125,20 @@ class PointGridMap {
   struct Tile {
     // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
     uint32_t index[kTile * kTile][kLookupCandidates];
-    float d2[kTile * kTile][kLookupCandidates];  // their squared distances from the cell centre [m^2]
+    // Their squared distances from the cell centre [m^2], candidate-major: d2[kLookupCandidates - 1]
+    // (the farthest, the one a new point must beat) is one row of floats for the insertion's test.
+    float d2[kLookupCandidates][kTile * kTile];
   };
-  // The likelihood raster's nodes in a tile, row by row (y), in units of 1/255 (a byte each: the
-  // raster of the area a scan covers stays in the cache). rasters_[i] belongs to tiles_[i].
+  // The likelihood raster's nodes in a tile of kNodes x kNodes, row by row (y), in units of 1/255
+  // (a byte each: the raster of the area a scan covers stays in the cache), and an apron: the
+  // first kRasterApron nodes of the tiles after it in x, in y and in both, copies kept as points
+  // are added. A search's block of nodes (AddShiftedLikelihoods) that starts in a tile then lies
+  // in it, read in place, when it is at most kRasterApron nodes wide.
+  static constexpr int kRasterApron = 40;  // shifts of up to +-8 cells (0.4 m of 0.05 m cells)
+  static constexpr int kRasterRow = kNodes + kRasterApron;
   struct RasterTile {
-    uint8_t node[kNodes * kNodes];
-    uint8_t padding[8];  // AddShiftedLikelihoods reads up to 6 nodes past a block
+    uint8_t node[kRasterRow * kRasterRow];
+    uint8_t padding[8];  // AddShiftedLikelihoods reads up to 7 nodes past a copied row piece
   };
   static constexpr size_t kRasterPadding = 8;
   static constexpr uint32_t kNone = 0xffffffffu;
@@ -152,13 +159,16 @@ class PointGridMap {
   void AddToLookup(const Eigen::Vector2d& p, uint32_t index);
   void AddToLikelihood(const Eigen::Vector2d& p);
   Tile* TileAt(int64_t tx, int64_t ty);  // created (empty) if absent
+  RasterTile* RasterAt(int64_t tx, int64_t ty);  // created (zeros) if absent
   float Node(int64_t ix, int64_t iy) const;  // a raster node (0 where there is no tile)
   double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_, inv_lookup_cell_;
   std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
   std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
-  std::deque<RasterTile> rasters_;  // with a likelihood raster: one per tile
+  TileTable raster_index_;          // raster tile -> index in rasters_
+  std::deque<RasterTile> rasters_;  // with a likelihood raster: the tiles of kNodes x kNodes nodes
+                                    // with a node, or an apron node, within reach of a point
   // The raster's byte by bins of d^2 / (2 sigma^2) (-1: a rounding boundary in the bin, computed).
   static constexpr int kKernelBins = 4096;
   static constexpr double kKernelMaxX = 4.5;
