@@ -193,9 +193,9 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
   if (slot == tiles_.size()) {
     tiles_.emplace_back();
     Tile& t = tiles_.back();
-    for (int c = 0; c < kTile * kTile; ++c) std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
-    for (int k = 0; k < kLookupCandidates; ++k) {
-      std::fill(std::begin(t.d2[k]), std::end(t.d2[k]), std::numeric_limits<float>::infinity());
+    for (int c = 0; c < kTile * kTile; ++c) {
+      std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
+      std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
     }
   }
   return &tiles_[slot];
@@ -235,50 +235,24 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
         const int64_t lo = std::max(cx0, static_cast<int64_t>(std::floor(centre - half)) - 1);
         const int64_t hi = std::min(cx1, static_cast<int64_t>(std::floor(centre + half)) + 1);
         const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
-        const float* farthest = tile->d2[kLookupCandidates - 1] + row - (tx << kTileBits);  // by cx
-        // Inserts into cell cx's candidates, nearest first.
-        const auto insert = [&](int64_t cx, double d2) {
-          const int c = row + static_cast<int>(cx - (tx << kTileBits));
-          uint32_t* idx = tile->index[c];
-          const float f = static_cast<float>(d2);
-          int k = kLookupCandidates - 1;
-          while (k > 0 && f < tile->d2[k - 1][c]) --k;
-          for (int j = kLookupCandidates - 1; j > k; --j) {
-            tile->d2[j][c] = tile->d2[j - 1][c];
-            idx[j] = idx[j - 1];
-          }
-          tile->d2[k][c] = f;
-          idx[k] = index;
-        };
-        int64_t cx = lo;
-#if defined(__SSE2__)
-        // Two cells at a time: the same double and float operations as below, then the (few)
-        // insertions one by one.
-        const __m128d half_v = _mm_set1_pd(0.5), cell_v = _mm_set1_pd(lookup_cell_), px_v = _mm_set1_pd(p.x());
-        const __m128d dy2_v = _mm_set1_pd(dy2), reach2_v = _mm_set1_pd(reach2);
-        for (; cx + 1 <= hi; cx += 2) {
-          const __m128d x_v = _mm_set_pd(static_cast<double>(cx + 1), static_cast<double>(cx));
-          const __m128d dx_v = _mm_sub_pd(_mm_mul_pd(_mm_add_pd(x_v, half_v), cell_v), px_v);
-          const __m128d d2_v = _mm_add_pd(_mm_mul_pd(dx_v, dx_v), dy2_v);
-          const __m128 f_v = _mm_cvtpd_ps(d2_v);  // lanes 0, 1
-          const __m128 far_v = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(farthest + cx)));
-          const int near = _mm_movemask_ps(_mm_cmplt_ps(f_v, far_v)) & 3;
-          const int within = ~_mm_movemask_pd(_mm_cmpgt_pd(d2_v, reach2_v)) & 3;
-          const int hits = near & within;
-          if (!hits) continue;
-          alignas(16) double d2s[2];
-          _mm_store_pd(d2s, d2_v);
-          if (hits & 1) insert(cx, d2s[0]);
-          if (hits & 2) insert(cx + 1, d2s[1]);
-        }
-#endif
-        for (; cx <= hi; ++cx) {
+        for (int64_t cx = lo; cx <= hi; ++cx) {
           const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
           const double d2 = dx * dx + dy2;
           if (d2 > reach2) continue;
-          // Mostly the point is farther than all three candidates.
-          if (!(static_cast<float>(d2) < farthest[cx])) continue;
-          insert(cx, d2);
+          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          // Insert into the cell's candidates, nearest first (mostly it is farther than all three).
+          float* dist = tile->d2[c];
+          const float f = static_cast<float>(d2);
+          if (!(f < dist[kLookupCandidates - 1])) continue;
+          uint32_t* idx = tile->index[c];
+          int k = kLookupCandidates - 1;
+          while (k > 0 && f < dist[k - 1]) --k;
+          for (int j = kLookupCandidates - 1; j > k; --j) {
+            dist[j] = dist[j - 1];
+            idx[j] = idx[j - 1];
+          }
+          dist[k] = static_cast<float>(d2);
+          idx[k] = index;
         }
       }
     }

@@ -125,9 +125,7 @@ class PointGridMap {
   struct Tile {
     // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
     uint32_t index[kTile * kTile][kLookupCandidates];
-    // Their squared distances from the cell centre [m^2], candidate-major: d2[kLookupCandidates - 1]
-    // (the farthest, the one a new point must beat) is one row of floats for the insertion's test.
-    float d2[kLookupCandidates][kTile * kTile];
+    float d2[kTile * kTile][kLookupCandidates];
   };
   // The likelihood raster's nodes in a tile of kNodes x kNodes, row by row (y), in units of 1/255
   // (a byte each: the raster of the area a scan covers stays in the cache), and an apron: the
