@@ -193,10 +193,8 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
   if (slot == tiles_.size()) {
     tiles_.emplace_back();
     Tile& t = tiles_.back();
-    for (int c = 0; c < kTile * kTile; ++c) {
-      std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
-      std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
-    }
+    std::fill(&t.index[0][0], &t.index[0][0] + kTile * kTile * kLookupCandidates, kNone);
+    std::fill(&t.d2[0][0], &t.d2[0][0] + kTile * kTile * kLookupCandidates, std::numeric_limits<float>::infinity());
   }
   return &tiles_[slot];
 }
@@ -204,9 +202,7 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
 PointGridMap::RasterTile* PointGridMap::RasterAt(int64_t tx, int64_t ty) {
   const uint32_t slot = raster_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(rasters_.size()));
   if (slot == rasters_.size()) {
-    rasters_.emplace_back();
-    std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
-    std::fill(std::begin(rasters_.back().padding), std::end(rasters_.back().padding), uint8_t{0});
+    rasters_.emplace_back();  // value-initialised: zeros
   }
   return &rasters_[slot];
 }
@@ -769,7 +765,10 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       // to the prediction.
       const double c = std::cos(r.estimate.theta_rad), s = std::sin(r.estimate.theta_rad);
       for (size_t k = 0; k < src.size(); ++k) {
-        r.residual2 += (r.estimate.Transform(src[k]) - dst[k]).squaredNorm() / 2.0;
+        // (Pose2::Transform's arithmetic, its sine and cosine computed once.)
+        const Eigen::Vector2d at(r.estimate.x_m + c * src[k].x() - s * src[k].y(),
+                                 r.estimate.y_m + s * src[k].x() + c * src[k].y());
+        r.residual2 += (at - dst[k]).squaredNorm() / 2.0;
         r.weight_sum += 1;
         const Eigen::Vector2d n = Rotate(c, s, normals[index[k]]);
         const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());

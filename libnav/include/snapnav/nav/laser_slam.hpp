@@ -123,6 +123,7 @@ class PointGridMap {
  private:
   static constexpr int kNodeBits = kTileBits + kLikelihoodSubBits, kNodes = 1 << kNodeBits;
   struct Tile {
+    Tile() {}  // (not zeroed: TileAt fills it)
     // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
     uint32_t index[kTile * kTile][kLookupCandidates];
     float d2[kTile * kTile][kLookupCandidates];
