@@ -118,6 +118,16 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
   return points;
 }
 
+namespace {
+
+// floor(v) as an integer, without the library call (the lookup's hot path).
+int64_t FloorToInt(double v) {
+  const auto i = static_cast<int64_t>(v);
+  return i - (static_cast<double>(i) > v);
+}
+
+}  // namespace
+
 PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m, double lookup_cell_m,
                            double likelihood_sigma_m)
     : resolution_(resolution_m),
@@ -152,13 +162,12 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_r
 }
 
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
-  const uint64_t fine = Key(static_cast<int64_t>(std::floor(p.x() / resolution_)),
-                            static_cast<int64_t>(std::floor(p.y() / resolution_)));
-  // (try_emplace: no node allocated when the cell is taken, as it mostly is.)
-  if (!cells_.try_emplace(fine, static_cast<uint32_t>(points_.size())).second) return false;
-  buckets_[Key(static_cast<int64_t>(std::floor(p.x() / bucket_)), static_cast<int64_t>(std::floor(p.y() / bucket_)))]
-      .push_back(static_cast<uint32_t>(points_.size()));
-  if (lookup_radius_ > 0) AddToLookup(p, static_cast<uint32_t>(points_.size()));
+  const uint64_t fine = Key(FloorToInt(p.x() / resolution_), FloorToInt(p.y() / resolution_));
+  // (Mostly the cell is taken: one probe of an open-addressing table.)
+  const auto index = static_cast<uint32_t>(points_.size());
+  if (cells_.FindOrAdd(fine, index) != index) return false;
+  buckets_[Key(FloorToInt(p.x() / bucket_), FloorToInt(p.y() / bucket_))].push_back(index);
+  if (lookup_radius_ > 0) AddToLookup(p, index);
   if (has_likelihood()) AddToLikelihood(p);
   points_.push_back(p);
   normals_.push_back(normal);
@@ -254,16 +263,6 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
     }
   }
 }
-
-namespace {
-
-// floor(v) as an integer, without the library call (the lookup's hot path).
-int64_t FloorToInt(double v) {
-  const auto i = static_cast<int64_t>(v);
-  return i - (static_cast<double>(i) > v);
-}
-
-}  // namespace
 
 void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
   const double reach = 3 * likelihood_sigma_, reach2 = reach * reach;

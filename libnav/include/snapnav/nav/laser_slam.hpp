@@ -161,8 +161,9 @@ class PointGridMap {
   RasterTile* RasterAt(int64_t tx, int64_t ty);  // created (zeros) if absent
   float Node(int64_t ix, int64_t iy) const;  // a raster node (0 where there is no tile)
   double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_, inv_lookup_cell_;
-  std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
+
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
+  TileTable cells_;                                              // fine cell -> index in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
   std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
   TileTable raster_index_;          // raster tile -> index in rasters_
