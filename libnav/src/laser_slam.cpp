@@ -398,9 +398,8 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   // The block, where it spans tiles; its rows bw apart, 8 nodes or more longer than the block (for
   // the copies of 8 nodes at a time below).
   const int bw = ((w + 7) & ~7) + 8;
-  // (Called for every heading of every scan's search: the buffers are kept, zeroed each call.)
+  // (Called for every heading of every scan's search: the buffers are kept, zeroed each call as needed.)
   thread_local std::vector<uint8_t> block;
-  block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);  // (used only by blocks wider than the apron)
   const int cells = shifts * shifts;
   thread_local std::vector<float> acc;  // per shift, in units of 1/255
   acc.assign(static_cast<size_t>(cells), 0.0f);
@@ -415,6 +414,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
 #endif
   // Whether a block is read in place: it fits in the apron of the tile it starts in.
   const bool in_place = read_x <= kRasterApron && w <= kRasterApron;
+  if (!in_place) block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);
   for (const Eigen::Vector2d& p : points) {
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
     const int64_t i = FloorToInt(u), j = FloorToInt(v);
@@ -981,7 +981,8 @@ LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
     ++u->starts;
     u->pruned += icp.pruned;
     if (!icp.ok) continue;
-    const double score = n > 1 ? KernelScore(icp.estimate, points, 1) : 0.0;
+    ScoreEstimate(points, &icp);
+    const double score = n > 1 ? icp.kernel : 0.0;
     if (score > best_score) {
       best_score = score;
       best = icp;
@@ -993,6 +994,37 @@ LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
     best = Align(*start, points, normals);
   }
   return best;
+}
+
+void LaserSlam::ScoreEstimate(const std::vector<Eigen::Vector2d>& points, Icp* icp) const {
+  const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
+  const double tau = options_.match_distance_m, half = 0.5 * options_.match_distance_m;
+  const double limit = std::max({reach, tau, half});
+  icp->scored = true;
+  if (!(limit <= map_.lookup_radius_m())) {  // (the limits would take different lookups)
+    icp->kernel = KernelScore(icp->estimate, points, 1);
+    icp->score = Score(icp->estimate, points, 1);
+    icp->fit = Fit(icp->estimate, points, 1);
+    return;
+  }
+  // The distance tests as the lookups make them: d <= limit^2.
+  const double reach2 = reach * reach, tau2 = tau * tau, half2 = half * half;
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(icp->estimate), points, 1, limit, &world, &nearest);
+  double kernel = 0, score = 0;
+  size_t near = 0;
+  for (size_t i = 0; i < world.size(); ++i) {
+    const int j = nearest[i];
+    if (j < 0) continue;
+    const double d = (map_.points()[static_cast<size_t>(j)] - world[i]).squaredNorm();
+    if (d <= reach2) kernel += std::exp(-d * inv2s2);
+    if (d <= tau2) score += 1.0 - d / tau2;
+    if (d <= half2) ++near;
+  }
+  icp->kernel = kernel;
+  icp->score = score;
+  icp->fit = world.empty() ? 0.0 : static_cast<double>(near) / static_cast<double>(world.size());
 }
 
 double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
@@ -1122,7 +1154,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     if (candidates.empty()) candidates.push_back({pose_, 0});
     Icp icp = RefineBest(candidates, points, normals, &start, &u);
     u.start = start;
-    u.fit = icp.ok ? Fit(icp.estimate, points, 1) : 0.0;
+    u.fit = !icp.ok ? 0.0 : icp.scored ? icp.fit : Fit(icp.estimate, points, 1);
     if (u.fit < options_.recovery_fit && options_.search_window_max_rad >= step) {
       // Poor fit: search the whole window, and positions around the prediction, then align again.
       const std::vector<Candidate> again_candidates =
@@ -1132,7 +1164,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
                                       points, stride);
       Pose2 again_start = pose_;
       const Icp again = RefineBest(again_candidates, points, normals, &again_start, &u);
-      const double again_fit = again.ok ? Fit(again.estimate, points, 1) : 0.0;
+      const double again_fit = !again.ok ? 0.0 : again.scored ? again.fit : Fit(again.estimate, points, 1);
       ++u.recoveries;
       if (again_fit > u.fit) {
         icp = again;
@@ -1161,7 +1193,8 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
         // The update should sit where the scan fits: if it scores clearly below the ICP pose
         // against the map, the prediction was off by more than its covariance allowed (odometry
         // jitter along a corridor, a late turn); widen it by the innovation and update again.
-        const double at_icp = Score(icp.estimate, points, 1), at_update = Score(pose_, points, 1);
+        const double at_icp = icp.scored ? icp.score : Score(icp.estimate, points, 1);
+        const double at_update = Score(pose_, points, 1);
         if (at_update < (1 - options_.update_score_margin) * at_icp) {
           const Eigen::Vector3d off(icp.estimate.x_m - predicted.x_m, icp.estimate.y_m - predicted.y_m,
                                     WrapAngle(icp.estimate.theta_rad - predicted.theta_rad));

@@ -358,6 +358,9 @@ class LaserSlam {
     int matches = 0, iterations = 0;
     Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // unscaled information (sum of J^T J)
     double residual2 = 0, weight_sum = 0;
+    // From RefineBest: KernelScore, Score and Fit of the estimate (every point), if measured.
+    bool scored = false;
+    double kernel = 0, score = 0, fit = 0;
   };
   // ICP from `start`. With prune_below > 0: after refine_prune_iterations iterations (if it has not
   // converged by then), a KernelScore of the estimate below prune_below ends it: not ok, pruned.
@@ -390,6 +393,10 @@ class LaserSlam {
 
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
+  // KernelScore, Score and Fit of every point at icp->estimate into icp's kernel, score and fit:
+  // the same figures from one lookup (its nearest points within the largest of their distances;
+  // a point's nearest within a smaller one is the same point, or none).
+  void ScoreEstimate(const std::vector<Eigen::Vector2d>& points, Icp* icp) const;
 
   LaserSlamOptions options_;
   Pose2 pose_;
