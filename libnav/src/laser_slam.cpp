@@ -506,15 +506,16 @@ void PointGridMap::LookupIndices(const Eigen::Vector2d* q, size_t n, double max_
     for (size_t i = 0; i < n; ++i) out[i] = NearestIndex(q[i], max_distance_m);
     return;
   }
-  // 1. Each point's cell candidates (nullptr: no tile), the tile of the last point remembered.
-  thread_local std::vector<const uint32_t*> cells;
-  cells.resize(n);
+  // Each point's cell candidates (nullptr: no tile) are located, and prefetched, kAhead points
+  // before they are resolved (the memory reads overlap); the tile of the last point remembered.
+  constexpr size_t kAhead = 8;
+  const uint32_t* ahead[kAhead];
   uint64_t cached_key = 0;
   const Tile* cached_tile = nullptr;
   bool cached = false;
-  for (size_t i = 0; i < n; ++i) {
-    const int64_t cx = FloorToInt(q[i].x() * inv_lookup_cell_);
-    const int64_t cy = FloorToInt(q[i].y() * inv_lookup_cell_);
+  const auto locate = [&](const Eigen::Vector2d& p) -> const uint32_t* {
+    const int64_t cx = FloorToInt(p.x() * inv_lookup_cell_);
+    const int64_t cy = FloorToInt(p.y() * inv_lookup_cell_);
     const uint64_t key = Key(cx >> kTileBits, cy >> kTileBits);
     if (!cached || key != cached_key) {
       cached_key = key;
@@ -522,13 +523,17 @@ void PointGridMap::LookupIndices(const Eigen::Vector2d* q, size_t n, double max_
       cached_tile = tile == kNone ? nullptr : &tiles_[tile];
       cached = true;
     }
-    cells[i] = cached_tile ? cached_tile->index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))] : nullptr;
-    if (cells[i]) __builtin_prefetch(cells[i]);
-  }
-  // 2. The nearest of each cell's candidates, as LookupIndex takes it.
+    if (!cached_tile) return nullptr;
+    const uint32_t* cell = cached_tile->index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
+    __builtin_prefetch(cell);
+    return cell;
+  };
+  for (size_t i = 0; i < std::min(n, kAhead); ++i) ahead[i] = locate(q[i]);
+  // The nearest of each cell's candidates, as LookupIndex takes it.
   const double limit = max_distance_m * max_distance_m;
   for (size_t i = 0; i < n; ++i) {
-    const uint32_t* candidates = cells[i];
+    const uint32_t* candidates = ahead[i % kAhead];
+    if (i + kAhead < n) ahead[i % kAhead] = locate(q[i + kAhead]);
     int found = -1;
     if (candidates) {
       double best = limit;

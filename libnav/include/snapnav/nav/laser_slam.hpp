@@ -94,7 +94,8 @@ class PointGridMap {
   // it is NearestIndex.
   int LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const;
   // LookupIndex of each of the n points q in out[0..n): the same answers, faster for a scan's
-  // points (their cells are located first, all of them, then resolved: the memory reads overlap).
+  // points (each one's cell is located and prefetched some points before it is resolved: the
+  // memory reads overlap).
   void LookupIndices(const Eigen::Vector2d* q, size_t n, double max_distance_m, int* out) const;
   // Whether a stored point lies within `distance_m` of p (through the lookup grid if there is one).
   bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return LookupIndex(p, distance_m) >= 0; }
