@@ -200,8 +200,8 @@ uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
 PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
   const uint32_t slot = tile_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
   if (slot == tiles_.size()) {
-    tiles_.emplace_back();
-    Tile& t = tiles_.back();
+    tiles_.tiles.push_back(std::make_unique<Tile>());  // (not zeroed)
+    Tile& t = *tiles_.tiles.back();
     std::fill(&t.index[0][0], &t.index[0][0] + kTile * kTile * kLookupCandidates, kNone);
     std::fill(&t.d2[0][0], &t.d2[0][0] + kTile * kTile * kLookupCandidates, std::numeric_limits<float>::infinity());
   }
@@ -211,7 +211,7 @@ PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
 PointGridMap::RasterTile* PointGridMap::RasterAt(int64_t tx, int64_t ty) {
   const uint32_t slot = raster_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(rasters_.size()));
   if (slot == rasters_.size()) {
-    rasters_.emplace_back();  // value-initialised: zeros
+    rasters_.tiles.push_back(std::make_unique<RasterTile>());  // value-initialised: zeros
   }
   return &rasters_[slot];
 }

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -166,10 +167,28 @@ class PointGridMap {
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
   TileTable cells_;                                              // fine cell -> index in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
-  std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
+  // Tiles, each allocated once (growing the store never moves them; one load to reach one); a
+  // copy of the map copies them.
+  template <typename T>
+  struct TileStore {
+    std::vector<std::unique_ptr<T>> tiles;
+    TileStore() = default;
+    TileStore(const TileStore& other) { *this = other; }
+    TileStore& operator=(const TileStore& other) {
+      if (this == &other) return *this;
+      tiles.clear();
+      for (const auto& t : other.tiles) tiles.push_back(std::make_unique<T>(*t));
+      return *this;
+    }
+    TileStore(TileStore&&) noexcept = default;
+    TileStore& operator=(TileStore&&) noexcept = default;
+    size_t size() const { return tiles.size(); }
+    T& operator[](size_t i) const { return *tiles[i]; }
+  };
+  TileStore<Tile> tiles_;
   TileTable raster_index_;          // raster tile -> index in rasters_
-  std::deque<RasterTile> rasters_;  // with a likelihood raster: the tiles of kNodes x kNodes nodes
-                                    // with a node, or an apron node, within reach of a point
+  TileStore<RasterTile> rasters_;  // with a likelihood raster: the tiles of kNodes x kNodes nodes
+                                   // with a node, or an apron node, within reach of a point
   // The raster's byte by bins of d^2 / (2 sigma^2) (-1: a rounding boundary in the bin, computed).
   static constexpr int kKernelBins = 4096;
   static constexpr double kKernelMaxX = 4.5;
