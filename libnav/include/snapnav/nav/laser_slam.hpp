@@ -71,12 +71,12 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
 // a query (LookupIndex) takes the nearest of its cell's candidates: one tile lookup instead of a
 // search over buckets.
 //
-// With likelihood_sigma_m > 0 (and a lookup grid) the tiles also hold a likelihood raster for
-// correlative scan matching (Olson 2009): nodes every lookup_cell_m / kLikelihoodSub, at the
-// centres of cells of that size, hold exp(-d^2 / (2 sigma^2)), d the distance from the node to the
-// nearest stored point (0 beyond 3 sigma), updated as points are added; between nodes the
-// likelihood is bilinear. Its memory is that of the lookup tiles (they cover the same area): it
-// grows with the area explored, not with the scans.
+// With likelihood_sigma_m > 0 (and a lookup grid) it also keeps a likelihood raster for
+// correlative scan matching (Olson 2009), in tiles of its own: nodes every lookup_cell_m /
+// kLikelihoodSub, at the centres of cells of that size, hold exp(-d^2 / (2 sigma^2)), d the
+// distance from the node to the nearest stored point (0 beyond 3 sigma), updated as points are
+// added; between nodes the likelihood is bilinear. Its memory (about 10.8 KB per 1.6 m x 1.6 m,
+// against the lookup tiles' 24 KB) grows with the area explored, not with the scans.
 class PointGridMap {
  public:
   PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m = 0, double lookup_cell_m = 0.05,
@@ -128,7 +128,7 @@ class PointGridMap {
     Tile() {}  // (not zeroed: TileAt fills it)
     // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
     uint32_t index[kTile * kTile][kLookupCandidates];
-    float d2[kTile * kTile][kLookupCandidates];
+    float d2[kTile * kTile][kLookupCandidates];  // their squared distances from the cell centre [m^2]
   };
   // The likelihood raster's nodes in a tile of kNodes x kNodes, row by row (y), in units of 1/255
   // (a byte each: the raster of the area a scan covers stays in the cache), and an apron: the
@@ -163,7 +163,6 @@ class PointGridMap {
   RasterTile* RasterAt(int64_t tx, int64_t ty);  // created (zeros) if absent
   float Node(int64_t ix, int64_t iy) const;  // a raster node (0 where there is no tile)
   double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_, inv_lookup_cell_;
-
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
   TileTable cells_;                                              // fine cell -> index in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
