@@ -905,7 +905,9 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
   std::vector<Ranked> ranked;
   std::vector<Candidate> by_heading(static_cast<size_t>(2 * nt + 1));
   // Per heading with the raster: its shifts to score exactly (the best kRescoredShifts on the raster).
-  std::vector<std::vector<Ranked>> to_rescore(raster ? by_heading.size() : 0);
+  // (kRescoredShifts slots per heading, `rescore_count` of them used.)
+  std::vector<Ranked> to_rescore(raster ? by_heading.size() * kRescoredShifts : 0);
+  std::vector<size_t> rescore_count(raster ? by_heading.size() : 0, 0);
   const auto rotate_to = [&](double dt) {
     const double c = std::cos(around.theta_rad + dt), sn = std::sin(around.theta_rad + dt);
     rotated.clear();
@@ -959,7 +961,9 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
                           return x.total > y.total || (x.total == y.total && x.order < y.order);
                         });
       best = {pose_at(ranked[0].shift, dt), ranked[0].total};
-      to_rescore[static_cast<size_t>(ik + nt)].assign(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep));
+      std::copy(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep),
+                to_rescore.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(ik + nt) * kRescoredShifts));
+      rescore_count[static_cast<size_t>(ik + nt)] = keep;
     } else {
       for (int ia = -nxy; ia <= nxy; ++ia) {
         for (int ib = -nxy; ib <= nxy; ++ib) {
@@ -988,7 +992,8 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
       const double dt = sign * (h - nt) * step;
       rotate_to(dt);
       Candidate best{around, -std::numeric_limits<double>::infinity()};
-      for (const Ranked& r : to_rescore[static_cast<size_t>(h)]) {
+      for (size_t k = 0; k < rescore_count[static_cast<size_t>(h)]; ++k) {
+        const Ranked& r = to_rescore[static_cast<size_t>(h) * kRescoredShifts + k];
         const double total = exact(r.shift) - penalty(r.shift, dt);
         if (total > best.score) best = {pose_at(r.shift, dt), total};
       }
