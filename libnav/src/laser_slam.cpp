@@ -118,6 +118,16 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
   return points;
 }
 
+namespace {
+
+// floor(v) as an integer, without the library call (the lookup's hot path).
+int64_t FloorToInt(double v) {
+  const auto i = static_cast<int64_t>(v);
+  return i - (static_cast<double>(i) > v);
+}
+
+}  // namespace
+
 PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m, double lookup_cell_m,
                            double likelihood_sigma_m)
     : resolution_(resolution_m),
@@ -152,12 +162,12 @@ PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_r
 }
 
 bool PointGridMap::Add(const Eigen::Vector2d& p, const Eigen::Vector2d& normal) {
-  const uint64_t fine = Key(static_cast<int64_t>(std::floor(p.x() / resolution_)),
-                            static_cast<int64_t>(std::floor(p.y() / resolution_)));
-  if (!cells_.emplace(fine, static_cast<uint32_t>(points_.size())).second) return false;
-  buckets_[Key(static_cast<int64_t>(std::floor(p.x() / bucket_)), static_cast<int64_t>(std::floor(p.y() / bucket_)))]
-      .push_back(static_cast<uint32_t>(points_.size()));
-  if (lookup_radius_ > 0) AddToLookup(p, static_cast<uint32_t>(points_.size()));
+  const uint64_t fine = Key(FloorToInt(p.x() / resolution_), FloorToInt(p.y() / resolution_));
+  // (Mostly the cell is taken: one probe of an open-addressing table.)
+  const auto index = static_cast<uint32_t>(points_.size());
+  if (cells_.FindOrAdd(fine, index) != index) return false;
+  buckets_[Key(FloorToInt(p.x() / bucket_), FloorToInt(p.y() / bucket_))].push_back(index);
+  if (lookup_radius_ > 0) AddToLookup(p, index);
   if (has_likelihood()) AddToLikelihood(p);
   points_.push_back(p);
   normals_.push_back(normal);
@@ -190,19 +200,20 @@ uint32_t PointGridMap::TileTable::FindOrAdd(uint64_t key, uint32_t value) {
 PointGridMap::Tile* PointGridMap::TileAt(int64_t tx, int64_t ty) {
   const uint32_t slot = tile_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(tiles_.size()));
   if (slot == tiles_.size()) {
-    tiles_.emplace_back();
-    Tile& t = tiles_.back();
-    for (int c = 0; c < kTile * kTile; ++c) {
-      std::fill(std::begin(t.index[c]), std::end(t.index[c]), kNone);
-      std::fill(std::begin(t.d2[c]), std::end(t.d2[c]), std::numeric_limits<float>::infinity());
-    }
-    if (has_likelihood()) {
-      rasters_.emplace_back();
-      std::fill(std::begin(rasters_.back().node), std::end(rasters_.back().node), uint8_t{0});
-      std::fill(std::begin(rasters_.back().padding), std::end(rasters_.back().padding), uint8_t{0});
-    }
+    tiles_.tiles.push_back(std::make_unique<Tile>());  // (not zeroed)
+    Tile& t = *tiles_.tiles.back();
+    std::fill(&t.index[0][0], &t.index[0][0] + kTile * kTile * kLookupCandidates, kNone);
+    std::fill(&t.d2[0][0], &t.d2[0][0] + kTile * kTile * kLookupCandidates, std::numeric_limits<float>::infinity());
   }
   return &tiles_[slot];
+}
+
+PointGridMap::RasterTile* PointGridMap::RasterAt(int64_t tx, int64_t ty) {
+  const uint32_t slot = raster_index_.FindOrAdd(Key(tx, ty), static_cast<uint32_t>(rasters_.size()));
+  if (slot == rasters_.size()) {
+    rasters_.tiles.push_back(std::make_unique<RasterTile>());  // value-initialised: zeros
+  }
+  return &rasters_[slot];
 }
 
 void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
@@ -253,50 +264,50 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   }
 }
 
-namespace {
-
-// floor(v) as an integer, without the library call (the lookup's hot path).
-int64_t FloorToInt(double v) {
-  const auto i = static_cast<int64_t>(v);
-  return i - (static_cast<double>(i) > v);
-}
-
-}  // namespace
-
 void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
   const double reach = 3 * likelihood_sigma_, reach2 = reach * reach;
   const double inv2s2 = 1.0 / (2 * likelihood_sigma_ * likelihood_sigma_);
   // Nodes sit at the centres of cells of node_: node i at (i + 0.5) node_.
   const int64_t x0 = FloorToInt((p.x() - reach) / node_), x1 = FloorToInt((p.x() + reach) / node_);
   const int64_t y0 = FloorToInt((p.y() - reach) / node_), y1 = FloorToInt((p.y() + reach) / node_);
-  for (int64_t tx = x0 >> kNodeBits; tx <= x1 >> kNodeBits; ++tx) {
-    for (int64_t ty = y0 >> kNodeBits; ty <= y1 >> kNodeBits; ++ty) {
-      TileAt(tx, ty);
-      RasterTile& raster = rasters_[tile_index_.Find(Key(tx, ty))];
-      const int64_t ix0 = std::max(x0, tx << kNodeBits), ix1 = std::min(x1, ((tx + 1) << kNodeBits) - 1);
-      const int64_t iy0 = std::max(y0, ty << kNodeBits), iy1 = std::min(y1, ((ty + 1) << kNodeBits) - 1);
+  // The box's bytes (0 beyond reach: a node within it is at least 255 exp(-4.5), 3), computed once.
+  const int nx = static_cast<int>(x1 - x0 + 1), ny = static_cast<int>(y1 - y0 + 1);
+  thread_local std::vector<uint8_t> bytes;
+  bytes.assign(static_cast<size_t>(nx) * ny, 0);
+  for (int64_t iy = y0; iy <= y1; ++iy) {
+    const double dy = (static_cast<double>(iy) + 0.5) * node_ - p.y();
+    uint8_t* out = bytes.data() + (iy - y0) * nx;
+    for (int64_t ix = x0; ix <= x1; ++ix) {
+      const double dx = (static_cast<double>(ix) + 0.5) * node_ - p.x();
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > reach2) continue;
+      const double x = d2 * inv2s2;
+      const int bin = static_cast<int>(x * (kKernelBins / kKernelMaxX));
+      const int16_t byte = bin < kKernelBins ? kernel_bytes_[static_cast<size_t>(bin)] : int16_t{-1};
+      out[ix - x0] = byte >= 0 ? static_cast<uint8_t>(byte) : static_cast<uint8_t>(std::lround(255 * std::exp(-x)));
+    }
+  }
+  // Into every tile whose nodes or apron (kRasterRow nodes from its origin) meet the box: the same
+  // value in each copy of a node.
+  for (int64_t tx = (x0 - kRasterApron) >> kNodeBits; tx <= x1 >> kNodeBits; ++tx) {
+    for (int64_t ty = (y0 - kRasterApron) >> kNodeBits; ty <= y1 >> kNodeBits; ++ty) {
+      RasterTile& raster = *RasterAt(tx, ty);
+      const int64_t ox = tx << kNodeBits, oy = ty << kNodeBits;  // its first node
+      const int64_t ix0 = std::max(x0, ox), ix1 = std::min(x1, ox + kRasterRow - 1);
+      const int64_t iy0 = std::max(y0, oy), iy1 = std::min(y1, oy + kRasterRow - 1);
       for (int64_t iy = iy0; iy <= iy1; ++iy) {
-        const double dy = (static_cast<double>(iy) + 0.5) * node_ - p.y();
-        uint8_t* row = raster.node + (static_cast<int>(iy - (ty << kNodeBits)) << kNodeBits);
-        for (int64_t ix = ix0; ix <= ix1; ++ix) {
-          const double dx = (static_cast<double>(ix) + 0.5) * node_ - p.x();
-          const double d2 = dx * dx + dy * dy;
-          if (d2 > reach2) continue;
-          uint8_t& v = row[ix - (tx << kNodeBits)];
-          const double x = d2 * inv2s2;
-          const int bin = static_cast<int>(x * (kKernelBins / kKernelMaxX));
-          const int16_t byte = bin < kKernelBins ? kernel_bytes_[static_cast<size_t>(bin)] : int16_t{-1};
-          v = std::max(v, byte >= 0 ? static_cast<uint8_t>(byte) : static_cast<uint8_t>(std::lround(255 * std::exp(-x))));
-        }
+        uint8_t* row = raster.node + static_cast<ptrdiff_t>(iy - oy) * kRasterRow - ox;
+        const uint8_t* in = bytes.data() + (iy - y0) * nx - x0;
+        for (int64_t ix = ix0; ix <= ix1; ++ix) row[ix] = std::max(row[ix], in[ix]);
       }
     }
   }
 }
 
 float PointGridMap::Node(int64_t ix, int64_t iy) const {
-  const uint32_t tile = tile_index_.Find(Key(ix >> kNodeBits, iy >> kNodeBits));
+  const uint32_t tile = raster_index_.Find(Key(ix >> kNodeBits, iy >> kNodeBits));
   if (tile == kNone) return 0.0f;
-  return rasters_[tile].node[((iy & (kNodes - 1)) << kNodeBits) | (ix & (kNodes - 1))];
+  return rasters_[tile].node[(iy & (kNodes - 1)) * kRasterRow + (ix & (kNodes - 1))];
 }
 
 double PointGridMap::Likelihood(const Eigen::Vector2d& p) const {
@@ -378,7 +389,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     const uint64_t key = Key(tx, ty);
     if (!cached || key != cached_key) {
       cached_key = key;
-      const uint32_t tile = tile_index_.Find(key);
+      const uint32_t tile = raster_index_.Find(key);
       cached_nodes = tile == kNone ? nullptr : rasters_[tile].node;
       cached = true;
     }
@@ -387,9 +398,8 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   // The block, where it spans tiles; its rows bw apart, 8 nodes or more longer than the block (for
   // the copies of 8 nodes at a time below).
   const int bw = ((w + 7) & ~7) + 8;
-  // (Called for every heading of every scan's search: the buffers are kept, zeroed each call.)
+  // (Called for every heading of every scan's search: the buffers are kept, zeroed each call as needed.)
   thread_local std::vector<uint8_t> block;
-  block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);
   const int cells = shifts * shifts;
   thread_local std::vector<float> acc;  // per shift, in units of 1/255
   acc.assign(static_cast<size_t>(cells), 0.0f);
@@ -398,8 +408,55 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
   const int groups = (shifts + 3) / 4;
   thread_local std::vector<Lanes> acc4;
   acc4.assign(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
+  const int read_x = simd ? std::max(w, 8 * groups) : w;  // nodes of a block row read (SSE2: 8 at a time)
+#else
+  const int read_x = w;
+#endif
+  // Whether a block is read in place: it fits in the apron of the tile it starts in.
+  const bool in_place = read_x <= kRasterApron && w <= kRasterApron;
+  if (!in_place) block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);
+#if defined(__SSE2__)
+  const bool fast = simd && in_place;
+  if (fast) {
+    // The common case, each point's interpolation set up with SSE2: the same operations as the
+    // loop below (FloorToInt by truncation to 32 bits: points within 50,000 km).
+    const __m128d inv2 = _mm_set1_pd(inv_node), half2 = _mm_set1_pd(0.5), one2 = _mm_set1_pd(1.0);
+    const __m128 one4 = _mm_set1_ps(1.0f);
+    const int64_t back = static_cast<int64_t>(n) * step_nodes;
+    for (const Eigen::Vector2d& p : points) {
+      const __m128d uv = _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(p.data()), inv2), half2);  // (u, v)
+      const __m128i t = _mm_cvttpd_epi32(uv);
+      const __m128d tf = _mm_cvtepi32_pd(t);
+      const __m128d above = _mm_cmpgt_pd(tf, uv);  // truncated up: the floor is one less
+      const __m128d fl = _mm_sub_pd(tf, _mm_and_pd(above, one2));
+      const int down = _mm_movemask_pd(above);
+      const int64_t i = _mm_cvtsi128_si32(t) - (down & 1), j = _mm_cvtsi128_si32(_mm_shuffle_epi32(t, 1)) - (down >> 1);
+      const uint8_t* nodes = nodes_of((i - back) >> kNodeBits, (j - back) >> kNodeBits);
+      if (!nodes) continue;  // no map point within reach of any shift
+      const uint8_t* base = nodes + ((j - back) & mask) * kRasterRow + ((i - back) & mask);
+      // (fx, fy) and the bilinear weights (1-fx)(1-fy), fx(1-fy), (1-fx)fy, fx fy in floats.
+      const __m128 f = _mm_cvtpd_ps(_mm_sub_pd(uv, fl));
+      const __m128 pairs = _mm_unpacklo_ps(_mm_sub_ps(one4, f), f);  // (1-fx, fx, 1-fy, fy)
+      const __m128 weights = _mm_mul_ps(_mm_movelh_ps(pairs, pairs), _mm_shuffle_ps(pairs, pairs, _MM_SHUFFLE(3, 3, 2, 2)));
+      const __m128 v00 = _mm_shuffle_ps(weights, weights, 0x00), v10 = _mm_shuffle_ps(weights, weights, 0x55);
+      const __m128 v01 = _mm_shuffle_ps(weights, weights, 0xAA), v11 = _mm_shuffle_ps(weights, weights, 0xFF);
+      switch (shifts) {
+        case 3:
+          AccumulateShiftsStep2<3>(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
+          break;
+        case 5:
+          AccumulateShiftsStep2<5>(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
+          break;
+        default:
+          AccumulateShiftsStep2<0>(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
+      }
+    }
+  }
+#else
+  const bool fast = false;
 #endif
   for (const Eigen::Vector2d& p : points) {
+    if (fast) break;  // (done above)
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
     const int64_t i = FloorToInt(u), j = FloorToInt(v);
     const float fx = static_cast<float>(u - static_cast<double>(i)), fy = static_cast<float>(v - static_cast<double>(j));
@@ -408,14 +465,15 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     const int64_t tx0 = lx >> kNodeBits, tx1 = hx >> kNodeBits, ty0 = ly >> kNodeBits, ty1 = hy >> kNodeBits;
     const uint8_t* base;  // the block's first node
     int row_stride;     // nodes from one block row to the next
-    if (tx0 == tx1 && ty0 == ty1) {
-      // One tile holds the block (mostly: a tile is kNodes nodes wide): read it in place.
+    if (in_place || (tx0 == tx1 && ty0 == ty1)) {
+      // The tile the block starts in holds it (with its apron): read it in place.
       const uint8_t* nodes = nodes_of(tx0, ty0);
       if (!nodes) continue;  // no map point within reach of any shift
-      base = nodes + ((ly & mask) << kNodeBits) + (lx & mask);
-      row_stride = kNodes;
+      base = nodes + (ly & mask) * kRasterRow + (lx & mask);
+      row_stride = kRasterRow;
     } else {
-      // The block spans 2 or 4 tiles: copied together, row pieces of each tile (zeros where there is none).
+      // A block wider than the apron that spans 2 or 4 tiles: copied together, row pieces of each
+      // tile (zeros where there is none).
       bool any = false;
       for (int64_t ty = ty0; ty <= ty1; ++ty) {
         const int64_t y0 = std::max(ly, ty << kNodeBits), y1 = std::min(hy, ((ty + 1) << kNodeBits) - 1);
@@ -426,10 +484,9 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
           any = any || nodes;
           for (int64_t iy = y0; iy <= y1; ++iy) {
             // 8 nodes at a time: a piece may write (and read) up to 7 nodes past its end, into the
-            // next piece of the row (copied after it) or the row's slack (and the tile's next row
-            // or its padding).
+            // next piece of the row (copied after it) or the row's slack (and the tile's apron).
             uint8_t* to = block.data() + (iy - ly) * bw + (x0 - lx);
-            const uint8_t* from = nodes ? nodes + ((iy & mask) << kNodeBits) + (x0 & mask) : nullptr;
+            const uint8_t* from = nodes ? nodes + (iy & mask) * kRasterRow + (x0 & mask) : nullptr;
             for (size_t k = 0; k < len; k += 8) {
               uint64_t eight = 0;
               if (from) std::memcpy(&eight, from + k, 8);
@@ -490,15 +547,16 @@ void PointGridMap::LookupIndices(const Eigen::Vector2d* q, size_t n, double max_
     for (size_t i = 0; i < n; ++i) out[i] = NearestIndex(q[i], max_distance_m);
     return;
   }
-  // 1. Each point's cell candidates (nullptr: no tile), the tile of the last point remembered.
-  thread_local std::vector<const uint32_t*> cells;
-  cells.resize(n);
+  // Each point's cell candidates (nullptr: no tile) are located, and prefetched, kAhead points
+  // before they are resolved (the memory reads overlap); the tile of the last point remembered.
+  constexpr size_t kAhead = 8;
+  const uint32_t* ahead[kAhead];
   uint64_t cached_key = 0;
   const Tile* cached_tile = nullptr;
   bool cached = false;
-  for (size_t i = 0; i < n; ++i) {
-    const int64_t cx = FloorToInt(q[i].x() * inv_lookup_cell_);
-    const int64_t cy = FloorToInt(q[i].y() * inv_lookup_cell_);
+  const auto locate = [&](const Eigen::Vector2d& p) -> const uint32_t* {
+    const int64_t cx = FloorToInt(p.x() * inv_lookup_cell_);
+    const int64_t cy = FloorToInt(p.y() * inv_lookup_cell_);
     const uint64_t key = Key(cx >> kTileBits, cy >> kTileBits);
     if (!cached || key != cached_key) {
       cached_key = key;
@@ -506,13 +564,17 @@ void PointGridMap::LookupIndices(const Eigen::Vector2d* q, size_t n, double max_
       cached_tile = tile == kNone ? nullptr : &tiles_[tile];
       cached = true;
     }
-    cells[i] = cached_tile ? cached_tile->index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))] : nullptr;
-    if (cells[i]) __builtin_prefetch(cells[i]);
-  }
-  // 2. The nearest of each cell's candidates, as LookupIndex takes it.
+    if (!cached_tile) return nullptr;
+    const uint32_t* cell = cached_tile->index[((cy & (kTile - 1)) << kTileBits) | (cx & (kTile - 1))];
+    __builtin_prefetch(cell);
+    return cell;
+  };
+  for (size_t i = 0; i < std::min(n, kAhead); ++i) ahead[i] = locate(q[i]);
+  // The nearest of each cell's candidates, as LookupIndex takes it.
   const double limit = max_distance_m * max_distance_m;
   for (size_t i = 0; i < n; ++i) {
-    const uint32_t* candidates = cells[i];
+    const uint32_t* candidates = ahead[i % kAhead];
+    if (i + kAhead < n) ahead[i % kAhead] = locate(q[i + kAhead]);
     int found = -1;
     if (candidates) {
       double best = limit;
@@ -748,7 +810,10 @@ LaserSlam::Icp LaserSlam::Align(const Pose2& start, const std::vector<Eigen::Vec
       // to the prediction.
       const double c = std::cos(r.estimate.theta_rad), s = std::sin(r.estimate.theta_rad);
       for (size_t k = 0; k < src.size(); ++k) {
-        r.residual2 += (r.estimate.Transform(src[k]) - dst[k]).squaredNorm() / 2.0;
+        // (Pose2::Transform's arithmetic, its sine and cosine computed once.)
+        const Eigen::Vector2d at(r.estimate.x_m + c * src[k].x() - s * src[k].y(),
+                                 r.estimate.y_m + s * src[k].x() + c * src[k].y());
+        r.residual2 += (at - dst[k]).squaredNorm() / 2.0;
         r.weight_sum += 1;
         const Eigen::Vector2d n = Rotate(c, s, normals[index[k]]);
         const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());
@@ -840,7 +905,9 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
   std::vector<Ranked> ranked;
   std::vector<Candidate> by_heading(static_cast<size_t>(2 * nt + 1));
   // Per heading with the raster: its shifts to score exactly (the best kRescoredShifts on the raster).
-  std::vector<std::vector<Ranked>> to_rescore(raster ? by_heading.size() : 0);
+  // (kRescoredShifts slots per heading, `rescore_count` of them used.)
+  std::vector<Ranked> to_rescore(raster ? by_heading.size() * kRescoredShifts : 0);
+  std::vector<size_t> rescore_count(raster ? by_heading.size() : 0, 0);
   const auto rotate_to = [&](double dt) {
     const double c = std::cos(around.theta_rad + dt), sn = std::sin(around.theta_rad + dt);
     rotated.clear();
@@ -894,7 +961,9 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
                           return x.total > y.total || (x.total == y.total && x.order < y.order);
                         });
       best = {pose_at(ranked[0].shift, dt), ranked[0].total};
-      to_rescore[static_cast<size_t>(ik + nt)].assign(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep));
+      std::copy(ranked.begin(), ranked.begin() + static_cast<ptrdiff_t>(keep),
+                to_rescore.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(ik + nt) * kRescoredShifts));
+      rescore_count[static_cast<size_t>(ik + nt)] = keep;
     } else {
       for (int ia = -nxy; ia <= nxy; ++ia) {
         for (int ib = -nxy; ib <= nxy; ++ib) {
@@ -923,7 +992,8 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
       const double dt = sign * (h - nt) * step;
       rotate_to(dt);
       Candidate best{around, -std::numeric_limits<double>::infinity()};
-      for (const Ranked& r : to_rescore[static_cast<size_t>(h)]) {
+      for (size_t k = 0; k < rescore_count[static_cast<size_t>(h)]; ++k) {
+        const Ranked& r = to_rescore[static_cast<size_t>(h) * kRescoredShifts + k];
         const double total = exact(r.shift) - penalty(r.shift, dt);
         if (total > best.score) best = {pose_at(r.shift, dt), total};
       }
@@ -962,7 +1032,8 @@ LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
     ++u->starts;
     u->pruned += icp.pruned;
     if (!icp.ok) continue;
-    const double score = n > 1 ? KernelScore(icp.estimate, points, 1) : 0.0;
+    ScoreEstimate(points, &icp);
+    const double score = n > 1 ? icp.kernel : 0.0;
     if (score > best_score) {
       best_score = score;
       best = icp;
@@ -974,6 +1045,37 @@ LaserSlam::Icp LaserSlam::RefineBest(const std::vector<Candidate>& candidates,
     best = Align(*start, points, normals);
   }
   return best;
+}
+
+void LaserSlam::ScoreEstimate(const std::vector<Eigen::Vector2d>& points, Icp* icp) const {
+  const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
+  const double tau = options_.match_distance_m, half = 0.5 * options_.match_distance_m;
+  const double limit = std::max({reach, tau, half});
+  icp->scored = true;
+  if (!(limit <= map_.lookup_radius_m())) {  // (the limits would take different lookups)
+    icp->kernel = KernelScore(icp->estimate, points, 1);
+    icp->score = Score(icp->estimate, points, 1);
+    icp->fit = Fit(icp->estimate, points, 1);
+    return;
+  }
+  // The distance tests as the lookups make them: d <= limit^2.
+  const double reach2 = reach * reach, tau2 = tau * tau, half2 = half * half;
+  std::vector<Eigen::Vector2d> world;
+  std::vector<int> nearest;
+  LookupAt(map_, Rigid(icp->estimate), points, 1, limit, &world, &nearest);
+  double kernel = 0, score = 0;
+  size_t near = 0;
+  for (size_t i = 0; i < world.size(); ++i) {
+    const int j = nearest[i];
+    if (j < 0) continue;
+    const double d = (map_.points()[static_cast<size_t>(j)] - world[i]).squaredNorm();
+    if (d <= reach2) kernel += std::exp(-d * inv2s2);
+    if (d <= tau2) score += 1.0 - d / tau2;
+    if (d <= half2) ++near;
+  }
+  icp->kernel = kernel;
+  icp->score = score;
+  icp->fit = world.empty() ? 0.0 : static_cast<double>(near) / static_cast<double>(world.size());
 }
 
 double LaserSlam::Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
@@ -1103,7 +1205,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     if (candidates.empty()) candidates.push_back({pose_, 0});
     Icp icp = RefineBest(candidates, points, normals, &start, &u);
     u.start = start;
-    u.fit = icp.ok ? Fit(icp.estimate, points, 1) : 0.0;
+    u.fit = !icp.ok ? 0.0 : icp.scored ? icp.fit : Fit(icp.estimate, points, 1);
     if (u.fit < options_.recovery_fit && options_.search_window_max_rad >= step) {
       // Poor fit: search the whole window, and positions around the prediction, then align again.
       const std::vector<Candidate> again_candidates =
@@ -1113,7 +1215,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
                                       points, stride);
       Pose2 again_start = pose_;
       const Icp again = RefineBest(again_candidates, points, normals, &again_start, &u);
-      const double again_fit = again.ok ? Fit(again.estimate, points, 1) : 0.0;
+      const double again_fit = !again.ok ? 0.0 : again.scored ? again.fit : Fit(again.estimate, points, 1);
       ++u.recoveries;
       if (again_fit > u.fit) {
         icp = again;
@@ -1142,7 +1244,8 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
         // The update should sit where the scan fits: if it scores clearly below the ICP pose
         // against the map, the prediction was off by more than its covariance allowed (odometry
         // jitter along a corridor, a late turn); widen it by the innovation and update again.
-        const double at_icp = Score(icp.estimate, points, 1), at_update = Score(pose_, points, 1);
+        const double at_icp = icp.scored ? icp.score : Score(icp.estimate, points, 1);
+        const double at_update = Score(pose_, points, 1);
         if (at_update < (1 - options_.update_score_margin) * at_icp) {
           const Eigen::Vector3d off(icp.estimate.x_m - predicted.x_m, icp.estimate.y_m - predicted.y_m,
                                     WrapAngle(icp.estimate.theta_rad - predicted.theta_rad));

@@ -147,10 +147,12 @@ TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
   // The shifted sums are the sums of the likelihoods at the shifted points: for each window
   // (3 x 3 and 5 x 5 shifts have kernels of their own, 13 x 13 the general one), for the raster's
   // step (SIMD where there is SSE2) and others, with blocks inside a tile and across tile borders
-  // (x = 0 and y = 0 are tile borders; (5, 5) has no tile).
+  // (x = 0 and y = 0 are tile borders; (5, 5) has no tile). Blocks read from a tile's apron (the
+  // copies of its neighbours' first nodes) and, wider than the apron (21 x 21 shifts), copied
+  // from the tiles they span.
   const std::vector<Eigen::Vector2d> scan = {{-1.21, 0.02}, {-0.03, 0.11}, {0.52, -0.17}, {1.17, 0.29},
                                              {0.0, 0.5},    {0.4, 0.01},   {-0.02, -0.01}, {5, 5}};
-  for (const int n : {1, 2, 3, 6}) {
+  for (const int n : {1, 2, 3, 6, 10}) {
     for (const int step : {PointGridMap::kLikelihoodSub, 1, 3}) {
       std::vector<double> sums((2 * n + 1) * (2 * n + 1), 0.0);
       raster.AddShiftedLikelihoods(scan, n, step, sums.data());
@@ -165,6 +167,14 @@ TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
   }
   std::vector<double> sums(9, 0.0);
   EXPECT_THROW(exact.AddShiftedLikelihoods(scan, 1, 2, sums.data()), std::logic_error);
+  // A copy is a map of its own: points added to it are not in the original.
+  PointGridMap copy = raster;
+  copy.Add({5, 5});
+  EXPECT_GT(copy.Likelihood({5, 5}), 0.9);
+  EXPECT_EQ(raster.Likelihood({5, 5}), 0.0);
+  EXPECT_GE(copy.LookupIndex({5.01, 5}, 0.2), 0);
+  EXPECT_EQ(raster.LookupIndex({5.01, 5}, 0.2), -1);
+  EXPECT_EQ(copy.Likelihood({0.4, 0.01}), raster.Likelihood({0.4, 0.01}));
 }
 
 sim::Scene SquareRoom() {

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <deque>
+#include <memory>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -70,12 +71,12 @@ std::vector<Eigen::Vector2d> ScanToPoints(const std::vector<float>& ranges_m, do
 // a query (LookupIndex) takes the nearest of its cell's candidates: one tile lookup instead of a
 // search over buckets.
 //
-// With likelihood_sigma_m > 0 (and a lookup grid) the tiles also hold a likelihood raster for
-// correlative scan matching (Olson 2009): nodes every lookup_cell_m / kLikelihoodSub, at the
-// centres of cells of that size, hold exp(-d^2 / (2 sigma^2)), d the distance from the node to the
-// nearest stored point (0 beyond 3 sigma), updated as points are added; between nodes the
-// likelihood is bilinear. Its memory is that of the lookup tiles (they cover the same area): it
-// grows with the area explored, not with the scans.
+// With likelihood_sigma_m > 0 (and a lookup grid) it also keeps a likelihood raster for
+// correlative scan matching (Olson 2009), in tiles of its own: nodes every lookup_cell_m /
+// kLikelihoodSub, at the centres of cells of that size, hold exp(-d^2 / (2 sigma^2)), d the
+// distance from the node to the nearest stored point (0 beyond 3 sigma), updated as points are
+// added; between nodes the likelihood is bilinear. Its memory (about 10.8 KB per 1.6 m x 1.6 m,
+// against the lookup tiles' 24 KB) grows with the area explored, not with the scans.
 class PointGridMap {
  public:
   PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m = 0, double lookup_cell_m = 0.05,
@@ -94,7 +95,8 @@ class PointGridMap {
   // it is NearestIndex.
   int LookupIndex(const Eigen::Vector2d& p, double max_distance_m) const;
   // LookupIndex of each of the n points q in out[0..n): the same answers, faster for a scan's
-  // points (their cells are located first, all of them, then resolved: the memory reads overlap).
+  // points (each one's cell is located and prefetched some points before it is resolved: the
+  // memory reads overlap).
   void LookupIndices(const Eigen::Vector2d* q, size_t n, double max_distance_m, int* out) const;
   // Whether a stored point lies within `distance_m` of p (through the lookup grid if there is one).
   bool HasPointWithin(const Eigen::Vector2d& p, double distance_m) const { return LookupIndex(p, distance_m) >= 0; }
@@ -123,15 +125,21 @@ class PointGridMap {
  private:
   static constexpr int kNodeBits = kTileBits + kLikelihoodSubBits, kNodes = 1 << kNodeBits;
   struct Tile {
+    Tile() {}  // (not zeroed: TileAt fills it)
     // Per cell, the nearest points to its centre, nearest first; kNone where fewer lie within the radius.
     uint32_t index[kTile * kTile][kLookupCandidates];
     float d2[kTile * kTile][kLookupCandidates];  // their squared distances from the cell centre [m^2]
   };
-  // The likelihood raster's nodes in a tile, row by row (y), in units of 1/255 (a byte each: the
-  // raster of the area a scan covers stays in the cache). rasters_[i] belongs to tiles_[i].
+  // The likelihood raster's nodes in a tile of kNodes x kNodes, row by row (y), in units of 1/255
+  // (a byte each: the raster of the area a scan covers stays in the cache), and an apron: the
+  // first kRasterApron nodes of the tiles after it in x, in y and in both, copies kept as points
+  // are added. A search's block of nodes (AddShiftedLikelihoods) that starts in a tile then lies
+  // in it, read in place, when it is at most kRasterApron nodes wide.
+  static constexpr int kRasterApron = 40;  // shifts of up to +-8 cells (0.4 m of 0.05 m cells)
+  static constexpr int kRasterRow = kNodes + kRasterApron;
   struct RasterTile {
-    uint8_t node[kNodes * kNodes];
-    uint8_t padding[8];  // AddShiftedLikelihoods reads up to 6 nodes past a block
+    uint8_t node[kRasterRow * kRasterRow];
+    uint8_t padding[8];  // AddShiftedLikelihoods reads up to 7 nodes past a copied row piece
   };
   static constexpr size_t kRasterPadding = 8;
   static constexpr uint32_t kNone = 0xffffffffu;
@@ -152,13 +160,34 @@ class PointGridMap {
   void AddToLookup(const Eigen::Vector2d& p, uint32_t index);
   void AddToLikelihood(const Eigen::Vector2d& p);
   Tile* TileAt(int64_t tx, int64_t ty);  // created (empty) if absent
+  RasterTile* RasterAt(int64_t tx, int64_t ty);  // created (zeros) if absent
   float Node(int64_t ix, int64_t iy) const;  // a raster node (0 where there is no tile)
   double resolution_, bucket_, lookup_radius_, lookup_cell_, likelihood_sigma_, node_, inv_lookup_cell_;
-  std::unordered_map<uint64_t, uint32_t> cells_;                 // fine cell -> index in points_
   std::unordered_map<uint64_t, std::vector<uint32_t>> buckets_;  // bucket -> indices in points_
+  TileTable cells_;                                              // fine cell -> index in points_
   TileTable tile_index_;                                         // lookup tile -> index in tiles_
-  std::deque<Tile> tiles_;  // a deque: growing it never moves (copies) the tiles
-  std::deque<RasterTile> rasters_;  // with a likelihood raster: one per tile
+  // Tiles, each allocated once (growing the store never moves them; one load to reach one); a
+  // copy of the map copies them.
+  template <typename T>
+  struct TileStore {
+    std::vector<std::unique_ptr<T>> tiles;
+    TileStore() = default;
+    TileStore(const TileStore& other) { *this = other; }
+    TileStore& operator=(const TileStore& other) {
+      if (this == &other) return *this;
+      tiles.clear();
+      for (const auto& t : other.tiles) tiles.push_back(std::make_unique<T>(*t));
+      return *this;
+    }
+    TileStore(TileStore&&) noexcept = default;
+    TileStore& operator=(TileStore&&) noexcept = default;
+    size_t size() const { return tiles.size(); }
+    T& operator[](size_t i) const { return *tiles[i]; }
+  };
+  TileStore<Tile> tiles_;
+  TileTable raster_index_;          // raster tile -> index in rasters_
+  TileStore<RasterTile> rasters_;  // with a likelihood raster: the tiles of kNodes x kNodes nodes
+                                   // with a node, or an apron node, within reach of a point
   // The raster's byte by bins of d^2 / (2 sigma^2) (-1: a rounding boundary in the bin, computed).
   static constexpr int kKernelBins = 4096;
   static constexpr double kKernelMaxX = 4.5;
@@ -348,6 +377,9 @@ class LaserSlam {
     int matches = 0, iterations = 0;
     Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // unscaled information (sum of J^T J)
     double residual2 = 0, weight_sum = 0;
+    // From RefineBest: KernelScore, Score and Fit of the estimate (every point), if measured.
+    bool scored = false;
+    double kernel = 0, score = 0, fit = 0;
   };
   // ICP from `start`. With prune_below > 0: after refine_prune_iterations iterations (if it has not
   // converged by then), a KernelScore of the estimate below prune_below ends it: not ok, pruned.
@@ -380,6 +412,10 @@ class LaserSlam {
 
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
+  // KernelScore, Score and Fit of every point at icp->estimate into icp's kernel, score and fit:
+  // the same figures from one lookup (its nearest points within the largest of their distances;
+  // a point's nearest within a smaller one is the same point, or none).
+  void ScoreEstimate(const std::vector<Eigen::Vector2d>& points, Icp* icp) const;
 
   LaserSlamOptions options_;
   Pose2 pose_;
