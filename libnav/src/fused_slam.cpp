@@ -48,6 +48,14 @@ Eigen::Matrix3d Rotate(const Eigen::Matrix2d& r, const Eigen::Matrix3d& c) {
 
 Eigen::Matrix3d Symmetric(const Eigen::Matrix3d& c) { return 0.5 * (c + c.transpose()); }
 
+// The smallest covariance at least `c` and at least `floor` along every direction where floor
+// exceeds c: c plus the positive part of floor - c.
+Eigen::Matrix3d AtLeast(const Eigen::Matrix3d& c, const Eigen::Matrix3d& floor) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(Symmetric(floor - c));
+  const Eigen::Vector3d positive = eig.eigenvalues().cwiseMax(0.0);
+  return Symmetric(c + eig.eigenvectors() * positive.asDiagonal() * eig.eigenvectors().transpose());
+}
+
 }  // namespace
 
 const char* VisualOutcomeName(VisualOutcome outcome) {
@@ -83,6 +91,8 @@ void FusedSlamOptions::Validate() const {
   Require(dynamic_max_fraction >= 0 && dynamic_max_fraction <= 1, "dynamic_max_fraction must be in [0, 1]");
   Require(occlusion_fix_inflation >= 0 && std::isfinite(occlusion_fix_inflation),
           "occlusion_fix_inflation must be >= 0 (0: off)");
+  Require(laser_min_constraint >= 0 && std::isfinite(laser_min_constraint), "laser_min_constraint must be >= 0 (0: off)");
+  Require(fix_correlation_m >= 0 && std::isfinite(fix_correlation_m), "fix_correlation_m must be >= 0 (0: off)");
   Require(map_cell_m > 0 && std::isfinite(map_cell_m), "map_cell_m must be positive");
   Require(start_sigma_xy_m >= 0 && start_sigma_theta_rad >= 0 && std::isfinite(start_sigma_xy_m) &&
               std::isfinite(start_sigma_theta_rad),
@@ -107,6 +117,7 @@ FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start, const 
   laser_.SetMapping(true, options_.map_min_fit);
   // The map frame is the start's: its uncertainty in the world is the offset of everything seen first.
   u_cov_ = Rotate(start_rotation_.transpose(), Symmetric(covariance));
+  laser_cov_ = laser_.covariance();
   Refresh();
 }
 
@@ -114,16 +125,28 @@ void FusedSlam::Refresh() {
   const Pose2& m = laser_.pose();
   const Eigen::Vector2d p(m.x_m, m.y_m);
   const Eigen::Matrix3d a = Lever(u_at_, p);
-  const Eigen::Vector3d u = a * u_;
+  const Eigen::Vector3d u = a * u_ + drift_;
   const Pose2 corrected{m.x_m - u.x(), m.y_m - u.y(), WrapAngle(m.theta_rad - u.z())};
   pose_ = start_.Compose(corrected);
   pose_.theta_rad = WrapAngle(pose_.theta_rad);
-  covariance_ = Rotate(start_rotation_, Symmetric(laser_.covariance() + a * u_cov_ * a.transpose()));
+  covariance_ = Rotate(start_rotation_, Symmetric(laser_covariance() + a * u_cov_ * a.transpose()));
 }
 
 void FusedSlam::Predict(int64_t utime, const Pose2& delta) {
+  const Pose2 before = laser_.pose();
   laser_.Predict(delta);  // throws on a non-finite increment before anything changes
   travelled_since_scan_m_ += std::hypot(delta.x_m, delta.y_m);
+  travelled_since_fix_m_ += std::hypot(delta.x_m, delta.y_m);
+  travelled_since_new_cells_m_ += std::hypot(delta.x_m, delta.y_m);
+  if (options_.laser_min_constraint > 0) {
+    // P_l grows with the laser's motion model; the drift d is carried with the motion (the corrected
+    // pose m - d moves by the same increment as m).
+    const Pose2 corrected{before.x_m - drift_.x(), before.y_m - drift_.y(), WrapAngle(before.theta_rad - drift_.z())};
+    Pose2 moved = before;
+    PredictWithOdometry(options_.laser.motion, delta, &moved, &laser_cov_);
+    drift_ = Difference(moved, corrected.Compose(delta));
+    laser_cov_ = Symmetric(laser_cov_);
+  }
   if (hypothesis_) PredictWithOdometry(options_.laser.motion, delta, &hypothesis_->pose, &hypothesis_->covariance);
   for (auto& e : rejected_window_) PredictWithOdometry(options_.laser.motion, delta, &e.pose, &e.covariance);
   if (!have_time_ || utime > utime_) utime_ = utime;
@@ -299,6 +322,13 @@ LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
   laser_.SetMapping(!suspect(), options_.map_min_fit);
   const bool map_empty = laser_.map().size() == 0;
   const LaserSlamUpdate u = laser_.Update(*points);  // the laser SLAM, as it runs alone, on the static points
+  UpdateLaserCovariance(u);
+  if (map_empty && options_.laser_min_constraint > 0) {
+    // The first scan defines the map: the laser sits on it exactly (its uncertainty in the world is
+    // the start's, the cells' offset).
+    laser_cov_.setZero();
+    drift_.setZero();
+  }
   const Pose2& m = laser_.pose();
   const Eigen::Vector2d p(m.x_m, m.y_m);
   // The robot's offset: the seen cells' (or, where none has one yet, carried with the robot).
@@ -319,7 +349,7 @@ LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
   if (!unmapped) {
     // Cells this scan reaches first are mapped from the robot's pose: its offset, carried to them,
     // and one more scan's drift.
-    const double d = travelled_since_scan_m_;
+    const double d = options_.map_drift_accumulates ? travelled_since_new_cells_m_ : travelled_since_scan_m_;
     const Eigen::Matrix3d drift = Diagonal(options_.map_drift_xy_m * std::sqrt(d), options_.map_drift_theta_rad * std::sqrt(d));
     bool added = false;
     for (const auto& point : last_points_) {
@@ -329,11 +359,17 @@ LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
       MapOffset c;
       c.center = CellCenter(q);
       const Eigen::Matrix3d a = Lever(p, c.center);
-      c.offset = a * u_;
-      c.covariance = Symmetric(a * u_cov_ * a.transpose() + drift);
+      if (options_.map_inherits_laser_drift && options_.laser_min_constraint > 0) {
+        c.offset = a * (u_ + drift_);
+        c.covariance = Symmetric(a * (u_cov_ + laser_cov_) * a.transpose() + drift);
+      } else {
+        c.offset = a * u_;
+        c.covariance = Symmetric(a * u_cov_ * a.transpose() + drift);
+      }
       cells_.emplace(key, c);
       added = true;
     }
+    if (added) travelled_since_new_cells_m_ = 0;
     if (added && SeenOffset(m, &seen_u, &seen_cov, &seen_)) {
       u_ = seen_u;
       u_cov_ = seen_cov;
@@ -346,6 +382,34 @@ LaserSlamUpdate FusedSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
   while (map_sizes_.size() > 1 && map_sizes_[1].first <= utime_ - keep_us) map_sizes_.pop_front();
   Refresh();
   return u;
+}
+
+void FusedSlam::UpdateLaserCovariance(const LaserSlamUpdate& u) {
+  if (options_.laser_min_constraint <= 0) return;
+  if (u.measured && u.matches > 0) {
+    // The scan's information, without its weak position directions.
+    const Eigen::Matrix3d info = Symmetric(u.measurement_covariance.inverse());
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(info.topLeftCorner<2, 2>());
+    const double per_point = options_.laser.point_sigma_m * options_.laser.point_sigma_m / u.matches;
+    Eigen::Matrix<double, 3, Eigen::Dynamic> kept(3, 1);
+    kept.col(0) = Eigen::Vector3d::UnitZ();
+    weakest_constraint_ = std::max(0.0, eig.eigenvalues()(0)) * per_point;  // ascending: (0) is the weakest
+    for (int i = 0; i < 2; ++i) {
+      if (eig.eigenvalues()(i) * per_point < options_.laser_min_constraint) continue;
+      kept.conservativeResize(3, kept.cols() + 1);
+      kept.col(kept.cols() - 1) << eig.eigenvectors()(0, i), eig.eigenvectors()(1, i), 0.0;
+    }
+    degenerate_ = kept.cols() < 3;
+    if (degenerate_) ++degenerate_scans_;
+    const Eigen::Matrix3d used = kept * (kept.transpose() * info * kept) * kept.transpose();
+    // Information form: P = (P^-1 + I')^-1 = (1 + P I')^-1 P; d = (1 + P I')^-1 d (the scan says the
+    // laser sits on its map along the directions it constrains).
+    const Eigen::Matrix3d g = (Eigen::Matrix3d::Identity() + laser_cov_ * used).inverse();
+    laser_cov_ = Symmetric(g * laser_cov_);
+    drift_ = g * drift_;
+  }
+  // The laser widened its own covariance (a poor fit's recovery, an update off the fit): never below it.
+  if (u.widened || u.recoveries > 0 || !u.measured) laser_cov_ = AtLeast(laser_cov_, laser_.covariance());
 }
 
 bool FusedSlam::CarryForward(int64_t utime, Pose2* z, Eigen::Matrix3d* r) const {
@@ -398,9 +462,9 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   const Pose2& m = laser_.pose();
   const Eigen::Vector2d p(m.x_m, m.y_m);
   const Pose2 zm = start_.Inverse().Compose(z);
-  const Eigen::Matrix3d rm = Rotate(start_rotation_.transpose(), r) + laser_.covariance();
+  const Eigen::Matrix3d rm = Rotate(start_rotation_.transpose(), r) + laser_covariance();
   const Eigen::Matrix3d a = Lever(u_at_, p);
-  const Eigen::Vector3d u = a * u_;
+  const Eigen::Vector3d u = a * u_ + drift_;
   const Eigen::Matrix3d uc = Symmetric(a * u_cov_ * a.transpose());
   const Eigen::Vector3d measured(m.x_m - zm.x_m, m.y_m - zm.y_m, WrapAngle(m.theta_rad - zm.theta_rad));
   Eigen::Vector3d y = measured - u;
@@ -408,11 +472,32 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   const Eigen::LDLT<Eigen::Matrix3d> s(Symmetric(uc + rm));
   v.mahalanobis2 = y.dot(s.solve(y));
   if (v.mahalanobis2 <= options_.gate_chi2) {
+    // Correlated fixes (fix_correlation_m): the update takes the fix's covariance times the
+    // effective number of fixes its error is shared with.
+    double factor = 1;
+    if (options_.fix_correlation_m > 0 && have_fix_) {
+      const double rho = std::exp(-travelled_since_fix_m_ / options_.fix_correlation_m);
+      factor = std::min(1e4, (1 + rho) / std::max(1e-12, 1 - rho));
+    }
+    const Eigen::Matrix3d ru = Rotate(start_rotation_.transpose(), r) * factor + laser_covariance();
+    const Eigen::LDLT<Eigen::Matrix3d> su(Symmetric(uc + ru));
+    const Eigen::Vector3d y_offset = y;  // the innovation of the robot's offset (cells and drift)
+    const Eigen::Vector3d drift_before = drift_;
+    const Eigen::Matrix3d ru_before = ru;  // the cells' updates see the drift's state before this fix
+    if (options_.laser_min_constraint > 0) {
+      // The laser's drift from its map takes its share (P_l S^-1) of the innovation.
+      const Eigen::Matrix3d kd = su.solve(laser_cov_).transpose();  // P_l S^-1
+      drift_ += kd * y_offset;
+      drift_.z() = WrapAngle(drift_.z());
+      laser_cov_ = Symmetric(laser_cov_ - kd * laser_cov_);
+    }
     u_at_ = p;
+    have_fix_ = true;
+    travelled_since_fix_m_ = 0;
     if (seen_.empty()) {
       // No map cell under the robot (just relocalised, no scan yet): the robot's offset alone.
-      const Eigen::Matrix3d k = s.solve(uc).transpose();  // uc S^-1 (both symmetric)
-      u_ = u + k * y;
+      const Eigen::Matrix3d k = su.solve(uc).transpose();  // uc S^-1 (both symmetric)
+      u_ = a * u_ + k * y_offset;
       u_.z() = WrapAngle(u_.z());
       u_cov_ = Symmetric(uc - k * uc);
     } else {
@@ -424,10 +509,10 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
       for (const auto& [key, w] : seen_) {
         MapOffset& c = cells_.at(key);
         const Eigen::Matrix3d ac = Lever(c.center, p);
-        Eigen::Vector3d yc = measured - ac * c.offset;
+        Eigen::Vector3d yc = measured - drift_before - ac * c.offset;
         yc.z() = WrapAngle(yc.z());
         const Eigen::Matrix3d oa = c.covariance * ac.transpose();
-        const Eigen::LDLT<Eigen::Matrix3d> sc(Symmetric(ac * oa + rm));
+        const Eigen::LDLT<Eigen::Matrix3d> sc(Symmetric(ac * oa + ru_before));
         const Eigen::Matrix3d kc = sc.solve(oa.transpose()).transpose();  // O A^T S_c^-1
         c.offset += kc * yc;
         c.offset.z() = WrapAngle(c.offset.z());
@@ -509,6 +594,8 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
       laser_.ResetPose(target, Diagonal(ixy, ith));
       u_cov_ = pm;
     }
+    laser_cov_ = laser_.covariance();  // the relocalised pose's: no drift from the map known
+    drift_.setZero();
     u_ = there_u;
     u_at_ = {target.x_m, target.y_m};
     seen_ = std::move(there_cells);

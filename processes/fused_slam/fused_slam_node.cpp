@@ -78,12 +78,16 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   o.map_cell_m = ini.GetDouble(s, "map_cell_m");
   o.map_drift_xy_m = ini.GetDouble(s, "map_drift_xy_m");
   o.map_drift_theta_rad = ini.GetDouble(s, "map_drift_theta_deg") / kDegPerRad;
+  o.map_drift_accumulates = ini.GetBool(s, "map_drift_accumulates");
   o.map_min_fit = ini.GetDouble(s, "map_min_fit");
   o.dynamic_explain_m = ini.GetDouble(s, "dynamic_explain_m");
   o.dynamic_max_behind_m = ini.GetDouble(s, "dynamic_max_behind_m");
   o.dynamic_max_fraction = ini.GetDouble(s, "dynamic_max_fraction");
   o.dynamic_map_age_s = ini.GetDouble(s, "dynamic_map_age_s");
   o.occlusion_fix_inflation = ini.GetDouble(s, "occlusion_fix_inflation");
+  o.laser_min_constraint = ini.GetDouble(s, "laser_min_constraint");
+  o.map_inherits_laser_drift = ini.GetBool(s, "map_inherits_laser_drift");
+  o.fix_correlation_m = ini.GetDouble(s, "fix_correlation_m");
   c.map_every_n_scans = ini.GetInt(s, "map_every_n_scans");
   c.status_every_n_scans = ini.GetInt(s, "status_every_n_scans");
   ini.CheckAllUsed();
@@ -116,10 +120,14 @@ void FusedSlamConfig::Print(std::ostream& out) const {
       << "\nsuspect_after = " << o.suspect_after << "\nstart_sigma_xy_m = " << o.start_sigma_xy_m
       << "\nstart_sigma_theta_deg = " << o.start_sigma_theta_rad * kDegPerRad << "\nmap_cell_m = " << o.map_cell_m
       << "\nmap_drift_xy_m = " << o.map_drift_xy_m << "\nmap_drift_theta_deg = " << o.map_drift_theta_rad * kDegPerRad
+      << "\nmap_drift_accumulates = " << (o.map_drift_accumulates ? "true" : "false")
       << "\nmap_min_fit = " << o.map_min_fit << "\ndynamic_explain_m = " << o.dynamic_explain_m
       << "\ndynamic_max_behind_m = " << o.dynamic_max_behind_m << "\ndynamic_max_fraction = " << o.dynamic_max_fraction
       << "\ndynamic_map_age_s = " << o.dynamic_map_age_s
       << "\nocclusion_fix_inflation = " << o.occlusion_fix_inflation
+      << "\nlaser_min_constraint = " << o.laser_min_constraint
+      << "\nmap_inherits_laser_drift = " << (o.map_inherits_laser_drift ? "true" : "false")
+      << "\nfix_correlation_m = " << o.fix_correlation_m
       << "\nmap_every_n_scans = " << map_every_n_scans << "\nstatus_every_n_scans = " << status_every_n_scans << "\n";
 }
 

@@ -44,7 +44,10 @@ void PrintCompareOptions(std::ostream& out, const CompareConfigPaths& paths, con
       << (f.dynamic_explain_m > 0 ? "left out" : "kept") << " (explain " << f.dynamic_explain_m << " m, behind "
       << f.dynamic_max_behind_m << " m, map age " << f.dynamic_map_age_s << " s, max fraction " << f.dynamic_max_fraction
       << ")"
-      << ", occlusion fix inflation " << f.occlusion_fix_inflation << "\n";
+      << ", occlusion fix inflation " << f.occlusion_fix_inflation << ", map drift "
+      << (f.map_drift_accumulates ? "accumulated since new cells" : "per scan") << ", laser min constraint "
+      << f.laser_min_constraint << (f.map_inherits_laser_drift ? " (cells inherit its drift)" : "")
+      << ", fix correlation " << f.fix_correlation_m << " m\n";
 }
 
 }  // namespace snapnav::eval

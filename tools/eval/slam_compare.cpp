@@ -233,6 +233,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     update(&no_vision, &no_vision_result, &no_vision_ms, &no_vision_max_ms);
     out.fused_sigma.push_back(fused.covariance().diagonal().cwiseMax(0.0).cwiseSqrt());
     out.fused_covariance.push_back(fused.covariance());
+    out.no_vision_covariance.push_back(no_vision.covariance());
     out.fused_occluded_fraction.push_back(fused.occluded_fraction());
     {
       const double c = std::cos(fused.map_frame().theta_rad), sn = std::sin(fused.map_frame().theta_rad);
@@ -242,6 +243,9 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       j.topLeftCorner<2, 2>() << c, -sn, sn, c;
       out.fused_map_offset.push_back(j * u);
       out.fused_map_offset_sigma.push_back((j * uc * j.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt());
+      const Eigen::Matrix3d lc = j * fused.laser_covariance() * j.transpose();
+      out.fused_weakest_constraint.push_back(fused.weakest_constraint());
+      out.fused_laser_sigma.push_back(lc.diagonal().cwiseMax(0.0).cwiseSqrt());
     }
     if (ratslam) ratslam_result.poses.push_back(ratslam->pose());
     scan_pending = true;
@@ -412,21 +416,29 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     if (m->ran) Measure(m, out.truth, options.rpe_delta_m, split);
   }
   {
-    // NEES of fused SLAM against the truth.
-    double sum = 0;
-    int within = 0, n = 0;
-    for (size_t i = 0; i < fused_result.poses.size() && i < out.truth.size() && i < out.fused_covariance.size(); ++i) {
-      const Eigen::Vector3d e(fused_result.poses[i].x_m - out.truth[i].x_m, fused_result.poses[i].y_m - out.truth[i].y_m,
-                              nav::WrapAngle(fused_result.poses[i].theta_rad - out.truth[i].theta_rad));
-      const Eigen::LDLT<Eigen::Matrix3d> ldlt(out.fused_covariance[i]);
-      const double nees = e.dot(ldlt.solve(e));
-      if (!std::isfinite(nees)) continue;
-      sum += nees;
-      within += nees <= 7.81 ? 1 : 0;
-      ++n;
-    }
-    out.fused_nees_mean = n ? sum / n : kNaN;
-    out.fused_nees_within_95 = n ? static_cast<double>(within) / n : kNaN;
+    // NEES of fused SLAM and of its ablation against the truth.
+    const auto nees = [&](const MethodResult& m, const std::vector<Eigen::Matrix3d>& covariance,
+                          std::vector<double>* each, double* mean, double* within_95) {
+      double sum = 0;
+      int within = 0, n = 0;
+      each->assign(m.poses.size(), kNaN);
+      for (size_t i = 0; i < m.poses.size() && i < out.truth.size() && i < covariance.size(); ++i) {
+        const Eigen::Vector3d e(m.poses[i].x_m - out.truth[i].x_m, m.poses[i].y_m - out.truth[i].y_m,
+                                nav::WrapAngle(m.poses[i].theta_rad - out.truth[i].theta_rad));
+        const Eigen::LDLT<Eigen::Matrix3d> ldlt(covariance[i]);
+        const double d2 = e.dot(ldlt.solve(e));
+        if (!std::isfinite(d2)) continue;
+        (*each)[i] = d2;
+        sum += d2;
+        within += d2 <= 7.81 ? 1 : 0;
+        ++n;
+      }
+      *mean = n ? sum / n : kNaN;
+      *within_95 = n ? static_cast<double>(within) / n : kNaN;
+    };
+    nees(fused_result, out.fused_covariance, &out.fused_nees, &out.fused_nees_mean, &out.fused_nees_within_95);
+    nees(no_vision_result, out.no_vision_covariance, &out.no_vision_nees, &out.no_vision_nees_mean,
+         &out.no_vision_nees_within_95);
   }
   if (out.kidnapped) {
     out.recovery_s = RecoveryTime(out.time_s, fused_result.error_m, out.kidnap_at_s, options.recovery_error_m,
@@ -437,6 +449,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   out.visual_accepted = fused.accepted();
   out.visual_rejected = fused.rejected();
   out.relocalizations = fused.relocalizations();
+  out.fused_degenerate_scans = fused.degenerate_scans();
   out.relocalizations_refused = fused.refused_relocalizations();
   out.visual_stale = fused.stale();
   out.unmapped_scans = fused.unmapped_scans();
@@ -533,6 +546,9 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
   k.push_back({"fused_slam_dynamic_overflow_scans", static_cast<double>(run.dynamic_overflow_scans)});
   k.push_back({"fused_slam_nees_mean", run.fused_nees_mean});
   k.push_back({"fused_slam_nees_within_95", run.fused_nees_within_95});
+  k.push_back({"fused_no_vision_nees_mean", run.no_vision_nees_mean});
+  k.push_back({"fused_no_vision_nees_within_95", run.no_vision_nees_within_95});
+  k.push_back({"fused_slam_degenerate_scans", static_cast<double>(run.fused_degenerate_scans)});
   k.push_back({"visual_fix_error_mean_m", run.visual_error_mean_m});
   k.push_back({"visual_fix_error_median_m", run.visual_error_median_m});
   k.push_back({"place_cells_ms_per_view", run.ms_per_view});
@@ -640,7 +656,9 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
     }
     csv << ",fused_slam_sigma_x_m,fused_slam_sigma_y_m,fused_slam_sigma_theta_rad,fused_slam_map_offset_x_m,"
            "fused_slam_map_offset_y_m,fused_slam_map_offset_theta_rad,fused_slam_map_offset_sigma_x_m,"
-           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad,fused_slam_occluded_fraction\n"
+           "fused_slam_map_offset_sigma_y_m,fused_slam_map_offset_sigma_theta_rad,fused_slam_occluded_fraction,"
+           "fused_slam_nees,fused_no_vision_nees,fused_slam_laser_sigma_x_m,fused_slam_laser_sigma_y_m,"
+           "fused_slam_laser_sigma_theta_rad,fused_slam_weakest_constraint\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.truth.size(); ++i) {
       csv << run.utime[i] << "," << run.time_s[i] << "," << run.truth[i].x_m << "," << run.truth[i].y_m << ","
@@ -654,7 +672,12 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
       const Eigen::Vector3d o = i < run.fused_map_offset.size() ? run.fused_map_offset[i] : nan3;
       const Eigen::Vector3d os = i < run.fused_map_offset_sigma.size() ? run.fused_map_offset_sigma[i] : nan3;
       csv << "," << o.x() << "," << o.y() << "," << o.z() << "," << os.x() << "," << os.y() << "," << os.z() << ","
-          << (i < run.fused_occluded_fraction.size() ? run.fused_occluded_fraction[i] : kNaN) << "\n";
+          << (i < run.fused_occluded_fraction.size() ? run.fused_occluded_fraction[i] : kNaN) << ","
+          << (i < run.fused_nees.size() ? run.fused_nees[i] : kNaN) << ","
+          << (i < run.no_vision_nees.size() ? run.no_vision_nees[i] : kNaN);
+      const Eigen::Vector3d ls = i < run.fused_laser_sigma.size() ? run.fused_laser_sigma[i] : nan3;
+      csv << "," << ls.x() << "," << ls.y() << "," << ls.z() << ","
+          << (i < run.fused_weakest_constraint.size() ? run.fused_weakest_constraint[i] : kNaN) << "\n";
     }
   }
   {

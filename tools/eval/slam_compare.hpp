@@ -128,6 +128,17 @@ struct CompareRun {
   // (e^T P^-1 e over x, y, theta at every scan; 3 for a consistent filter) and the share of scans
   // where it is within the chi-square 95 % bound (7.81).
   double fused_nees_mean = 0, fused_nees_within_95 = 0;
+  // The same of the ablation (fused SLAM without visual fixes: its laser and its map-offset model
+  // alone), with its covariance at every scan; and both NEES at every scan (trajectories.csv).
+  std::vector<Eigen::Matrix3d> no_vision_covariance;
+  double no_vision_nees_mean = 0, no_vision_nees_within_95 = 0;
+  std::vector<double> fused_nees, no_vision_nees;
+  // Fused SLAM's laser part (its covariance relative to its own map, scene frame's axes): std. devs. at every scan.
+  std::vector<Eigen::Vector3d> fused_laser_sigma;
+  // Its laser's information per matched point along the weakest position direction (see
+  // nav::FusedSlamOptions::laser_min_constraint) at every scan, and the scans where it was left out.
+  std::vector<double> fused_weakest_constraint;
+  int64_t fused_degenerate_scans = 0;
   std::vector<Eigen::Vector2d> map;   // fused SLAM's map at the end
   int memory_cells = 0;
   // Visual measurements of fused SLAM.

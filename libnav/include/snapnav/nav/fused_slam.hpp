@@ -73,6 +73,18 @@
 // rejected visual measurements) scans do not add points to the map, nor does a scan whose ICP
 // fit is below map_min_fit.
 //
+// Consistency (the covariance against the errors; all off by default, on in config/fused_slam.ini).
+// Three things made the covariance claim far less than the errors (corridor NEES 48):
+//   - the map's drift was added per scan, to the cells that scan reached first: most scans reach
+//     none, and their drift was lost (map_drift_accumulates: since the last scan that did);
+//   - along a corridor's axis the laser's covariance claims millimetres from the walls' noisy
+//     normals while its pose slides with the odometry (laser_min_constraint: fused SLAM's own
+//     covariance of the laser without those directions, P_l, and the laser's drift d from its map
+//     as a state the fixes estimate; map_inherits_laser_drift: new cells are built at m and inherit
+//     d and P_l);
+//   - the fixes' errors are correlated along the path (neighbouring views are alike), so a run of
+//     them is worth fewer independent ones (fix_correlation_m).
+//
 // Where the laser sees its map well and the map was built from a certain pose (a room seen from
 // the start), the offsets stay as certain as the start (start_sigma_*) and the fixes, centimetres
 // off, move the world pose by micrometres: fused SLAM is then the laser SLAM. Where the map drifts
@@ -124,6 +136,11 @@ struct FusedSlamOptions {
   // over 1 m].
   double map_drift_xy_m = 0.05;
   double map_drift_theta_rad = 0.0087;
+  // ... the metres travelled since the last scan that reached new cells, not since the previous scan
+  // (false): the map drifts while the robot travels, and a scan that maps no new cell does not
+  // undo the drift it travelled (with false it is lost, and a corridor mapped a cell every 2 m gets
+  // the drift of 3 cm each time) [true | false].
+  bool map_drift_accumulates = false;
   // A scan with an ICP fit below this adds no points [0-1]; 0: off. Off by default: where the
   // map has nothing yet (just relocalised into an unexplored part) every fit is poor, and the map
   // could never grow there.
@@ -146,6 +163,29 @@ struct FusedSlamOptions {
   // last scan's occluded fraction: people in the view move the place cells' match (the memory was
   // recorded without them) [1, 0: off].
   double occlusion_fix_inflation = 0;
+  // Degeneracy of the laser (a corridor's axis). LaserSlam's ICP measurement covariance comes from
+  // the matched points' surface normals; along a corridor's axis their information is the noise of
+  // the normals, yet, scan after scan, it makes the laser's covariance claim millimetres there while
+  // its pose slides with the odometry. With laser_min_constraint > 0 fused SLAM keeps its own
+  // covariance of the laser's pose relative to its map (P_l, map frame): the laser's motion model
+  // predicts it, and each scan's ICP information I (LaserSlamUpdate::measurement_covariance^-1)
+  // updates it in information form, P_l = (P_l^-1 + I')^-1, where I' is I without the weak
+  // position directions: an eigenvector v of I's position block whose information per matched point,
+  // lambda point_sigma_m^2 / matches, is below laser_min_constraint (the share of the points whose
+  // normals would face v; a wall facing v: ~1) constrains nothing. P_l is never below the laser's
+  // own covariance. Along the weak directions the laser's drift from its map, d (mean zero after a
+  // scan that constrains it), becomes a state the visual fixes estimate: the world pose is
+  // start (+) (m - u - d), its covariance P_l + U. 0: off (the laser's covariance, no d).
+  double laser_min_constraint = 0;
+  // Cells a scan reaches first inherit the laser's drift d and P_l too (the map there is built at the
+  // drifted pose) [true | false; without laser_min_constraint nothing changes].
+  bool map_inherits_laser_drift = false;
+  // Visual fixes whose errors are correlated: the place cells' error at neighbouring poses is alike
+  // (their views are), so a run of fixes along a few decimetres does not average it out. An accepted
+  // fix updates with its covariance multiplied by (1 + rho) / (1 - rho), rho = exp(-s /
+  // fix_correlation_m), s the distance travelled since the previous accepted fix: the variance of the
+  // mean of an AR(1) error (the gate tests the fix with its own covariance). [m, 0: off, independent]
+  double fix_correlation_m = 0;
   void Validate() const;              // throws std::invalid_argument naming the option
 };
 
@@ -229,6 +269,17 @@ class FusedSlam {
   // The robot's map offset (map frame, at the robot) and its covariance.
   const Eigen::Vector3d& robot_offset() const { return u_; }
   const Eigen::Matrix3d& robot_offset_covariance() const { return u_cov_; }
+  // The laser pose's covariance relative to its map as fused SLAM takes it (laser_min_constraint:
+  // its own, P_l; else the laser's), and the laser's estimated drift d from its map (zero when off).
+  const Eigen::Matrix3d& laser_covariance() const {
+    return options_.laser_min_constraint > 0 ? laser_cov_ : laser_.covariance();
+  }
+  const Eigen::Vector3d& laser_drift() const { return drift_; }
+  // Of the last scan with an ICP measurement: the information per matched point along the weakest
+  // position direction (see laser_min_constraint; 0 before one), and whether it was left out.
+  double weakest_constraint() const { return weakest_constraint_; }
+  bool degenerate() const { return degenerate_; }
+  int64_t degenerate_scans() const { return degenerate_scans_; }
   // The offset of the map cell holding the world point p, if a scan has reached it.
   std::optional<MapOffset> MapOffsetAt(const Eigen::Vector2d& p) const;
   size_t map_offset_cells() const { return cells_.size(); }
@@ -289,6 +340,16 @@ class FusedSlam {
   int64_t dynamic_points_ = 0, dynamic_overflow_scans_ = 0;
   double travelled_since_scan_m_ = 0;  // odometry distance since the last scan [m]
   std::vector<Eigen::Vector2d> last_points_;  // a sample of the last scan (robot frame)
+  // laser_min_constraint: P_l and d (map frame; see the option).
+  Eigen::Matrix3d laser_cov_ = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d drift_ = Eigen::Vector3d::Zero();
+  double weakest_constraint_ = 0;
+  bool degenerate_ = false;
+  int64_t degenerate_scans_ = 0;
+  double travelled_since_new_cells_m_ = 0;  // odometry distance since the last scan that mapped new cells [m]
+  double travelled_since_fix_m_ = 0;  // odometry distance since the last accepted visual fix [m]
+  bool have_fix_ = false;
+  void UpdateLaserCovariance(const LaserSlamUpdate& u);
 };
 
 }  // namespace snapnav::nav
