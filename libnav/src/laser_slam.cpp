@@ -225,6 +225,14 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   const int64_t x1 = static_cast<int64_t>(std::floor((p.x() + reach) / lookup_cell_));
   const int64_t y0 = static_cast<int64_t>(std::floor((p.y() - reach) / lookup_cell_));
   const int64_t y1 = static_cast<int64_t>(std::floor((p.y() + reach) / lookup_cell_));
+  // Each column's dx^2 once, for every row (the same arithmetic as per cell).
+  thread_local std::vector<double> dx2;
+  dx2.resize(static_cast<size_t>(x1 - x0 + 1));
+  for (int64_t cx = x0; cx <= x1; ++cx) {
+    const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
+    dx2[static_cast<size_t>(cx - x0)] = dx * dx;
+  }
+  const double* dx2_at = dx2.data() - x0;  // by cx
   for (int64_t tx = x0 >> kTileBits; tx <= x1 >> kTileBits; ++tx) {
     for (int64_t ty = y0 >> kTileBits; ty <= y1 >> kTileBits; ++ty) {
       Tile* tile = TileAt(tx, ty);
@@ -241,8 +249,7 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
         const int64_t hi = std::min(cx1, static_cast<int64_t>(std::floor(centre + half)) + 1);
         const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
         for (int64_t cx = lo; cx <= hi; ++cx) {
-          const double dx = (static_cast<double>(cx) + 0.5) * lookup_cell_ - p.x();
-          const double d2 = dx * dx + dy2;
+          const double d2 = dx2_at[cx] + dy2;
           if (d2 > reach2) continue;
           const int c = row + static_cast<int>(cx - (tx << kTileBits));
           // Insert into the cell's candidates, nearest first (mostly it is farther than all three).
