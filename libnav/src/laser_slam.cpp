@@ -382,6 +382,11 @@ inline void AccumulateShiftsStep2(const uint8_t* base, int row_stride, int shift
 
 void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes,
                                          double* sums) const {
+  AddShiftedLikelihoods(points, 1.0, 0.0, Eigen::Vector2d::Zero(), n, step_nodes, sums);  // (x 1 - y 0 + 0: x)
+}
+
+void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& moving, double c, double s,
+                                         const Eigen::Vector2d& t, int n, int step_nodes, double* sums) const {
   if (!has_likelihood()) throw std::logic_error("point map: no likelihood raster");
   const int shifts = 2 * n + 1;
   // The nodes any shift of a point interpolates between: a block of w x w from (i - n s, j - n s).
@@ -430,8 +435,12 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
     const __m128d inv2 = _mm_set1_pd(inv_node), half2 = _mm_set1_pd(0.5), one2 = _mm_set1_pd(1.0);
     const __m128 one4 = _mm_set1_ps(1.0f);
     const int64_t back = static_cast<int64_t>(n) * step_nodes;
-    for (const Eigen::Vector2d& p : points) {
-      const __m128d uv = _mm_sub_pd(_mm_mul_pd(_mm_loadu_pd(p.data()), inv2), half2);  // (u, v)
+    // The moved point (c x - s y + tx, s x + c y + ty) as (c x + (-s) y, c y + s x) + t: the same bits.
+    const __m128d cc = _mm_set1_pd(c), ms = _mm_set_pd(s, -s), tt = _mm_loadu_pd(t.data());
+    for (const Eigen::Vector2d& q : moving) {
+      const __m128d xy = _mm_loadu_pd(q.data());
+      const __m128d p = _mm_add_pd(_mm_add_pd(_mm_mul_pd(xy, cc), _mm_mul_pd(_mm_shuffle_pd(xy, xy, 1), ms)), tt);
+      const __m128d uv = _mm_sub_pd(_mm_mul_pd(p, inv2), half2);  // (u, v)
       const __m128i t = _mm_cvttpd_epi32(uv);
       const __m128d tf = _mm_cvtepi32_pd(t);
       const __m128d above = _mm_cmpgt_pd(tf, uv);  // truncated up: the floor is one less
@@ -462,8 +471,9 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& poi
 #else
   const bool fast = false;
 #endif
-  for (const Eigen::Vector2d& p : points) {
+  for (const Eigen::Vector2d& q : moving) {
     if (fast) break;  // (done above)
+    const Eigen::Vector2d p = Eigen::Vector2d(c * q.x() - s * q.y(), s * q.x() + c * q.y()) + t;
     const double u = p.x() * inv_node - 0.5, v = p.y() * inv_node - 0.5;
     const int64_t i = FloorToInt(u), j = FloorToInt(v);
     const float fx = static_cast<float>(u - static_cast<double>(i)), fy = static_cast<float>(v - static_cast<double>(j));
@@ -897,8 +907,10 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
   const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
   const Eigen::Matrix3d info = (covariance + Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal().toDenseMatrix()).inverse();
   const double prior = prior_on ? 0.5 * options_.search_prior_weight : 0.0;
-  std::vector<Eigen::Vector2d> rotated;
+  std::vector<Eigen::Vector2d> rotated, subset;  // the search's points, rotated to a heading; as they are
   rotated.reserve(points.size() / stride + 1);
+  subset.reserve(points.size() / stride + 1);
+  for (size_t i = 0; i < points.size(); i += stride) subset.push_back(points[i]);
   const int sign = options_.search_order_reversed ? -1 : 1;
   // With the map's likelihood raster (its nodes a lookup cell / kLikelihoodSub apart, the shifts
   // a whole cell), a point's score at every shift comes from one block of the raster.
@@ -946,13 +958,14 @@ std::vector<LaserSlam::Candidate> LaserSlam::SearchPoses(const Pose2& around, co
   };
   for (int ik = -nt; ik <= nt; ++ik) {
     const double dt = sign * ik * step;
-    rotate_to(dt);
+    if (!raster) rotate_to(dt);  // (the raster moves the points itself)
     Candidate& best = by_heading[static_cast<size_t>(ik + nt)];
     best = {around, -std::numeric_limits<double>::infinity()};
     if (raster) {
       // The raster ranks the shifts; its best is the heading's candidate unless it is scored exactly below.
       std::fill(sums.begin(), sums.end(), 0.0);
-      map_.AddShiftedLikelihoods(rotated, nxy, PointGridMap::kLikelihoodSub, sums.data());
+      map_.AddShiftedLikelihoods(subset, std::cos(around.theta_rad + dt), std::sin(around.theta_rad + dt),
+                                 Eigen::Vector2d(around.x_m, around.y_m), nxy, PointGridMap::kLikelihoodSub, sums.data());
       ranked.clear();
       for (int ia = -nxy; ia <= nxy; ++ia) {
         for (int ib = -nxy; ib <= nxy; ++ib) {

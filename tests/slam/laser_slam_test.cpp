@@ -165,6 +165,20 @@ TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
       }
     }
   }
+  // Moved by a rotation and a translation on the way in: the same sums, bit for bit, as for the
+  // moved points.
+  {
+    const double theta = 0.3, c = std::cos(theta), sn = std::sin(theta);
+    const Eigen::Vector2d t(0.05, -0.02);
+    std::vector<Eigen::Vector2d> moved;
+    for (const Eigen::Vector2d& p : scan) moved.push_back(Eigen::Vector2d(c * p.x() - sn * p.y(), sn * p.x() + c * p.y()) + t);
+    for (const int n : {0, 1, 2, 6, 10}) {
+      std::vector<double> a((2 * n + 1) * (2 * n + 1), 0.0), b(a.size(), 0.0);
+      raster.AddShiftedLikelihoods(moved, n, PointGridMap::kLikelihoodSub, a.data());
+      raster.AddShiftedLikelihoods(scan, c, sn, t, n, PointGridMap::kLikelihoodSub, b.data());
+      for (size_t k = 0; k < a.size(); ++k) EXPECT_EQ(a[k], b[k]) << n << " " << k;
+    }
+  }
   std::vector<double> sums(9, 0.0);
   EXPECT_THROW(exact.AddShiftedLikelihoods(scan, 1, 2, sums.data()), std::logic_error);
   // A copy is a map of its own: points added to it are not in the original.

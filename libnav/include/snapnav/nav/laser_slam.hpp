@@ -114,6 +114,10 @@ class PointGridMap {
   // sums[(ia + n) * (2n + 1) + (ib + n)] the sum over `points` of Likelihood(p + shift), each
   // point's interpolation weights computed once for all shifts. Needs a raster.
   void AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& points, int n, int step_nodes, double* sums) const;
+  // The same for the points moved by the rotation (c, s) and then t (each c x - s y + t.x,
+  // s x + c y + t.y, as the search rotates them), without a copy of the moved points.
+  void AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& moving, double c, double s, const Eigen::Vector2d& t,
+                             int n, int step_nodes, double* sums) const;
 
  private:
   static constexpr int kTileBits = 5, kTile = 1 << kTileBits;  // 32 x 32 lookup cells per tile
