@@ -441,12 +441,13 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
       const __m128d xy = _mm_loadu_pd(q.data());
       const __m128d p = _mm_add_pd(_mm_add_pd(_mm_mul_pd(xy, cc), _mm_mul_pd(_mm_shuffle_pd(xy, xy, 1), ms)), tt);
       const __m128d uv = _mm_sub_pd(_mm_mul_pd(p, inv2), half2);  // (u, v)
-      const __m128i t = _mm_cvttpd_epi32(uv);
-      const __m128d tf = _mm_cvtepi32_pd(t);
+      const __m128i truncated = _mm_cvttpd_epi32(uv);
+      const __m128d tf = _mm_cvtepi32_pd(truncated);
       const __m128d above = _mm_cmpgt_pd(tf, uv);  // truncated up: the floor is one less
       const __m128d fl = _mm_sub_pd(tf, _mm_and_pd(above, one2));
       const int down = _mm_movemask_pd(above);
-      const int64_t i = _mm_cvtsi128_si32(t) - (down & 1), j = _mm_cvtsi128_si32(_mm_shuffle_epi32(t, 1)) - (down >> 1);
+      const int64_t i = _mm_cvtsi128_si32(truncated) - (down & 1);
+      const int64_t j = _mm_cvtsi128_si32(_mm_shuffle_epi32(truncated, 1)) - (down >> 1);
       const uint8_t* nodes = nodes_of((i - back) >> kNodeBits, (j - back) >> kNodeBits);
       if (!nodes) continue;  // no map point within reach of any shift
       const uint8_t* base = nodes + ((j - back) & mask) * kRasterRow + ((i - back) & mask);
