@@ -376,6 +376,21 @@ inline void AccumulateShiftsStep2(const uint8_t* base, int row_stride, int shift
     }
   }
 }
+
+// AccumulateShiftsStep2 with the window's size known at compile time where it is common.
+inline void AccumulateShiftsStep2Any(const uint8_t* base, int row_stride, int shifts, __m128 w00, __m128 w10,
+                                     __m128 w01, __m128 w11, Lanes* acc) {
+  switch (shifts) {
+    case 3:
+      AccumulateShiftsStep2<3>(base, row_stride, shifts, w00, w10, w01, w11, acc);
+      break;
+    case 5:
+      AccumulateShiftsStep2<5>(base, row_stride, shifts, w00, w10, w01, w11, acc);
+      break;
+    default:
+      AccumulateShiftsStep2<0>(base, row_stride, shifts, w00, w10, w01, w11, acc);
+  }
+}
 #endif
 
 }  // namespace
@@ -457,16 +472,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
       const __m128 weights = _mm_mul_ps(_mm_movelh_ps(pairs, pairs), _mm_shuffle_ps(pairs, pairs, _MM_SHUFFLE(3, 3, 2, 2)));
       const __m128 v00 = _mm_shuffle_ps(weights, weights, 0x00), v10 = _mm_shuffle_ps(weights, weights, 0x55);
       const __m128 v01 = _mm_shuffle_ps(weights, weights, 0xAA), v11 = _mm_shuffle_ps(weights, weights, 0xFF);
-      switch (shifts) {
-        case 3:
-          AccumulateShiftsStep2<3>(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
-          break;
-        case 5:
-          AccumulateShiftsStep2<5>(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
-          break;
-        default:
-          AccumulateShiftsStep2<0>(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
-      }
+      AccumulateShiftsStep2Any(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());
     }
   }
 #else
@@ -522,16 +528,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
 #if defined(__SSE2__)
     if (simd) {
       const __m128 v00 = _mm_set1_ps(w00), v10 = _mm_set1_ps(w10), v01 = _mm_set1_ps(w01), v11 = _mm_set1_ps(w11);
-      switch (shifts) {
-        case 3:
-          AccumulateShiftsStep2<3>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
-          break;
-        case 5:
-          AccumulateShiftsStep2<5>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
-          break;
-        default:
-          AccumulateShiftsStep2<0>(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
-      }
+      AccumulateShiftsStep2Any(base, row_stride, shifts, v00, v10, v01, v11, acc4.data());
       continue;
     }
 #endif
