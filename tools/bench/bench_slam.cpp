@@ -135,7 +135,7 @@ int Main(int argc, char** argv) {
                     "bench.md, trajectories.csv and map images to --out.");
   flags.AddString("rawlog", &rawlog, "MRPT rawlog with laser scans and odometry");
   flags.AddInt("runs", &runs, "runs of our laser SLAM per figure");
-  flags.AddInt("icp-runs", &icp_runs, "runs of icp-slam");
+  flags.AddInt("icp-runs", &icp_runs, "runs of icp-slam in each of the two timed configs");
   bool no_ladder = false;
   flags.AddBool("no-icp-slam-ladder", &no_ladder,
                 "skip the evidence runs of icp-slam (one each) at settings between the classic config and full\n"
