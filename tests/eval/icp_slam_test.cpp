@@ -132,6 +132,27 @@ TEST(IcpSlamConfig, SetsItsKeysAndKeepsTheRest) {
   EXPECT_THROW(MakeIcpSlamConfig("[ICP]\nx=1\n", "a", "b"), std::invalid_argument);
 }
 
+TEST(IcpSlamConfig, SetsOtherKeysInTheirSections) {
+  const std::string base =
+      "[ICP]\ncorresponding_points_decimation = 5 // every 5th\n"
+      "[MappingApplication]\nlocalizationLinDistance\t= 0.2\t// metres\ncorresponding_points_decimation = 9\n";
+  const std::string cfg = MakeIcpSlamConfig(base, "/r.rawlog", "/o", "",
+                                            {{"ICP", "corresponding_points_decimation", "1"},
+                                             {"MappingApplication", "localizationLinDistance", "0"}});
+  EXPECT_NE(cfg.find("[ICP]\n# snapnav: was corresponding_points_decimation = 5\ncorresponding_points_decimation = 1\n"),
+            std::string::npos)
+      << cfg;
+  EXPECT_NE(cfg.find("\n# snapnav: was localizationLinDistance = 0.2\nlocalizationLinDistance = 0\n"), std::string::npos);
+  EXPECT_NE(cfg.find("\ncorresponding_points_decimation = 9\n"), std::string::npos);  // another section's: kept
+  // A key to set that the base does not have (in that section) is a mistake, not an addition.
+  const std::string message = ThrowMessage([&] {
+    MakeIcpSlamConfig(base, "/r.rawlog", "/o", "", {{"MappingApplication", "localizationAngDistance", "0"}});
+  });
+  EXPECT_NE(message.find("localizationAngDistance in [MappingApplication]"), std::string::npos) << message;
+  EXPECT_THROW(MakeIcpSlamConfig(base, "/r.rawlog", "/o", "", {{"ICP", "localizationLinDistance", "0"}}),
+               std::invalid_argument);
+}
+
 TEST(IcpSlamConfig, TheShippedClassicConfig) {
   std::ifstream in(kIcpSlamClassicConfig);
   if (!in) {

@@ -59,50 +59,20 @@ std::string Spread(const std::vector<double>& v) {
 struct Baseline {
   std::string name;   // in file names and JSON keys
   std::string label;  // in the report
-  std::vector<std::pair<std::string, std::string>> keys;
+  std::vector<eval::IcpSlamKey> keys;
   bool timed = false;  // --icp-runs runs, interleaved with ours (else one run: evidence)
 };
-const std::pair<std::string, std::string> kLocLin0{"localizationLinDistance", "0"};
-const std::pair<std::string, std::string> kLocAng0{"localizationAngDistance", "0"};
-const std::pair<std::string, std::string> kDecimation1{"corresponding_points_decimation", "1"};
-const std::vector<std::pair<std::string, std::string>> kEveryScanEveryPoint = {kLocLin0, kLocAng0, kDecimation1};
+const eval::IcpSlamKey kLocLin0{"MappingApplication", "localizationLinDistance", "0"};
+const eval::IcpSlamKey kLocAng0{"MappingApplication", "localizationAngDistance", "0"};
+const eval::IcpSlamKey kDecimation1{"ICP", "corresponding_points_decimation", "1"};
 
 struct BaselineResult {
-  eval::IcpSlamOptions options;
   eval::IcpSlamRun last;
   std::vector<double> ms, wall_ms;
   double median_ms = 0, median_wall_ms = 0, ratio = 0;  // ratio: its ms/scan over ours
   eval::IcpSlamComparison cmp;
   eval::MapConsistency consistency;
 };
-
-// `base` with each of `keys` set (a line "KEY = VALUE", the old line kept in its comment) into
-// `path`. Throws if a key is not in `base`.
-void WriteVariantConfig(const std::string& base, const std::vector<std::pair<std::string, std::string>>& keys,
-                        const std::string& name, const std::string& path) {
-  std::ifstream in(base);
-  if (!in) throw std::runtime_error("cannot read icp-slam config " + base);
-  std::ostringstream text;
-  std::vector<bool> found(keys.size(), false);
-  std::string line;
-  while (std::getline(in, line)) {
-    for (size_t k = 0; k < keys.size(); ++k) {
-      const std::string& key = keys[k].first;
-      if (line.rfind(key, 0) != 0 || line.size() == key.size()) continue;
-      const char next = line[key.size()];
-      if (next != ' ' && next != '\t' && next != '=') continue;
-      line = key + " = " + keys[k].second + "  // bench-slam: " + name + " (was: " + line + ")";
-      found[k] = true;
-    }
-    text << line << "\n";
-  }
-  for (size_t k = 0; k < keys.size(); ++k) {
-    if (!found[k]) throw std::runtime_error("icp-slam config " + base + " has no key " + keys[k].first);
-  }
-  std::ofstream out(path);
-  out << text.str();
-  if (!out) throw std::runtime_error("cannot write " + path);
-}
 
 // Median ms per scan of `runs` runs of our SLAM over `log`; the last run in *last.
 double OurMsPerScan(const eval::SlamLog& log, const nav::LaserSlamOptions& options, int runs, const std::string& what,
@@ -197,7 +167,8 @@ int Main(int argc, char** argv) {
   // 5th point). The goal is judged against the second.
   std::vector<Baseline> baselines = {
       {"classic", "classic config (MRPT's demo, as shipped)", {}, true},
-      {"every_scan", "every scan, every point (the work ours does per scan)", kEveryScanEveryPoint, true},
+      {"every_scan", "every scan, every point (the work ours does per scan)", {kLocLin0, kLocAng0, kDecimation1},
+       true},
   };
   if (!no_ladder) {
     // Evidence of which trajectory is right where they differ: icp-slam, one run each, a step at a
@@ -206,23 +177,20 @@ int Main(int argc, char** argv) {
     baselines.push_back({"every_scan_dec5", "every scan, every 5th point", {kLocLin0, kLocAng0}, false});
     baselines.push_back({"every_point", "every point, ICP after 0.2 m / 5 deg", {kDecimation1}, false});
     baselines.push_back({"keyframes_06", "every scan, every point, keyframes every 0.6 m / 20 deg",
-                         {kLocLin0, kLocAng0, kDecimation1, {"insertionLinDistance", "0.6"},
-                          {"insertionAngDistance", "20"}},
+                         {kLocLin0, kLocAng0, kDecimation1, {"MappingApplication", "insertionLinDistance", "0.6"},
+                          {"MappingApplication", "insertionAngDistance", "20"}},
                          false});
     baselines.push_back({"dense", "every point, keyframes every 0.2 m / 5 deg",
-                         {kDecimation1, {"insertionLinDistance", "0.2"}, {"insertionAngDistance", "5"}}, false});
+                         {kDecimation1, {"MappingApplication", "insertionLinDistance", "0.2"},
+                          {"MappingApplication", "insertionAngDistance", "5"}},
+                         false});
   }
   std::vector<BaselineResult> results(baselines.size());
-  for (size_t b = 0; b < baselines.size(); ++b) {
-    results[b].options = icp_options;
-    if (!baselines[b].keys.empty()) {
-      results[b].options.base_config = (out / "work" / ("icp-slam-" + baselines[b].name + "-base.ini")).string();
-      WriteVariantConfig(icp_options.base_config, baselines[b].keys, baselines[b].name, results[b].options.base_config);
-    }
-  }
   const auto run_icp = [&](size_t b) {
     BaselineResult& res = results[b];
-    res.last = eval::RunIcpSlam(rawlog, (out / "work" / ("icp-slam-" + baselines[b].name)).string(), res.options);
+    eval::IcpSlamOptions options = icp_options;
+    options.set = baselines[b].keys;
+    res.last = eval::RunIcpSlam(rawlog, (out / "work" / ("icp-slam-" + baselines[b].name)).string(), options);
     res.ms.push_back(res.last.ms_per_scan());
     res.wall_ms.push_back(res.last.wall_ms_per_scan());
   };

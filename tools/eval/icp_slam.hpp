@@ -42,10 +42,16 @@ inline constexpr char kIcpSlamClassicConfig[] = "/usr/share/mrpt/config_files/ic
 inline constexpr char kMalagaLoopRawlog[] =
     "/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
 
+// One key of an icp-slam ini file to set: `key = value` in [section].
+struct IcpSlamKey {
+  std::string section, key, value;
+};
+
 struct IcpSlamOptions {
   std::string icp_slam = "icp-slam";            // program: a name looked up on PATH, or a path
   std::string carmen2rawlog = "carmen2rawlog";  // for CARMEN input
   std::string base_config = kIcpSlamClassicConfig;
+  std::vector<IcpSlamKey> set;  // keys of base_config set to other values (each must be in it)
   double timeout_s = 900;  // icp-slam is killed after this long [s]
   bool progress = true;    // what is run, on stderr
 };
@@ -99,10 +105,11 @@ IcpSlamComparison CompareWithIcpSlam(const std::vector<int64_t>& scan_utimes, co
 // The icp-slam config: `base_ini` (the text of an icp-slam ini file) with these keys of
 // [MappingApplication] set (replaced where present, added after the section header otherwise):
 // rawlog_file, rawlog_offset = 0, logOutput_dir, LOG_FREQUENCY = 0, SAVE_3D_SCENE = 0,
-// SAVE_POSE_LOG = 0, SHOW_PROGRESS_3D_REAL_TIME = 0, verbosity = LVL_WARN. Throws
-// std::invalid_argument if there is no [MappingApplication] section.
+// SAVE_POSE_LOG = 0, SHOW_PROGRESS_3D_REAL_TIME = 0, verbosity = LVL_WARN; and each of `set`
+// replaced in its section. Throws std::invalid_argument if there is no [MappingApplication]
+// section, or a key of `set` is not in its section.
 std::string MakeIcpSlamConfig(const std::string& base_ini, const std::string& rawlog, const std::string& output_dir,
-                              const std::string& base_name = "");
+                              const std::string& base_name = "", const std::vector<IcpSlamKey>& set = {});
 
 // log_estimated_path.txt: one "step x y yaw" line per entry, steps 0, 1, 2, ... Throws
 // std::runtime_error naming the file and line on anything else.
