@@ -1,6 +1,7 @@
 // Node test: laser-slam on memq:// — publish odometry and scans of a ray-cast room, handle,
 // assert on the decoded poses and maps; bad input is counted, never a crash.
 #include "laser_slam_node.hpp"
+#include "snapnav/laser_slam_status_t.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/laser_slam_status_t.hpp"
 #include "snapnav/point_map_t.hpp"
 #include "snapnav/pose_t.hpp"
 
@@ -28,49 +30,22 @@ constexpr double kAngleIncrement = 240.0 * M_PI / 180.0 / (kBeams - 1);
 constexpr double kRangeMin = 0.02, kRangeMax = 5.6;
 constexpr double kMountX = 0.1;  // laser 10 cm ahead of the robot centre
 
-// [laser_slam] keys with libnav's defaults; map_every_n_scans = 10.
-const std::vector<std::pair<std::string, std::string>> kSlamKeys = {{"translation_noise_m_per_m", "0.05"},
-                                                                    {"rotation_noise_rad_per_rad", "0.4"},
-                                                                    {"rotation_noise_rad_per_m", "0.0052"},
-                                                                    {"initial_sigma_xy_m", "0.01"},
-                                                                    {"initial_sigma_theta_deg", "0.5"},
-                                                                    {"metric", "point_to_point"},
-                                                                    {"match_distance_m", "0.2"},
-                                                                    {"match_distance_start_m", "0.6"},
-                                                                    {"robust_scale_m", "0.05"},
-                                                                    {"max_range_m", "0"},
-                                                                    {"search_sigmas", "3.5"},
-                                                                    {"search_window_max_deg", "30"},
-                                                                    {"search_step_deg", "0.5"},
-                                                                    {"matcher", "correlative"},
-                                                                    {"search_window_xy_m", "0.3"},
-                                                                    {"search_sigma_m", "0.05"},
-                                                                    {"search_prior_weight", "1"},
-                                                                    {"refine_starts", "3"},
-                                                                    {"refine_prune_iterations", "0"},
-                                                                    {"refine_prune_fraction", "0.8"},
-                                                                    {"scan_latency_s", "0"},
-                                                                    {"recovery_fit", "0.6"},
-                                                                    {"turn_noise_rad_per_rad", "1"},
-                                                                    {"stale_odometry", "true"},
-                                                                    {"stale_fraction", "0.25"},
-                                                                    {"update_score_margin", "0.05"},
-                                                                    {"icp_iterations", "15"},
-                                                                    {"icp_convergence_m", "0.0001"},
-                                                                    {"point_sigma_m", "0.03"},
-                                                                    {"min_matches", "20"},
-                                                                    {"map_resolution_m", "0.05"},
-                                                                    {"add_distance_m", "0.08"},
-                                                                    {"scan_step", "1"},
-                                                                    {"lookup_cell_m", "0.05"},
-                                                                    {"map_every_n_scans", "10"}};
+// [laser_slam] keys of the shipped config (libnav's defaults: ShippedConfigHasTheLibnavDefaults);
+// map_every_n_scans = 10.
+std::vector<std::pair<std::string, std::string>> SlamKeys() {
+  const glue::IniFile shipped = glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/laser_slam.ini");
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (const std::string& key : shipped.Keys("laser_slam")) keys.push_back({key, shipped.GetString("laser_slam", key)});
+  return keys;
+}
+const std::vector<std::pair<std::string, std::string>> kSlamKeys = SlamKeys();
 
 // The config as INI text; `drop` leaves a [laser_slam] key out, `extra` is appended to [laser_slam],
 // `replace` overrides one key's value.
 std::string IniText(const std::string& drop = "", const std::string& extra = "",
                     const std::pair<std::string, std::string>& replace = {}) {
   std::ostringstream s;
-  s << "[channels]\nodometry = ODOMETRY\nscan = LASER_SCAN\npose = POSE_LASER_SLAM\nmap = POINT_MAP\n[laser_slam]\n";
+  s << "[channels]\nodometry = ODOMETRY\nscan = LASER_SCAN\npose = POSE_LASER_SLAM\nmap = POINT_MAP\nstatus = LASER_SLAM_STATUS\n[laser_slam]\n";
   for (const auto& [key, value] : kSlamKeys) {
     if (key == drop) continue;
     s << key << " = " << (key == replace.first ? replace.second : value) << "\n";
@@ -148,6 +123,9 @@ TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
   std::vector<point_map_t> maps;
   bus.Subscribe<pose_t>("LS1_POSE_LASER_SLAM", [&](const pose_t& p) { poses.push_back(p); });
   bus.Subscribe<point_map_t>("LS1_POINT_MAP", [&](const point_map_t& m) { maps.push_back(m); });
+  std::vector<laser_slam_status_t> statuses;
+  bus.Subscribe<laser_slam_status_t>("LS1_LASER_SLAM_STATUS",
+                                     [&](const laser_slam_status_t& s) { statuses.push_back(s); });
 
   constexpr int kSteps = 250;
   constexpr double kRadius = 1.5, kStep = 0.05, kScale = 1.02, kHeadingBias = 0.003;
@@ -202,6 +180,24 @@ TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
   EXPECT_TRUE(node.skipped().empty());
   EXPECT_EQ(node.internal_errors(), 0);
   EXPECT_GT(node.mean_update_ms(), 0.0);
+
+  // One status per scan, stamped as its pose: the first scan starts the map, the others' outcome
+  // counted as the node counts them; the gate and the pose's uncertainty from the filter.
+  ASSERT_EQ(statuses.size(), poses.size());
+  EXPECT_EQ(statuses.front().outcome, laser_slam_status_t::MAP_START);
+  int accepted = 0;
+  for (size_t i = 0; i < statuses.size(); ++i) {
+    EXPECT_EQ(statuses[i].utime, poses[i].utime);
+    accepted += statuses[i].outcome == laser_slam_status_t::ACCEPTED;
+    EXPECT_EQ(statuses[i].accepted, accepted) << "status " << i;
+    EXPECT_EQ(statuses[i].scans, static_cast<int64_t>(i + 1));
+  }
+  EXPECT_EQ(statuses.back().accepted, node.measured());
+  EXPECT_EQ(statuses.back().gated + statuses.back().ambiguous + statuses.back().no_match,
+            node.gated() + node.ambiguous() + node.no_match());
+  EXPECT_DOUBLE_EQ(statuses.back().gate_mahalanobis2, config.options.gate_mahalanobis2);
+  EXPECT_NEAR(statuses.back().heading_sigma_deg, std::sqrt(poses.back().covariance[8]) * 180 / M_PI, 1e-6);
+  EXPECT_GT(statuses.back().map_points, 200);
 
   // A map after every 10th scan, stamped with that scan's time, its points on the walls.
   ASSERT_EQ(maps.size(), static_cast<size_t>((kSteps + 1) / 10));

@@ -16,22 +16,28 @@ DeadReckoning::DeadReckoning(const DeadReckoningOptions& options, const Pose2& s
   options_.Validate();
 }
 
+Eigen::Matrix3d MotionCovariance(const DeadReckoningOptions& noise, const Pose2& from,
+                                 const Eigen::Matrix3d& covariance, const Pose2& motion, double path_m,
+                                 double turn_rad) {
+  const double c = std::cos(from.theta_rad), s = std::sin(from.theta_rad);
+  Eigen::Matrix3d jx = Eigen::Matrix3d::Identity();
+  jx(0, 2) = -s * motion.x_m - c * motion.y_m;
+  jx(1, 2) = c * motion.x_m - s * motion.y_m;
+  Eigen::Matrix3d ju;
+  ju << c, -s, 0, s, c, 0, 0, 0, 1;
+  const double st = noise.translation_noise_m_per_m * path_m;
+  const double sr = noise.rotation_noise_rad_per_rad * turn_rad + noise.rotation_noise_rad_per_m * path_m;
+  const Eigen::Vector3d q(st * st, st * st, sr * sr);
+  return jx * covariance * jx.transpose() + ju * q.asDiagonal() * ju.transpose();
+}
+
 void PredictWithOdometry(const DeadReckoningOptions& noise, const Pose2& delta, Pose2* pose,
                          Eigen::Matrix3d* covariance) {
   if (!std::isfinite(delta.x_m) || !std::isfinite(delta.y_m) || !std::isfinite(delta.theta_rad)) {
     throw std::invalid_argument("odometry increment is not finite");
   }
-  const double c = std::cos(pose->theta_rad), s = std::sin(pose->theta_rad);
-  Eigen::Matrix3d jx = Eigen::Matrix3d::Identity();
-  jx(0, 2) = -s * delta.x_m - c * delta.y_m;
-  jx(1, 2) = c * delta.x_m - s * delta.y_m;
-  Eigen::Matrix3d ju;
-  ju << c, -s, 0, s, c, 0, 0, 0, 1;
-  const double d = std::hypot(delta.x_m, delta.y_m);
-  const double st = noise.translation_noise_m_per_m * d;
-  const double sr = noise.rotation_noise_rad_per_rad * std::abs(delta.theta_rad) + noise.rotation_noise_rad_per_m * d;
-  const Eigen::Vector3d q(st * st, st * st, sr * sr);
-  *covariance = jx * *covariance * jx.transpose() + ju * q.asDiagonal() * ju.transpose();
+  *covariance = MotionCovariance(noise, *pose, *covariance, delta, std::hypot(delta.x_m, delta.y_m),
+                                 std::abs(delta.theta_rad));
   *pose = pose->Compose(delta);
 }
 

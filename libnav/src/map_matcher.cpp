@@ -156,6 +156,7 @@ MapMatcher::Icp MapMatcher::Align(const Pose2& start, const std::vector<Eigen::V
       Eigen::Vector3d g = Eigen::Vector3d::Zero();
       int matches = 0;
       double residual2 = 0, weight_sum = 0;
+      Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // for the covariance: each point's own noise
       LookupAt(map_, Rigid(r.estimate), points, 1, distance, &world, &nearest);
       for (size_t i = 0; i < points.size(); ++i) {
         const Eigen::Vector2d& w = world[i];
@@ -173,14 +174,16 @@ MapMatcher::Icp MapMatcher::Align(const Pose2& start, const std::vector<Eigen::V
         const double weight = 1.0 / (1.0 + res * res / scale2);
         h += weight * jac * jac.transpose();
         g += weight * res * jac;
-        residual2 += weight * res * res;
+        const double inv_var = weight / PointVariance(points[i]);
+        info += inv_var * jac * jac.transpose();
+        residual2 += inv_var * res * res;
         weight_sum += weight;
         ++matches;
       }
       ++r.iterations;
       r.matches = matches;
       if (matches < options_.min_matches) break;
-      r.info = h;
+      r.info = info;
       r.residual2 = residual2;
       r.weight_sum = weight_sum;
       // A small damping keeps directions the scan cannot see (a corridor's axis) where they were.
@@ -238,18 +241,29 @@ MapMatcher::Icp MapMatcher::Align(const Pose2& start, const std::vector<Eigen::V
         // (Pose2::Transform's arithmetic, its sine and cosine computed once.)
         const Eigen::Vector2d at(r.estimate.x_m + c * src[k].x() - s * src[k].y(),
                                  r.estimate.y_m + s * src[k].x() + c * src[k].y());
-        r.residual2 += (at - dst[k]).squaredNorm() / 2.0;
-        r.weight_sum += 1;
         const Eigen::Vector2d n = Rotate(c, s, normals[index[k]]);
-        const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());
         if (n.isZero()) continue;  // isolated point or corner: no surface
+        const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());
         const Eigen::Vector3d jac(n.x(), n.y(), n.dot(d_theta));
-        r.info += jac * jac.transpose();
+        const double res = n.dot(at - dst[k]), inv_var = 1.0 / PointVariance(src[k]);
+        r.info += inv_var * jac * jac.transpose();
+        r.residual2 += inv_var * res * res;
+        r.weight_sum += 1;
       }
     }
   }
   r.ok = !r.pruned && r.matches >= options_.min_matches && r.weight_sum > 0;
   return r;
+}
+
+double MapMatcher::Prior::Penalty(const Pose2& p) const {
+  const Eigen::Vector3d d(p.x_m - pose.x_m, p.y_m - pose.y_m, WrapAngle(p.theta_rad - pose.theta_rad));
+  return weight * 0.5 * d.dot(information * d);
+}
+
+double MapMatcher::PointVariance(const Eigen::Vector2d& point_robot) const {
+  const double angular = options_.point_sigma_rad * point_robot.norm();
+  return options_.point_sigma_m * options_.point_sigma_m + angular * angular;
 }
 
 double MapMatcher::Score(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const {
@@ -305,7 +319,7 @@ std::vector<MapMatcher::Candidate> MapMatcher::SearchHeading(const Pose2& around
 }
 
 std::vector<MapMatcher::Candidate> MapMatcher::SearchPoses(const Pose2& around, const Eigen::Matrix3d& covariance,
-                                                         double window_rad, double window_xy_m, bool prior_on,
+                                                         double window_rad, double window_xy_m, double prior_weight,
                                                          const std::vector<Eigen::Vector2d>& points,
                                                          size_t stride) const {
   const double cell = map_.lookup_radius_m() > 0 ? map_.lookup_cell_m() : map_.resolution_m();
@@ -314,7 +328,7 @@ std::vector<MapMatcher::Candidate> MapMatcher::SearchPoses(const Pose2& around, 
   const int nxy = static_cast<int>(std::floor(window_xy_m / cell + 1e-9));
   const double sigma = options_.search_sigma_m, reach = 3 * sigma, inv2s2 = 1.0 / (2 * sigma * sigma);
   const Eigen::Matrix3d info = (covariance + Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal().toDenseMatrix()).inverse();
-  const double prior = prior_on ? 0.5 * options_.search_prior_weight : 0.0;
+  const double prior = 0.5 * prior_weight;
   std::vector<Eigen::Vector2d> rotated, subset;  // the search's points, rotated to a heading; as they are
   rotated.reserve(points.size() / stride + 1);
   subset.reserve(points.size() / stride + 1);
@@ -448,29 +462,45 @@ double MapMatcher::KernelScore(const Pose2& pose, const std::vector<Eigen::Vecto
 MapMatcher::Icp MapMatcher::RefineBest(const std::vector<Candidate>& candidates,
                                      const std::vector<Eigen::Vector2d>& points,
                                      const std::vector<Eigen::Vector2d>& normals, Pose2* start,
-                                     RefineCounts* counts) const {
+                                     RefineCounts* counts, std::vector<Icp>* others, const Prior* prior) const {
   Icp best;
-  double best_score = -1;
+  double best_score = -std::numeric_limits<double>::infinity();
+  std::vector<Icp> results;  // every aligned start's result (with `others`)
   const size_t n = std::min(candidates.size(), static_cast<size_t>(std::max(1, options_.refine_starts)));
   for (size_t k = 0; k < n; ++k) {
     // A later start may be pruned once it is clearly worse than the best so far.
     const double prune_below =
-        options_.refine_prune_iterations > 0 && best_score > 0 ? options_.refine_prune_fraction * best_score : 0.0;
+        options_.refine_prune_iterations > 0 && best.ok && best.kernel > 0 ? options_.refine_prune_fraction * best.kernel
+                                                                           : 0.0;
     Icp icp = Align(candidates[k].pose, points, normals, prune_below);
     ++counts->starts;
     counts->pruned += icp.pruned;
     if (!icp.ok) continue;
     ScoreEstimate(points, &icp);
-    const double score = n > 1 ? icp.kernel : 0.0;
+    icp.posterior = icp.kernel - (prior ? prior->Penalty(icp.estimate) : 0.0);
+    const double score = n > 1 ? icp.posterior : 0.0;
+    if (others) results.push_back(icp);
     if (score > best_score) {
       best_score = score;
       best = icp;
       *start = candidates[k].pose;
     }
   }
-  if (best_score < 0) {  // none aligned: the first, as it is
+  if (best_score == -std::numeric_limits<double>::infinity()) {  // none aligned: the first, as it is
     *start = candidates.empty() ? *start : candidates.front().pose;
     best = Align(*start, points, normals);
+  }
+  if (others) {
+    // The results other than the best (the first of equal scores is the best, as above).
+    bool skipped = false;
+    for (Icp& r : results) {
+      if (!skipped && r.posterior == best.posterior && r.estimate.x_m == best.estimate.x_m &&
+          r.estimate.y_m == best.estimate.y_m && r.estimate.theta_rad == best.estimate.theta_rad) {
+        skipped = true;
+        continue;
+      }
+      others->push_back(std::move(r));
+    }
   }
   return best;
 }

@@ -5,10 +5,14 @@
 #include <iostream>
 #include <ostream>
 #include <stdexcept>
+#include <optional>
 #include <vector>
+
+#include <Eigen/Eigenvalues>
 
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
+#include "snapnav/laser_slam_status_t.hpp"
 #include "snapnav/point_map_t.hpp"
 
 namespace snapnav::processes {
@@ -59,12 +63,30 @@ nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::
   o.scan_latency_s = ini.GetDouble(s, "scan_latency_s");
   o.recovery_fit = ini.GetDouble(s, "recovery_fit");
   o.turn_noise_rad_per_rad = ini.GetDouble(s, "turn_noise_rad_per_rad");
+  o.interval_sigma_xy_m = ini.GetDouble(s, "interval_sigma_xy_m");
+  o.interval_sigma_theta_rad = ini.GetDouble(s, "interval_sigma_theta_deg") / kDegPerRad;
+  o.interval_full_m = ini.GetDouble(s, "interval_full_m");
+  o.interval_full_rad = ini.GetDouble(s, "interval_full_deg") / kDegPerRad;
+  o.motion_noise_per_scan = ini.GetBool(s, "motion_noise_per_scan");
   o.stale_odometry = ini.GetBool(s, "stale_odometry");
   o.stale_fraction = ini.GetDouble(s, "stale_fraction");
+  o.hypothesis_odds = ini.GetDouble(s, "hypothesis_odds");
+  o.match_sigma_xy_m = ini.GetDouble(s, "match_sigma_xy_m");
+  o.match_sigma_theta_rad = ini.GetDouble(s, "match_sigma_theta_deg") / kDegPerRad;
+  o.gate_mahalanobis2 = ini.GetDouble(s, "gate_mahalanobis2");
+  o.max_ambiguity = ini.GetDouble(s, "max_ambiguity");
+  o.min_fit = ini.GetDouble(s, "min_fit");
+  o.adaptive_motion_noise = ini.GetBool(s, "adaptive_motion_noise");
+  o.adaptive_window_scans = ini.GetDouble(s, "adaptive_window_scans");
+  o.adaptive_scale_min = ini.GetDouble(s, "adaptive_scale_min");
+  o.adaptive_scale_max = ini.GetDouble(s, "adaptive_scale_max");
+  o.outlier_scale = ini.GetDouble(s, "outlier_scale");
+  o.outlier_min_fit = ini.GetDouble(s, "outlier_min_fit");
   o.update_score_margin = ini.GetDouble(s, "update_score_margin");
   o.icp_iterations = ini.GetInt(s, "icp_iterations");
   o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
   o.point_sigma_m = ini.GetDouble(s, "point_sigma_m");
+  o.point_sigma_rad = ini.GetDouble(s, "point_sigma_deg") / kDegPerRad;
   o.min_matches = ini.GetInt(s, "min_matches");
   o.map_resolution_m = ini.GetDouble(s, "map_resolution_m");
   o.add_distance_m = ini.GetDouble(s, "add_distance_m");
@@ -95,9 +117,20 @@ void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& o) {
       << "\nrefine_prune_fraction = " << o.refine_prune_fraction
       << "\nscan_latency_s = " << o.scan_latency_s << "\nrecovery_fit = " << o.recovery_fit
       << "\nturn_noise_rad_per_rad = " << o.turn_noise_rad_per_rad
+      << "\ninterval_sigma_xy_m = " << o.interval_sigma_xy_m
+      << "\ninterval_sigma_theta_deg = " << o.interval_sigma_theta_rad * kDegPerRad
+      << "\ninterval_full_m = " << o.interval_full_m << "\ninterval_full_deg = " << o.interval_full_rad * kDegPerRad
+      << "\nmotion_noise_per_scan = " << (o.motion_noise_per_scan ? "true" : "false")
       << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false") << "\nstale_fraction = " << o.stale_fraction
+      << "\nhypothesis_odds = " << o.hypothesis_odds << "\nmatch_sigma_xy_m = " << o.match_sigma_xy_m
+      << "\nmatch_sigma_theta_deg = " << o.match_sigma_theta_rad * kDegPerRad << "\ngate_mahalanobis2 = " << o.gate_mahalanobis2
+      << "\nmax_ambiguity = " << o.max_ambiguity << "\nmin_fit = " << o.min_fit
+      << "\nadaptive_motion_noise = " << (o.adaptive_motion_noise ? "true" : "false")
+      << "\nadaptive_window_scans = " << o.adaptive_window_scans << "\nadaptive_scale_min = " << o.adaptive_scale_min
+      << "\nadaptive_scale_max = " << o.adaptive_scale_max << "\noutlier_scale = " << o.outlier_scale << "\noutlier_min_fit = " << o.outlier_min_fit
       << "\nupdate_score_margin = " << o.update_score_margin << "\nicp_iterations = " << o.icp_iterations
       << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
+      << "\npoint_sigma_deg = " << o.point_sigma_rad * kDegPerRad
       << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
       << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step
       << "\nlookup_cell_m = " << o.lookup_cell_m << "\n";
@@ -109,6 +142,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
   c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
   c.map_channel = channel_prefix + ini.GetString("channels", "map");
+  c.status_channel = channel_prefix + ini.GetString("channels", "status");
   c.options = ReadLaserSlamOptions(ini, "laser_slam");
   c.map_every_n_scans = ini.GetInt("laser_slam", "map_every_n_scans");
   ini.CheckAllUsed();
@@ -120,7 +154,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
 
 void LaserSlamConfig::Print(std::ostream& out) const {
   out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\npose = " << pose_channel
-      << "\nmap = " << map_channel << "\n[laser_slam]\n";
+      << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\n[laser_slam]\n";
   PrintLaserSlamOptions(out, options);
   out << "map_every_n_scans = " << map_every_n_scans << "\n";
 }
@@ -176,23 +210,74 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   if (!slam_) slam_.emplace(config_.options, nav::Pose2{});  // no odometry yet: start at the origin
 
   const auto points = glue::LaserScanPoints(msg);
+  std::optional<nav::LaserSlamUpdate> update;
+  double update_ms = 0;
   if (points.empty()) {
     // A well-formed scan that saw nothing (every beam NaN or no return, e.g. open space): no update,
     // the prediction stands and its pose is still published, so every well-formed scan has a pose.
     Skip("no valid points", "", false);
   } else {
     const auto t0 = std::chrono::steady_clock::now();
-    const nav::LaserSlamUpdate u = slam_->Update(points, msg.utime);
-    update_ms_total_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    update = slam_->Update(points, msg.utime);
+    update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    update_ms_total_ += update_ms;
     ++updates_;
-    if (u.measured) ++measured_;
+    measured_ += update->outcome == nav::MatchOutcome::kAccepted;
+    gated_ += update->outcome == nav::MatchOutcome::kGated;
+    ambiguous_ += update->outcome == nav::MatchOutcome::kAmbiguous;
+    no_match_ += update->outcome == nav::MatchOutcome::kNoMatch;
   }
   bus_.Publish(config_.pose_channel,
                glue::ToPoseMsg(msg.utime, "laser_slam", "map", slam_->pose(), slam_->covariance()));
   ++poses_published_;
+  PublishStatus(msg.utime, update ? &*update : nullptr, update_ms);
   if (!points.empty() && config_.map_every_n_scans > 0 && updates_ % config_.map_every_n_scans == 0) {
     PublishMap(msg.utime);
   }
+}
+
+void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u, double update_ms) {
+  laser_slam_status_t s{};
+  s.utime = utime;
+  s.gate_mahalanobis2 = config_.options.gate_mahalanobis2;
+  if (!u) {
+    s.outcome = laser_slam_status_t::NO_POINTS;
+    s.prediction = laser_slam_status_t::ODOMETRY;
+  } else {
+    switch (u->outcome) {
+      case nav::MatchOutcome::kMapStart: s.outcome = laser_slam_status_t::MAP_START; break;
+      case nav::MatchOutcome::kAccepted: s.outcome = laser_slam_status_t::ACCEPTED; break;
+      case nav::MatchOutcome::kGated: s.outcome = laser_slam_status_t::GATED; break;
+      case nav::MatchOutcome::kAmbiguous: s.outcome = laser_slam_status_t::AMBIGUOUS; break;
+      case nav::MatchOutcome::kNoMatch: s.outcome = laser_slam_status_t::NO_MATCH; break;
+    }
+    switch (u->prediction) {
+      case nav::PredictionSource::kOdometry: s.prediction = laser_slam_status_t::ODOMETRY; break;
+      case nav::PredictionSource::kStale: s.prediction = laser_slam_status_t::STALE; break;
+      case nav::PredictionSource::kCatchUp: s.prediction = laser_slam_status_t::CATCH_UP; break;
+    }
+    s.predictions = static_cast<int8_t>(u->predictions);
+    s.widened = u->widened;
+    s.mahalanobis2 = u->mahalanobis2;
+    s.ambiguity = u->ambiguity;
+    s.fit = u->fit;
+    s.kernel = u->kernel;
+    s.points = u->points;
+    s.matches = u->matches;
+    s.coasting_scans = u->coasting;
+  }
+  const Eigen::Matrix3d& p = slam_->covariance();
+  s.position_sigma_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(p.topLeftCorner<2, 2>())
+                                                   .eigenvalues()(1)));
+  s.heading_sigma_deg = std::sqrt(std::max(0.0, p(2, 2))) * kDegPerRad;
+  s.update_ms = update_ms;
+  s.scans = scans_;
+  s.accepted = measured_;
+  s.gated = gated_;
+  s.ambiguous = ambiguous_;
+  s.no_match = no_match_;
+  s.map_points = static_cast<int32_t>(slam_->map().size());
+  bus_.Publish(config_.status_channel, s);
 }
 
 void LaserSlamNode::PublishMap(int64_t utime) {
@@ -213,7 +298,8 @@ void LaserSlamNode::PublishMap(int64_t utime) {
 }
 
 void LaserSlamNode::Report(std::ostream& out) const {
-  out << "laser-slam: scans " << scans_ << ", updates " << updates_ << ", measured " << measured_ << ", odometry "
+  out << "laser-slam: scans " << scans_ << ", updates " << updates_ << ", accepted " << measured_ << ", gated "
+      << gated_ << ", ambiguous " << ambiguous_ << ", no match " << no_match_ << ", odometry "
       << odometry_ << " (late " << late_odometry_ << "), poses published " << poses_published_ << ", maps published "
       << maps_published_ << ", skipped " << problems_.skipped_total() << ", internal errors " << problems_.internal_errors() << "\n";
   out << "laser-slam: mean update " << mean_update_ms() << " ms per scan";

@@ -1,7 +1,9 @@
 #pragma once
 // laser-slam: libnav's 2D laser SLAM (EKF on the pose, ICP against a point map) on the bus.
 // ODOMETRY increments predict, each LASER_SCAN updates; one pose_t per scan on POSE_LASER_SLAM
-// and, every n-th updating scan, the map as point_map_t on POINT_MAP.
+// and one laser_slam_status_t on LASER_SLAM_STATUS (the match's outcome: accepted, gated,
+// ambiguous, no match; how sure it is), and every n-th updating scan the map as point_map_t on
+// POINT_MAP.
 //
 // Order: messages are processed in arrival order, never reordered by utime. A log (and the
 // simulator) is time ordered, so an odometry increment that ends before a scan arrives before
@@ -34,6 +36,7 @@ struct LaserSlamConfig {
   std::string scan_channel;      // laser_scan_t in
   std::string pose_channel;      // pose_t out
   std::string map_channel;       // point_map_t out
+  std::string status_channel;    // laser_slam_status_t out
   nav::LaserSlamOptions options;
   int map_every_n_scans = 10;  // publish the map after every n-th updating scan; 0: never
 
@@ -61,6 +64,9 @@ class LaserSlamNode {
   int64_t scans() const { return scans_; }                  // decoded scans on the scan channel, skipped ones included
   int64_t updates() const { return updates_; }              // scans given to LaserSlam::Update
   int64_t measured() const { return measured_; }            // updates whose ICP measurement was accepted
+  int64_t gated() const { return gated_; }                  // updates whose match was beyond the gate
+  int64_t ambiguous() const { return ambiguous_; }          // updates whose match was ambiguous
+  int64_t no_match() const { return no_match_; }            // updates with no usable match
   int64_t odometry() const { return odometry_; }            // decoded odometry messages, skipped ones included
   int64_t late_odometry() const { return late_odometry_; }  // older than the last scan, applied anyway
   int64_t poses_published() const { return poses_published_; }
@@ -87,6 +93,7 @@ class LaserSlamNode {
     problems_.Skip(reason, detail, malformed);
   }
   void PublishMap(int64_t utime);
+  void PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u, double update_ms);
 
   glue::Bus& bus_;
   LaserSlamConfig config_;
@@ -94,6 +101,7 @@ class LaserSlamNode {
   bool odometry_seen_ = false;
   int64_t last_scan_utime_ = 0;
   int64_t scans_ = 0, updates_ = 0, measured_ = 0, odometry_ = 0, late_odometry_ = 0;
+  int64_t gated_ = 0, ambiguous_ = 0, no_match_ = 0;
   int64_t poses_published_ = 0, maps_published_ = 0;
   double update_ms_total_ = 0.0;
   glue::HandlerProblems problems_;

@@ -21,6 +21,7 @@
 #include "slam_config.hpp"
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
+#include "slam_suite.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -76,8 +77,29 @@ int Main(int argc, char** argv) {
                 "with --reference: also run the laser slam at neighbouring settings (each of ten options one step\n"
                 "down and up) and under tiny perturbations (search step, match distance, start heading sigma,\n"
                 "search order), and write the ATE of each and the min / median / max to sweep.md and sweep.csv");
+  std::string suite_path;
+  flags.AddString("suite", &suite_path,
+                  "run every entry of a suite file instead of one log (--suite alone: the shipped\n"
+                  "config/slam_suite.ini): the laser SLAM (of the suite's config, with --set), the thesis\n"
+                  "configuration, icp-slam and dead reckoning on each, against its reference; suite.md,\n"
+                  "suite.csv, summary.json and a trajectory PNG per run in --out");
+  std::vector<std::string> only;
+  flags.AddStringList("only", &only, "with --suite: run only this entry (repeatable)");
   flags.AddString("out", &out_dir, "output folder (required)");
   if (!flags.Parse(argc, argv)) return 0;
+  if (!suite_path.empty()) {
+    if (out_dir.empty()) throw glue::FlagError("--suite needs --out DIR");
+    eval::SuiteOptions so;
+    so.overrides = sets;
+    so.only = only;
+    so.icp = icp_options;
+    const eval::Suite suite = eval::LoadSuite(suite_path);
+    const auto results = eval::RunSuite(suite, out_dir, so);
+    for (const auto& r : results) {
+      if (!r.skipped && !r.pass) return 2;
+    }
+    return 0;
+  }
   if (log_path.empty() || out_dir.empty()) throw glue::FlagError("--log LOG and --out DIR are required");
   eval::AddOverride(&config, "match_distance_m", match_distance);
   eval::AddOverride(&config, "icp_iterations", icp_iterations);
@@ -102,15 +124,7 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-slam: laser slam " << ms_per_scan << " ms/scan, map " << run.map.size() << " points\n";
   // The thesis' own procedure (5.3.1) beside it: point-to-point ICP at one match distance, no
   // heading search, the odometry noise of dead reckoning.
-  nav::LaserSlamOptions thesis = options;
-  thesis.metric = nav::IcpMetric::kPointToPoint;
-  thesis.match_distance_m = thesis.match_distance_start_m = 0.25;
-  thesis.search_window_max_rad = 0;
-  thesis.motion = nav::DeadReckoningOptions{};
-  thesis.turn_noise_rad_per_rad = 0;
-  thesis.stale_odometry = false;
-  thesis.update_score_margin = 0;
-  thesis.lookup_cell_m = 0;  // the exact nearest map point
+  const nav::LaserSlamOptions thesis = nav::ThesisLaserSlamOptions(options);
   const eval::SlamRun thesis_run = eval::RunSlam(log, thesis);
   std::cerr << "eval-slam: thesis configuration " << thesis_run.ms_per_scan() << " ms/scan\n";
 
@@ -184,6 +198,23 @@ int Main(int argc, char** argv) {
       }
     }
     const auto dr_ate = nav::ComputeAte(dr_pairs, nav::AlignSE2(dr_pairs));
+    {
+      // Map consistency (a scan's points against the scans seen on a revisit) of our trajectory and
+      // of the reference's, over the scans the reference has: which of the two draws the sharper map.
+      std::vector<std::optional<nav::Pose2>> ours(run.slam.size()), theirs(run.slam.size());
+      for (size_t i = 0; i < run.slam.size(); ++i) {
+        if (const auto truth = ref.Find(run.ranges_key[i], run.utime[i])) {
+          ours[i] = run.slam[i];
+          theirs[i] = *truth;
+        }
+      }
+      const eval::MapConsistency c_ours = eval::ComputeMapConsistency(log, ours);
+      const eval::MapConsistency c_ref = eval::ComputeMapConsistency(log, theirs);
+      std::cerr << "eval-slam: map consistency (median distance of a scan's points to revisited scans): laser slam "
+                << c_ours.median_m << " m, reference " << c_ref.median_m << " m\n";
+      json << ",\n  \"laser_slam_map_consistency_m\": " << c_ours.median_m
+           << ",\n  \"reference_map_consistency_m\": " << c_ref.median_m;
+    }
     const auto thesis_pairs = eval::PairWithReference(thesis_run.slam, thesis_run, ref);
     const auto thesis_ate = nav::ComputeAte(thesis_pairs, nav::AlignSE2(thesis_pairs));
     std::cerr << "eval-slam: " << slam_pairs.size() << " scans paired with the reference; ATE RMSE: laser slam "
@@ -322,7 +353,8 @@ int Main(int argc, char** argv) {
     csv << "scan,utime,points,matches,fit,searches,recoveries,stale_odometry,widened,measured,"
            "predicted_x_m,predicted_y_m,predicted_theta_rad,predicted_sigma_xy_m,predicted_sigma_theta_deg,"
            "measured_x_m,measured_y_m,measured_theta_rad,measured_sigma_x_m,measured_sigma_y_m,"
-           "measured_sigma_theta_deg,x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad\n"
+           "measured_sigma_theta_deg,x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad,outcome,prediction,"
+           "predictions,mahalanobis2,ambiguity,kernel,coasting\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.updates.size(); ++i) {
       const nav::LaserSlamUpdate& u = run.updates[i];
@@ -336,7 +368,9 @@ int Main(int argc, char** argv) {
           << "," << u.measurement.theta_rad << "," << std::sqrt(u.measurement_covariance(0, 0)) << ","
           << std::sqrt(u.measurement_covariance(1, 1)) << "," << std::sqrt(u.measurement_covariance(2, 2)) * deg << ","
           << s.x_m << "," << s.y_m << "," << s.theta_rad << "," << u.start.x_m << "," << u.start.y_m << ","
-          << u.start.theta_rad << "\n";
+          << u.start.theta_rad << "," << nav::MatchOutcomeName(u.outcome) << ","
+          << nav::PredictionSourceName(u.prediction) << "," << u.predictions << "," << u.mahalanobis2 << ","
+          << u.ambiguity << "," << u.kernel << "," << u.coasting << "\n";
     }
   }
   std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv"
@@ -351,4 +385,15 @@ int Main(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return glue::RunMain(argc, argv, Main); }
+int main(int argc, char** argv) {
+  // `--suite` without a file (the last flag, or followed by another flag): the shipped suite.
+  std::vector<std::string> args(argv, argv + argc);
+  for (size_t i = 1; i < args.size(); ++i) {
+    if (args[i] == "--suite" && (i + 1 == args.size() || args[i + 1].rfind("--", 0) == 0)) {
+      args.insert(args.begin() + static_cast<std::ptrdiff_t>(i) + 1, SNAPNAV_CONFIG_DIR "/slam_suite.ini");
+    }
+  }
+  std::vector<char*> ptrs;
+  for (std::string& a : args) ptrs.push_back(a.data());
+  return glue::RunMain(static_cast<int>(ptrs.size()), ptrs.data(), Main);
+}

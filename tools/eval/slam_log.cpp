@@ -8,6 +8,7 @@
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 
 #include "importers.hpp"
@@ -201,47 +202,65 @@ std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vect
 
 MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::optional<nav::Pose2>>& poses,
                                      int min_separation_scans, double max_distance_m, int min_pairs) {
-  // The scans' points in the world, in buckets of max_distance_m (3 x 3 buckets hold every
-  // point within max_distance_m of a query).
-  struct WorldPoint {
-    Eigen::Vector2d p;
-    int scan;
+  // The scans' points in the world on a grid of kCell: a cell keeps the point of the earliest and
+  // of the latest scan that hit it (a point of a scan at least min_separation_scans away, if there
+  // is one, is one of these two). A query visits the cells ring by ring and stops once no nearer
+  // cell is left: linear in the points, however often a place is seen again (a dense log that
+  // drives a corridor twice has thousands of scans on each wall).
+  constexpr double kCell = 0.05;
+  constexpr size_t kQueryPoints = 90;  // a scan's points queried, evenly spaced over the scan
+  struct Cell {
+    int first_scan, last_scan;
+    Eigen::Vector2d first, last;
   };
+  const auto key = [](int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffffLL); };
+  const auto cell_of = [](double v) { return static_cast<int64_t>(std::floor(v / kCell)); };
+  std::unordered_map<int64_t, Cell> grid;
   std::vector<std::vector<Eigen::Vector2d>> world;
   for (const SlamStep& step : log.steps) {
     if (!step.is_scan) continue;
-    const size_t i = world.size();
+    const int i = static_cast<int>(world.size());
     world.emplace_back();
-    if (i >= poses.size() || !poses[i]) continue;
-    for (const Eigen::Vector2d& q : step.points) world.back().push_back(poses[i]->Transform(q));
+    if (i >= static_cast<int>(poses.size()) || !poses[i]) continue;
+    for (const Eigen::Vector2d& q : step.points) {
+      const Eigen::Vector2d p = poses[i]->Transform(q);
+      world.back().push_back(p);
+      const auto [it, fresh] = grid.try_emplace(key(cell_of(p.x()), cell_of(p.y())), Cell{i, i, p, p});
+      if (!fresh) {
+        it->second.last_scan = i;  // scans come in order
+        it->second.last = p;
+      }
+    }
   }
-  const double bucket = max_distance_m;
-  const auto key = [bucket](const Eigen::Vector2d& p) {
-    return std::make_pair(static_cast<int64_t>(std::floor(p.x() / bucket)), static_cast<int64_t>(std::floor(p.y() / bucket)));
-  };
-  std::map<std::pair<int64_t, int64_t>, std::vector<WorldPoint>> buckets;
-  for (size_t i = 0; i < world.size(); ++i) {
-    for (const Eigen::Vector2d& p : world[i]) buckets[key(p)].push_back({p, static_cast<int>(i)});
-  }
+  const int rings = static_cast<int>(std::ceil(max_distance_m / kCell)) + 1;
   MapConsistency c;
   c.per_scan_m.assign(world.size(), std::numeric_limits<double>::quiet_NaN());
   std::vector<double> medians;
   for (size_t i = 0; i < world.size(); ++i) {
     std::vector<double> d;
-    for (const Eigen::Vector2d& p : world[i]) {
-      const auto [bx, by] = key(p);
+    const size_t step = std::max<size_t>(1, (world[i].size() + kQueryPoints - 1) / kQueryPoints);
+    for (size_t k = 0; k < world[i].size(); k += step) {
+      const Eigen::Vector2d& p = world[i][k];
+      const int64_t cx = cell_of(p.x()), cy = cell_of(p.y());
       double best = max_distance_m * max_distance_m;
       bool found = false;
-      for (int64_t dx = -1; dx <= 1; ++dx) {
-        for (int64_t dy = -1; dy <= 1; ++dy) {
-          const auto it = buckets.find({bx + dx, by + dy});
-          if (it == buckets.end()) continue;
-          for (const WorldPoint& w : it->second) {
-            if (std::abs(w.scan - static_cast<int>(i)) < min_separation_scans) continue;
-            const double d2 = (w.p - p).squaredNorm();
-            if (d2 <= best) {
-              best = d2;
-              found = true;
+      for (int r = 0; r <= rings; ++r) {
+        // Every cell of ring r is at least (r - 1) cells from p.
+        if (found && best <= std::pow(std::max(0, r - 1) * kCell, 2)) break;
+        for (int64_t dx = -r; dx <= r; ++dx) {
+          for (int64_t dy = -r; dy <= r; ++dy) {
+            if (std::max(std::abs(dx), std::abs(dy)) != r) continue;
+            const auto it = grid.find(key(cx + dx, cy + dy));
+            if (it == grid.end()) continue;
+            const Cell& cell = it->second;
+            for (const auto& [scan, q] : {std::pair<int, Eigen::Vector2d>{cell.first_scan, cell.first},
+                                          std::pair<int, Eigen::Vector2d>{cell.last_scan, cell.last}}) {
+              if (std::abs(scan - static_cast<int>(i)) < min_separation_scans) continue;
+              const double d2 = (q - p).squaredNorm();
+              if (d2 <= best) {
+                best = d2;
+                found = true;
+              }
             }
           }
         }

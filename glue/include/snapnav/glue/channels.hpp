@@ -26,6 +26,7 @@ inline constexpr char kPointMap[] = "POINT_MAP";                // point_map_t
 inline constexpr char kRoute[] = "ROUTE";                       // waypoint_route_t
 inline constexpr char kNavigatorStatus[] = "NAVIGATOR_STATUS";
 inline constexpr char kPointMapFused[] = "POINT_MAP_FUSED";    // point_map_t of fused-slam
+inline constexpr char kLaserSlamStatus[] = "LASER_SLAM_STATUS"; // laser_slam_status_t
 inline constexpr char kFusedSlamStatus[] = "FUSED_SLAM_STATUS"; // fused_slam_status_t
 inline constexpr char kBusCheck[] = "BUS_CHECK";                // omni_frame_t probes of bus-check
 inline constexpr char kBusPing[] = "BUS_PING";

@@ -21,6 +21,16 @@ struct DeadReckoningOptions {
 void PredictWithOdometry(const DeadReckoningOptions& noise, const Pose2& delta, Pose2* pose,
                          Eigen::Matrix3d* covariance);
 
+// The covariance after a motion `motion` (robot frame of `from`) from a pose `from` of covariance
+// `covariance`, the motion's noise from the distance driven and the angle turned along it (path_m,
+// turn_rad: at least the motion's own; more where it went back and forth). One call for a whole
+// interval treats its errors as one (the systematic errors of wheel odometry grow with the
+// distance, not with the number of messages it came in); PredictWithOdometry is the case of one
+// increment.
+Eigen::Matrix3d MotionCovariance(const DeadReckoningOptions& noise, const Pose2& from,
+                                 const Eigen::Matrix3d& covariance, const Pose2& motion, double path_m,
+                                 double turn_rad);
+
 class DeadReckoning {
  public:
   explicit DeadReckoning(const DeadReckoningOptions& options, const Pose2& start = {});

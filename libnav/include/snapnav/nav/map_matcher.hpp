@@ -70,6 +70,10 @@ struct MatcherOptions {
   // equal scores resolve the other way (a robust result does not depend on it).
   bool search_order_reversed = false;
   double search_sigma_m = 0.05;
+  // The kernel sum over-counts the evidence (neighbouring points' errors are not independent: a
+  // point's effective noise is point_sigma_m, not search_sigma_m): the prior weighs this many
+  // kernel points per unit of half its squared Mahalanobis distance, (point_sigma_m /
+  // search_sigma_m)^2, and a match's posterior in nats is its score over this weight.
   double search_prior_weight = 1.0;
   // ICP starts from the best this many local maxima of the search's score over the heading and
   // the result that fits best (the sum over all points of exp(-d^2 / (2 search_sigma_m^2))) is the
@@ -84,7 +88,12 @@ struct MatcherOptions {
   double refine_prune_fraction = 0.8;
   int icp_iterations = 15;
   double icp_convergence_m = 1e-4;          // stop when an iteration moves less than this
-  double point_sigma_m = 0.03;              // noise of one matched point, floor of the residual estimate
+  // A matched point's noise along its surface normal, for the match's covariance: point_sigma_m,
+  // and point_sigma_rad times its range (the laser's beam spacing and the map's local rotation
+  // move far points more), combined as independent; the covariance grows where the residuals say
+  // the points are noisier than that.
+  double point_sigma_m = 0.03;
+  double point_sigma_rad = 0.5 * kRadPerDeg;
   int min_matches = 20;                     // fewer: no measurement this scan (prediction only)
 };
 
@@ -99,11 +108,24 @@ class MapMatcher {
     bool pruned = false;  // ended early: after refine_prune_iterations it scored below the best start
     Pose2 estimate;
     int matches = 0, iterations = 0;
-    Eigen::Matrix3d info = Eigen::Matrix3d::Zero();  // unscaled information (sum of J^T J)
+    // The estimate's information from the matches with a surface normal (sum of J^T J / each point's
+    // variance, PointVariance), their squared residuals along the normals over those variances, and
+    // their weight: the covariance is info^-1 times max(1, residual2 / weight_sum).
+    Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
     double residual2 = 0, weight_sum = 0;
     // From RefineBest: KernelScore, Score and Fit of the estimate (every point), if measured.
     bool scored = false;
     double kernel = 0, score = 0, fit = 0;
+    // With a prior: the kernel less the prior's weight times half the squared Mahalanobis distance
+    // of the estimate from the prior's pose (what RefineBest ranks by); the kernel without one.
+    double posterior = 0;
+  };
+  // A prediction the results are weighed against (RefineBest).
+  struct Prior {
+    Pose2 pose;
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  // the inverse of its covariance
+    double weight = 0;  // kernel points per unit of half the squared Mahalanobis distance
+    double Penalty(const Pose2& p) const;
   };
   // A search's candidates: the local maxima of its score over the heading, best first.
   struct Candidate {
@@ -128,22 +150,29 @@ class MapMatcher {
   std::vector<Candidate> SearchHeading(const Pose2& around, double window_rad, double shift_m,
                                        const std::vector<Eigen::Vector2d>& points, size_t stride) const;
   // The correlative search around `around` (covariance `covariance`) within +-window_rad and
-  // +-window_xy_m (with `prior`, the prior included in the scores).
+  // +-window_xy_m, the prior in the scores: prior_weight kernel points (of every stride-th point)
+  // per unit of half the squared Mahalanobis distance (0: none).
   std::vector<Candidate> SearchPoses(const Pose2& around, const Eigen::Matrix3d& covariance, double window_rad,
-                                     double window_xy_m, bool prior, const std::vector<Eigen::Vector2d>& points,
+                                     double window_xy_m, double prior_weight, const std::vector<Eigen::Vector2d>& points,
                                      size_t stride) const;
   // Sum over the points of exp(-d^2 / (2 search_sigma_m^2)), d the distance to the nearest map point.
   double KernelScore(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
-  // ICP from each of the first refine_starts candidates; the result with the best KernelScore
-  // (its start in *start; the starts run and pruned added to *counts).
+  // ICP from each of the first refine_starts candidates; the result with the best KernelScore, or
+  // with `prior` the best posterior (its start in *start; the starts run and pruned added to
+  // *counts; with `others`, the other starts' aligned results appended to it, scored: how
+  // ambiguous the match is).
   Icp RefineBest(const std::vector<Candidate>& candidates, const std::vector<Eigen::Vector2d>& points,
-                 const std::vector<Eigen::Vector2d>& normals, Pose2* start, RefineCounts* counts) const;
+                 const std::vector<Eigen::Vector2d>& normals, Pose2* start, RefineCounts* counts,
+                 std::vector<Icp>* others = nullptr, const Prior* prior = nullptr) const;
   // Fraction of every stride-th point within match_distance_m / 2 of the map at `pose`.
   double Fit(const Pose2& pose, const std::vector<Eigen::Vector2d>& points, size_t stride) const;
   // KernelScore, Score and Fit of every point at icp->estimate into icp's kernel, score and fit:
   // the same figures from one lookup (its nearest points within the largest of their distances;
   // a point's nearest within a smaller one is the same point, or none).
   void ScoreEstimate(const std::vector<Eigen::Vector2d>& points, Icp* icp) const;
+
+  // The variance of a matched point along its surface normal (point_sigma_m, point_sigma_rad) [m^2].
+  double PointVariance(const Eigen::Vector2d& point_robot) const;
 
  private:
   const PointGridMap& map_;

@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# The laser SLAM suite on real logs under ctest: eval-slam --suite with tests/eval/slam_suite_bounds.ini
+# (CSAIL raw; ACES, Seattle, Orebro, Freiburg 079 made raw-like with perfect and realistic odometry
+# and every 3rd scan), each run against its own ATE bound and, with realistic odometry, no worse than
+# dead reckoning; one config (the shipped config/laser_slam.ini) for all. Skipped (77) without
+# ../shared beside the clone. Then the suite's files: suite.md, suite.csv, summary.json and a
+# trajectory PNG per run.
+set -euo pipefail
+BIN="$1"
+SRC="$(cd "$(dirname "$0")/../.." && pwd)"
+DATA="$SRC/../shared/data"
+if [ ! -f "$DATA/laser/mit-csail.clf" ] || [ ! -f "$SRC/../shared/tools/carmen_raw_like.py" ]; then
+  echo "SKIP: needs ../shared/data/laser (the real logs) and ../shared/tools/carmen_raw_like.py beside the clone"
+  exit 77
+fi
+OUT="$(mktemp -d)"
+trap 'rm -rf "$OUT"' EXIT
+status=0
+"$BIN/eval-slam" --suite "$SRC/tests/eval/slam_suite_bounds.ini" --out "$OUT" || status=$?
+cat "$OUT/suite.md"
+if [ "$status" -ne 0 ]; then
+  echo "FAIL: eval-slam --suite exited $status (a run beyond its bound or worse than dead reckoning; suite.md above)"
+  exit 1
+fi
+python3 - "$OUT" <<'PY'
+import csv, json, os, sys
+out = sys.argv[1]
+s = json.load(open(os.path.join(out, "summary.json")))
+rows = list(csv.DictReader(open(os.path.join(out, "suite.csv"))))
+names = [r["run"] for r in rows]
+assert len(names) == 7, names
+for n in names:
+    assert s[n + "_pass"], n
+    assert os.path.getsize(os.path.join(out, n, "trajectory.png")) > 10000, n
+    # Every scan decided: accepted, gated, ambiguous or no match (the first starts the map).
+    decided = sum(s[n + "_" + k + "_scans"] for k in ("accepted", "gated", "ambiguous", "no_match"))
+    assert decided >= 0.99 * (int(next(r for r in rows if r["run"] == n)["scans"]) - 1), n
+print("suite: %d runs within their bounds" % len(names))
+PY

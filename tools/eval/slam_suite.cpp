@@ -1,0 +1,367 @@
+#include "slam_suite.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "importers.hpp"
+#include "program.hpp"
+#include "report_text.hpp"
+#include "slam_config.hpp"
+#include "slam_plot.hpp"
+#include "snapnav/glue/ini.hpp"
+#include "snapnav/plot/plot.hpp"
+
+namespace snapnav::eval {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+// `path` relative to `base` unless absolute.
+std::string Resolve(const fs::path& base, const std::string& path) {
+  if (path.empty() || fs::path(path).is_absolute()) return path;
+  return (base / path).lexically_normal().string();
+}
+
+}  // namespace
+
+AteFigure MeasureAte(const std::vector<nav::Pose2>& estimate, const SlamRun& run, const Reference& reference) {
+  AteFigure f;
+  const auto pairs = PairWithReference(estimate, run, reference);
+  f.pairs = static_cast<int>(pairs.size());
+  if (pairs.size() < 2) return f;
+  const nav::AteResult ate = nav::ComputeAte(pairs, nav::AlignSE2(pairs));
+  f.measured = true;
+  f.rmse_m = ate.rmse_m;
+  f.max_m = ate.max_m;
+  return f;
+}
+
+OutcomeCounts CountOutcomes(const SlamRun& run) {
+  OutcomeCounts c;
+  for (const nav::LaserSlamUpdate& u : run.updates) {
+    c.accepted += u.outcome == nav::MatchOutcome::kAccepted;
+    c.gated += u.outcome == nav::MatchOutcome::kGated;
+    c.ambiguous += u.outcome == nav::MatchOutcome::kAmbiguous;
+    c.no_match += u.outcome == nav::MatchOutcome::kNoMatch;
+    c.stale_predictions += u.prediction == nav::PredictionSource::kStale;
+    c.catch_up_predictions += u.prediction == nav::PredictionSource::kCatchUp;
+    c.widened += u.widened;
+  }
+  return c;
+}
+
+Suite LoadSuite(const std::string& path) {
+  const glue::IniFile ini = glue::IniFile::Load(path);
+  const fs::path dir = fs::absolute(path).parent_path();
+  Suite suite;
+  suite.path = path;
+  const fs::path data = Resolve(dir, ini.GetString("suite", "data"));
+  suite.raw_like_tool = Resolve(dir, ini.GetString("suite", "raw_like_tool"));
+  suite.laser_slam_config = Resolve(dir, ini.GetString("suite", "laser_slam_config"));
+  suite.icp_slam = ini.GetBool("suite", "icp_slam");
+  for (const std::string& name : ini.SectionsInFileOrder()) {
+    if (name == "suite") continue;
+    SuiteEntry e;
+    e.name = name;
+    e.kind = ini.GetString(name, "kind");
+    if (e.kind != "carmen" && e.kind != "carmen_corrected" && e.kind != "rawlog") {
+      throw glue::ConfigError(path + ":" + std::to_string(ini.KeyLine(name, "kind")) + ": [" + name + "] kind = " +
+                              e.kind + ": expected carmen, carmen_corrected or rawlog");
+    }
+    e.log = Resolve(data, ini.GetString(name, "log"));
+    const std::string reference = ini.GetString(name, "reference");
+    if (reference == "corrected") {
+      if (e.kind != "carmen_corrected") {
+        throw glue::ConfigError(path + ":" + std::to_string(ini.KeyLine(name, "reference")) + ": [" + name +
+                                "] reference = corrected needs kind = carmen_corrected");
+      }
+      e.reference = e.log;
+    } else if (reference == "icp-slam") {
+      if (!suite.icp_slam) {
+        throw glue::ConfigError(path + ":" + std::to_string(ini.KeyLine(name, "reference")) + ": [" + name +
+                                "] reference = icp-slam needs [suite] icp_slam = true");
+      }
+      e.reference = "icp-slam";
+    } else {
+      e.reference = Resolve(data, reference);
+    }
+    if (e.kind == "carmen_corrected") {
+      e.noise = ini.GetDouble(name, "noise");
+      e.noise_seed = ini.GetInt(name, "seed");
+      e.every = ini.GetInt(name, "every");
+      if (!(e.noise >= 0) || e.every < 1) {
+        throw glue::ConfigError(path + ":" + std::to_string(ini.SectionLine(name)) + ": [" + name +
+                                "] noise must be >= 0 and every >= 1");
+      }
+    }
+    e.goal_ate_m = ini.GetDouble(name, "goal_ate_m");
+    e.no_worse_than_dead_reckoning = ini.GetBool(name, "no_worse_than_dead_reckoning");
+    suite.entries.push_back(e);
+  }
+  ini.CheckAllUsed();
+  if (suite.entries.empty()) throw glue::ConfigError(path + ": no runs (a section per run besides [suite])");
+  return suite;
+}
+
+namespace {
+
+// The missing input of an entry, if any ("" when everything is there).
+std::string MissingInput(const Suite& suite, const SuiteEntry& e) {
+  if (!fs::is_regular_file(e.log)) return e.log;
+  if (e.reference != "icp-slam" && !fs::is_regular_file(e.reference)) return e.reference;
+  if (e.kind == "carmen_corrected" && !fs::is_regular_file(suite.raw_like_tool)) return suite.raw_like_tool;
+  return "";
+}
+
+SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSlamOptions& options,
+                     const fs::path& dir, const SuiteOptions& so) {
+  SuiteResult r;
+  r.entry = e;
+  fs::create_directories(dir);
+  // The log the SLAM reads, and what icp-slam reads.
+  std::string input = e.log;
+  if (e.kind == "carmen_corrected") {
+    input = (dir / "raw.clf").string();
+    const std::vector<std::string> argv = {FindProgram("python3", "python3"), suite.raw_like_tool, e.log, input,
+                                           "--noise", Fixed(e.noise, 3), "--seed", std::to_string(e.noise_seed),
+                                           "--every", std::to_string(e.every)};
+    const std::string log = (dir / "raw_like.log").string();
+    CheckExit(RunProgram(argv, log, 300), argv, log);
+  }
+  const std::string lcm_log = (dir / "log.lcmlog").string();
+  {
+    importers::LcmLogSink sink(lcm_log);
+    importers::ImportReport report;
+    if (e.kind == "rawlog") {
+      report = importers::ImportRawlog(input, sink, importers::RawlogOptions{});
+    } else {
+      report = importers::ImportCarmenFile(input, sink, importers::CarmenOptions{});
+    }
+    sink.Close();
+    if (!report.errors.empty()) throw std::runtime_error(input + ": " + report.errors.front());
+  }
+  const SlamLog log = LoadSlamLog(lcm_log, false);
+  r.scans = log.scans;
+  const SlamRun run = RunSlam(log, options);
+  const SlamRun thesis = RunSlam(log, nav::ThesisLaserSlamOptions(options));
+  r.slam_ms_per_scan = run.ms_per_scan();
+  r.thesis_ms_per_scan = thesis.ms_per_scan();
+  r.outcomes = CountOutcomes(run);
+  std::optional<IcpSlamRun> icp;
+  std::optional<IcpSlamComparison> cmp;
+  if (suite.icp_slam || e.reference == "icp-slam") {  // icp-slam as the reference runs it whatever icp_slam says
+    IcpSlamOptions icp_options = so.icp;
+    icp_options.progress = false;
+    icp = RunIcpSlam(input, (dir / "icp-slam").string(), icp_options);
+    cmp = CompareWithIcpSlam(run.utime, run.slam, icp->poses);
+    r.icp_slam_ms_per_scan = icp->ms_per_scan();
+    r.icp_slam_ran = true;
+  }
+  Reference reference;
+  if (e.reference == "icp-slam") {
+    reference.path = "icp-slam";
+    reference.by_time = icp->poses;
+  } else {
+    reference = LoadReference(e.reference);
+  }
+  r.slam = MeasureAte(run.slam, run, reference);
+  r.thesis = MeasureAte(thesis.slam, thesis, reference);
+  r.dead_reckoning = MeasureAte(run.dead_reckoning, run, reference);
+  std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
+  std::vector<std::string> names = {"laser slam", "dead reckoning"};
+  if (cmp) {
+    std::vector<nav::Pose2> icp_track;
+    std::vector<nav::Pose2> icp_estimate(run.slam.size());
+    std::vector<nav::Pose2> ours;
+    SlamRun paired;  // the scans icp-slam has a pose for
+    for (size_t i = 0; i < run.slam.size(); ++i) {
+      if (!cmp->icp_at_scans[i]) continue;
+      paired.utime.push_back(run.utime[i]);
+      paired.ranges_key.push_back(run.ranges_key[i]);
+      icp_track.push_back(*cmp->icp_at_scans[i]);
+    }
+    r.icp_slam = MeasureAte(icp_track, paired, reference);
+    const nav::Pose2 to_slam = cmp->slam_to_icp.Inverse();
+    std::vector<nav::Pose2> drawn;
+    for (const nav::Pose2& p : icp_track) drawn.push_back(to_slam.Compose(p));
+    tracks.push_back(drawn);
+    names.push_back("icp-slam (MRPT)");
+  }
+  // The reference, in the SLAM frame.
+  const auto pairs = PairWithReference(run.slam, run, reference);
+  if (pairs.size() >= 2) {
+    const nav::Pose2 to_slam = nav::AlignSE2(pairs).Inverse();
+    std::vector<nav::Pose2> ref_track;
+    for (const auto& [est, truth] : pairs) ref_track.push_back(to_slam.Compose(truth));
+    tracks.push_back(ref_track);
+    names.push_back(e.reference == "icp-slam" ? "reference (icp-slam)" : "reference");
+  }
+  // Goals.
+  std::vector<std::string> failed;
+  if (!r.slam.measured) failed.push_back("no scan paired with the reference");
+  if (e.goal_ate_m > 0 && r.slam.measured && r.slam.rmse_m > e.goal_ate_m) {
+    failed.push_back("ATE " + Fixed(r.slam.rmse_m, 3) + " > " + Fixed(e.goal_ate_m, 2) + " m");
+  }
+  if (e.no_worse_than_dead_reckoning && r.slam.measured && r.dead_reckoning.measured &&
+      r.slam.rmse_m > r.dead_reckoning.rmse_m) {
+    failed.push_back("worse than dead reckoning");
+  }
+  r.pass = failed.empty();
+  for (const std::string& f : failed) r.failed += (r.failed.empty() ? "" : "; ") + f;
+  const std::string title = e.name + ": ATE laser slam " + Fixed(r.slam.rmse_m, 3) + " m, thesis " +
+                            Fixed(r.thesis.rmse_m, 2) + ", dead reckoning " + Fixed(r.dead_reckoning.rmse_m, 2) +
+                            (r.icp_slam.measured ? ", icp-slam " + Fixed(r.icp_slam.rmse_m, 2) : "");
+  plot::SavePng(DrawRun(tracks, names, run.map, title), (dir / "trajectory.png").string());
+  r.png = e.name + "/trajectory.png";
+  return r;
+}
+
+std::string Cell(const AteFigure& f, int digits = 3) { return f.measured ? Fixed(f.rmse_m, digits) : "-"; }
+
+}  // namespace
+
+void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results) {
+  out << "| run | scans | laser SLAM ATE [m] | max [m] | thesis [m] | icp-slam [m] | dead reckoning [m] | "
+         "ms/scan (icp-slam) | accepted / gated / ambiguous / no match | goal | result |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const SuiteResult& r : results) {
+    if (r.skipped) {
+      out << "| " << r.entry.name << " | | | | | | | | | | skipped: " << r.skip_reason << " |\n";
+      continue;
+    }
+    std::string goal = r.entry.goal_ate_m > 0 ? "<= " + Fixed(r.entry.goal_ate_m, 2) : "";
+    if (r.entry.no_worse_than_dead_reckoning) goal += goal.empty() ? "<= DR" : ", <= DR";
+    out << "| " << r.entry.name << " | " << r.scans << " | **" << Cell(r.slam) << "** | "
+        << (r.slam.measured ? Fixed(r.slam.max_m, 2) : "-") << " | " << Cell(r.thesis) << " | "
+        << (r.entry.reference == "icp-slam" ? "(reference)" : Cell(r.icp_slam)) << " | " << Cell(r.dead_reckoning)
+        << " | " << Fixed(r.slam_ms_per_scan, 2) << " (" << (r.icp_slam_ran ? Fixed(r.icp_slam_ms_per_scan, 2) : "-") << ") | "
+        << r.outcomes.accepted << " / " << r.outcomes.gated << " / " << r.outcomes.ambiguous << " / "
+        << r.outcomes.no_match << " | " << goal << " | " << (r.pass ? "pass" : "**fail**: " + r.failed) << " |\n";
+  }
+}
+
+std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir, const SuiteOptions& options) {
+  LaserSlamConfigChoice choice;
+  choice.path = suite.laser_slam_config;
+  choice.overrides = options.overrides;
+  const nav::LaserSlamOptions slam_options = LoadLaserSlamOptions(choice);
+  const fs::path out(out_dir);
+  fs::create_directories(out);
+  std::vector<SuiteResult> results;
+  const auto t0 = Clock::now();
+  size_t index = 0;
+  size_t planned = 0;
+  for (const SuiteEntry& e : suite.entries) {
+    planned += options.only.empty() || std::count(options.only.begin(), options.only.end(), e.name);
+  }
+  for (const SuiteEntry& e : suite.entries) {
+    if (!options.only.empty() && !std::count(options.only.begin(), options.only.end(), e.name)) continue;
+    ++index;
+    const std::string counter = "[" + std::to_string(index) + "/" + std::to_string(planned) + "] ";
+    if (const std::string missing = MissingInput(suite, e); !missing.empty()) {
+      SuiteResult r;
+      r.entry = e;
+      r.skipped = true;
+      r.skip_reason = missing + " not found";
+      if (options.progress) std::cerr << "eval-slam suite: " << counter << e.name << ": skipped, " << r.skip_reason << "\n";
+      results.push_back(r);
+      continue;
+    }
+    const auto t_run = Clock::now();
+    SuiteResult r = RunEntry(suite, e, slam_options, out / e.name, options);
+    results.push_back(r);
+    if (options.progress) {
+      std::cerr << "eval-slam suite: " << counter << e.name << ": " << r.scans << " scans, ATE laser slam "
+                << Cell(r.slam) << " m (thesis " << Cell(r.thesis, 2) << ", icp-slam " << Cell(r.icp_slam, 2)
+                << ", dead reckoning " << Cell(r.dead_reckoning, 2) << "), " << Fixed(r.slam_ms_per_scan, 2)
+                << " ms/scan: " << (r.pass ? "pass" : "FAIL (" + r.failed + ")") << " ["
+                << Fixed(std::chrono::duration<double>(Clock::now() - t_run).count(), 1) << " s]\n";
+    }
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  int runs = 0, passed = 0, skipped = 0;
+  for (const SuiteResult& r : results) {
+    skipped += r.skipped;
+    runs += !r.skipped;
+    passed += !r.skipped && r.pass;
+  }
+  {
+    std::ofstream md(out / "suite.md");
+    md << "# Laser SLAM suite: " << suite.path << "\n\n"
+       << "Laser SLAM config " << suite.laser_slam_config;
+    for (const std::string& o : options.overrides) md << ", " << o;
+    md << "; ATE = RMSE of the scan poses after SE(2) alignment with the reference. " << passed << " of " << runs
+       << " runs meet their goals" << (skipped ? ", " + std::to_string(skipped) + " skipped" : std::string()) << "; "
+       << Fixed(seconds, 0) << " s.\n\n";
+    WriteSuiteTable(md, results);
+  }
+  {
+    std::ofstream csv(out / "suite.csv");
+    csv << "run,kind,noise,seed,every,scans,skipped,laser_slam_ate_rmse_m,laser_slam_ate_max_m,thesis_ate_rmse_m,"
+           "icp_slam_ate_rmse_m,dead_reckoning_ate_rmse_m,laser_slam_ms_per_scan,thesis_ms_per_scan,"
+           "icp_slam_ms_per_scan,accepted,gated,ambiguous,no_match,stale_predictions,catch_up_predictions,"
+           "goal_ate_m,no_worse_than_dead_reckoning,pass\n";
+    const auto num = [](const AteFigure& f, bool max = false) {
+      return f.measured ? Fixed(max ? f.max_m : f.rmse_m, 4) : std::string();
+    };
+    for (const SuiteResult& r : results) {
+      const SuiteEntry& e = r.entry;
+      csv << e.name << "," << e.kind << "," << e.noise << "," << e.noise_seed << "," << e.every << "," << r.scans
+          << "," << (r.skipped ? 1 : 0) << "," << num(r.slam) << "," << num(r.slam, true) << "," << num(r.thesis)
+          << "," << num(r.icp_slam) << "," << num(r.dead_reckoning) << "," << Fixed(r.slam_ms_per_scan, 3) << ","
+          << Fixed(r.thesis_ms_per_scan, 3) << "," << (r.icp_slam_ran ? Fixed(r.icp_slam_ms_per_scan, 3) : "") << "," << r.outcomes.accepted
+          << "," << r.outcomes.gated << "," << r.outcomes.ambiguous << "," << r.outcomes.no_match << ","
+          << r.outcomes.stale_predictions << "," << r.outcomes.catch_up_predictions << "," << e.goal_ate_m << ","
+          << (e.no_worse_than_dead_reckoning ? 1 : 0) << "," << (r.skipped ? "" : r.pass ? "1" : "0") << "\n";
+    }
+  }
+  {
+    nlohmann::json j;
+    j["suite"] = suite.path;
+    j["laser_slam_config"] = suite.laser_slam_config;
+    j["laser_slam_overrides"] = options.overrides;
+    j["runs"] = runs;
+    j["runs_passed"] = passed;
+    j["runs_skipped"] = skipped;
+    j["seconds"] = seconds;
+    for (const SuiteResult& r : results) {
+      const std::string k = r.entry.name + "_";
+      j[k + "skipped"] = r.skipped;
+      if (r.skipped) continue;
+      j[k + "scans"] = r.scans;
+      if (r.slam.measured) {
+        j[k + "laser_slam_ate_rmse_m"] = r.slam.rmse_m;
+        j[k + "laser_slam_ate_max_m"] = r.slam.max_m;
+      }
+      if (r.thesis.measured) j[k + "thesis_ate_rmse_m"] = r.thesis.rmse_m;
+      if (r.icp_slam.measured) j[k + "icp_slam_ate_rmse_m"] = r.icp_slam.rmse_m;
+      if (r.dead_reckoning.measured) j[k + "dead_reckoning_ate_rmse_m"] = r.dead_reckoning.rmse_m;
+      j[k + "laser_slam_ms_per_scan"] = r.slam_ms_per_scan;
+      if (r.icp_slam_ran) j[k + "icp_slam_ms_per_scan"] = r.icp_slam_ms_per_scan;
+      j[k + "accepted_scans"] = r.outcomes.accepted;
+      j[k + "gated_scans"] = r.outcomes.gated;
+      j[k + "ambiguous_scans"] = r.outcomes.ambiguous;
+      j[k + "no_match_scans"] = r.outcomes.no_match;
+      j[k + "pass"] = r.pass;
+      j[k + "png"] = r.png;
+    }
+    std::ofstream(out / "summary.json") << j.dump(2) << "\n";
+  }
+  if (options.progress) {
+    std::cerr << "eval-slam suite: " << passed << " of " << runs << " runs meet their goals"
+              << (skipped ? ", " + std::to_string(skipped) + " skipped" : std::string()) << " (" << Fixed(seconds, 0)
+              << " s); " << (out / "suite.md").string() << ", suite.csv, summary.json\n";
+  }
+  return results;
+}
+
+}  // namespace snapnav::eval

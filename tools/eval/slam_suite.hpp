@@ -1,0 +1,100 @@
+#pragma once
+// The laser SLAM evaluation of one log (eval-slam) and the real-data suite (eval-slam --suite):
+// every entry of a suite file run with one laser SLAM config beside the thesis configuration,
+// MRPT's icp-slam and dead reckoning, against each log's reference.
+//
+// A suite file (config/slam_suite.ini) has a [suite] section and one section per run:
+//   [suite]
+//   data = ../../shared/data            ; folder of the entries' relative paths (relative to the file)
+//   raw_like_tool = ../../shared/tools/carmen_raw_like.py
+//   laser_slam_config = laser_slam.ini  ; relative to the file
+//   icp_slam = true                     ; run MRPT's icp-slam beside it
+//   [aces-n1]                           ; a run: its name
+//   kind = carmen_corrected             ; carmen | carmen_corrected | rawlog
+//   log = laser/carmen/aces-corrected.log.gz
+//   reference = corrected               ; a reference log or CSV | corrected (the log itself) | icp-slam
+//   noise = 1                           ; carmen_corrected: raw_like_tool's --noise, --seed, --every
+//   seed = 1
+//   every = 1
+//   goal_ate_m = 0.30                   ; the laser SLAM's ATE goal [m] (0: none)
+//   no_worse_than_dead_reckoning = true ; also a goal: ATE <= dead reckoning's
+// A run whose data file (or the raw-like tool) is missing is skipped with a line naming it.
+#include <cstdint>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "icp_slam.hpp"
+#include "slam_log.hpp"
+#include "snapnav/nav/laser_slam.hpp"
+
+namespace snapnav::eval {
+
+// An ATE figure (RMSE and max after SE(2) alignment) over the scans paired with the reference.
+struct AteFigure {
+  bool measured = false;
+  int pairs = 0;
+  double rmse_m = 0, max_m = 0;
+};
+AteFigure MeasureAte(const std::vector<nav::Pose2>& estimate, const SlamRun& run, const Reference& reference);
+
+// What the laser SLAM decided over a run (LaserSlamUpdate::outcome and prediction, per scan).
+struct OutcomeCounts {
+  int64_t accepted = 0, gated = 0, ambiguous = 0, no_match = 0, stale_predictions = 0, catch_up_predictions = 0,
+          widened = 0;
+};
+OutcomeCounts CountOutcomes(const SlamRun& run);
+
+struct SuiteEntry {
+  std::string name;
+  std::string kind;       // carmen | carmen_corrected | rawlog
+  std::string log;        // resolved path
+  std::string reference;  // resolved path, or "icp-slam"
+  int noise_seed = 1, every = 1;
+  double noise = 0;
+  double goal_ate_m = 0;
+  bool no_worse_than_dead_reckoning = false;
+};
+
+struct Suite {
+  std::string path;
+  std::string raw_like_tool;     // resolved
+  std::string laser_slam_config; // resolved
+  bool icp_slam = true;
+  std::vector<SuiteEntry> entries;
+};
+// Reads a suite file; a missing or unknown key, or a bad value, is a glue::ConfigError naming the
+// file, line and key.
+Suite LoadSuite(const std::string& path);
+
+// One run of the suite.
+struct SuiteResult {
+  SuiteEntry entry;
+  bool skipped = false;
+  std::string skip_reason;
+  int64_t scans = 0;
+  AteFigure slam, thesis, dead_reckoning, icp_slam;
+  double slam_ms_per_scan = 0, thesis_ms_per_scan = 0, icp_slam_ms_per_scan = 0;
+  bool icp_slam_ran = false;  // icp-slam ran on this entry (the suite's icp_slam, or icp-slam as the reference)
+  OutcomeCounts outcomes;
+  bool pass = false;           // every goal of the entry met
+  std::string failed;          // which goals failed
+  std::string png;             // the trajectory figure (relative to the output folder)
+};
+
+struct SuiteOptions {
+  std::vector<std::string> overrides;  // --set KEY=VALUE of [laser_slam]
+  std::vector<std::string> only;       // run only these entries (empty: all)
+  IcpSlamOptions icp;
+  bool progress = true;
+};
+
+// Runs every entry into out_dir/NAME/ (the raw-like log, the LCM log, icp-slam's work files,
+// trajectory.png) and writes out_dir/suite.md, suite.csv and summary.json. Returns the results.
+std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir, const SuiteOptions& options);
+
+// The suite table as Markdown (suite.md's table).
+void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results);
+
+}  // namespace snapnav::eval
