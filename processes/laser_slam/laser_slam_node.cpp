@@ -211,7 +211,6 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
 
   const auto points = glue::LaserScanPoints(msg);
   std::optional<nav::LaserSlamUpdate> update;
-  double update_ms = 0;
   if (points.empty()) {
     // A well-formed scan that saw nothing (every beam NaN or no return, e.g. open space): no update,
     // the prediction stands and its pose is still published, so every well-formed scan has a pose.
@@ -219,8 +218,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   } else {
     const auto t0 = std::chrono::steady_clock::now();
     update = slam_->Update(points, msg.utime);
-    update_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-    update_ms_total_ += update_ms;
+    update_ms_total_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ++updates_;
     measured_ += update->outcome == nav::MatchOutcome::kAccepted;
     gated_ += update->outcome == nav::MatchOutcome::kGated;
@@ -230,13 +228,13 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   bus_.Publish(config_.pose_channel,
                glue::ToPoseMsg(msg.utime, "laser_slam", "map", slam_->pose(), slam_->covariance()));
   ++poses_published_;
-  PublishStatus(msg.utime, update ? &*update : nullptr, update_ms);
+  PublishStatus(msg.utime, update ? &*update : nullptr);  // only what the inputs decide: a replay repeats it
   if (!points.empty() && config_.map_every_n_scans > 0 && updates_ % config_.map_every_n_scans == 0) {
     PublishMap(msg.utime);
   }
 }
 
-void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u, double update_ms) {
+void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) {
   laser_slam_status_t s{};
   s.utime = utime;
   s.gate_mahalanobis2 = config_.options.gate_mahalanobis2;
@@ -270,7 +268,6 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u, 
   s.position_sigma_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(p.topLeftCorner<2, 2>())
                                                    .eigenvalues()(1)));
   s.heading_sigma_deg = std::sqrt(std::max(0.0, p(2, 2))) * kDegPerRad;
-  s.update_ms = update_ms;
   s.scans = scans_;
   s.accepted = measured_;
   s.gated = gated_;

@@ -93,7 +93,7 @@ class LaserSlamNode {
     problems_.Skip(reason, detail, malformed);
   }
   void PublishMap(int64_t utime);
-  void PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u, double update_ms);
+  void PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u);
 
   glue::Bus& bus_;
   LaserSlamConfig config_;

@@ -56,6 +56,31 @@ fused_slam_status_t SampleFusedSlamStatus() {
   return m;
 }
 
+laser_slam_status_t SampleLaserSlamStatus() {
+  laser_slam_status_t m{};
+  m.utime = 1700000000000000;
+  m.outcome = laser_slam_status_t::ACCEPTED;
+  m.prediction = laser_slam_status_t::STALE;
+  m.predictions = 2;
+  m.widened = true;
+  m.mahalanobis2 = 3.2;
+  m.gate_mahalanobis2 = 16.27;
+  m.ambiguity = 0.05;
+  m.fit = 0.9;
+  m.kernel = 0.7;
+  m.points = 600;
+  m.matches = 580;
+  m.position_sigma_m = 0.02;
+  m.heading_sigma_deg = 0.4;
+  m.scans = 100;
+  m.accepted = 95;
+  m.gated = 3;
+  m.ambiguous = 1;
+  m.no_match = 1;
+  m.map_points = 4000;
+  return m;
+}
+
 homing_vector_t SampleHomingVector() {
   homing_vector_t m{};
   m.utime = 1700000000000000;
@@ -239,7 +264,7 @@ std::vector<TypeCase> AllTypes() {
           Case(SampleLaserScan()),    Case(SampleNavigatorStatus()), Case(SampleOdometry()),
           Case(SampleOmniFrame()),    Case(SamplePlaceCellMatch()),  Case(SamplePointMap()),
           Case(SamplePose()),         Case(SampleRoute()),           Case(SampleExperienceMap()),
-          Case(SampleFusedSlamStatus())};
+          Case(SampleFusedSlamStatus()), Case(SampleLaserSlamStatus())};
 }
 
 // "" when the published payload decodes and holds only finite numbers; else what is wrong.
@@ -301,6 +326,13 @@ std::string OutputProblem(const std::string& channel, const std::string& payload
     if (!m) return channel + ": " + error;
     return bad(AllFinite({m->last_mahalanobis2, m->last_fit, m->x_m, m->y_m, m->theta_rad, m->position_sigma_m}),
                "fused_slam_status_t");
+  }
+  if (*fp == static_cast<uint64_t>(laser_slam_status_t::getHash())) {
+    const auto m = glue::Decode<laser_slam_status_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->mahalanobis2, m->gate_mahalanobis2, m->ambiguity, m->fit, m->kernel, m->position_sigma_m,
+                          m->heading_sigma_deg}),
+               "laser_slam_status_t");
   }
   return channel + ": unexpected output type";
 }

@@ -10,6 +10,7 @@
 #include "snapnav/drive_command_t.hpp"
 #include "snapnav/experience_map_t.hpp"
 #include "snapnav/fused_slam_status_t.hpp"
+#include "snapnav/laser_slam_status_t.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/laser_scan_t.hpp"
@@ -26,6 +27,7 @@ namespace snapnav::fuzz {
 drive_command_t SampleDriveCommand();
 experience_map_t SampleExperienceMap();
 fused_slam_status_t SampleFusedSlamStatus();
+laser_slam_status_t SampleLaserSlamStatus();
 homing_vector_t SampleHomingVector();
 landmark_set_t SampleLandmarkSet();
 laser_scan_t SampleLaserScan(int beams = 16);

@@ -1,0 +1,60 @@
+// The laser SLAM suite files (tools/eval/slam_suite): the shipped suites load with every entry the
+// issue asks for; a bad suite file is an error naming the file and the key.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "slam_suite.hpp"
+#include "snapnav/glue/ini.hpp"
+
+namespace snapnav::eval {
+namespace {
+
+TEST(SlamSuiteFile, ShippedSuiteHasEveryLogAtEveryOdometry) {
+  const Suite s = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite.ini");
+  EXPECT_TRUE(s.icp_slam);
+  EXPECT_EQ(std::filesystem::path(s.laser_slam_config).filename(), "laser_slam.ini");
+  std::set<std::string> names;
+  for (const SuiteEntry& e : s.entries) names.insert(e.name);
+  EXPECT_TRUE(names.count("csail"));
+  EXPECT_TRUE(names.count("malaga"));
+  for (const std::string log : {"aces", "seattle", "orebro", "freiburg-079"}) {
+    for (const std::string v : {"-n0", "-n1", "-n1s2", "-n1e3"}) EXPECT_TRUE(names.count(log + v)) << log + v;
+  }
+  for (const SuiteEntry& e : s.entries) {
+    if (e.name == "malaga") {
+      EXPECT_EQ(e.reference, "icp-slam");
+      continue;
+    }
+    EXPECT_GT(e.goal_ate_m, 0) << e.name;
+    EXPECT_EQ(e.no_worse_than_dead_reckoning, e.noise > 0 || e.kind == "carmen") << e.name;
+  }
+  const Suite held = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_heldout.ini");
+  EXPECT_EQ(held.entries.size(), 12u);
+  for (const SuiteEntry& e : held.entries) {
+    EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
+  }
+}
+
+TEST(SlamSuiteFile, BadSuiteIsAnErrorNamingFileAndKey) {
+  const auto dir = std::filesystem::temp_directory_path() / "snapnav_slam_suite_file_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "bad.ini").string();
+  std::ofstream(path) << "[suite]\ndata = .\nraw_like_tool = x.py\nlaser_slam_config = l.ini\nicp_slam = false\n"
+                         "[a]\nkind = carmen_corrected\nlog = a.gz\nreference = corrected\nnoise = 1\nseed = 1\n"
+                         "every = 1\ngoal_ate_m = 0.3\nno_worse_than_dead_reckonin = true\n";
+  try {
+    LoadSuite(path);
+    ADD_FAILURE() << "a misspelt key loaded";
+  } catch (const glue::ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("bad.ini"), std::string::npos) << what;
+    EXPECT_NE(what.find("no_worse_than_dead_reckonin"), std::string::npos) << what;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace snapnav::eval
