@@ -45,6 +45,13 @@ class VectorSink : public importers::Sink {
 
 }  // namespace
 
+bool UsableScan(const laser_scan_t& s) {
+  // As the laser-slam process checks a scan (processes/laser_slam).
+  return !s.ranges_m.empty() && std::isfinite(s.angle_min_rad) && std::isfinite(s.angle_increment_rad) &&
+         s.angle_increment_rad != 0 && s.range_min_m >= 0 && s.range_max_m > s.range_min_m && s.range_max_m <= 10000 &&
+         std::abs(s.sensor_x_m) <= 10000 && std::abs(s.sensor_y_m) <= 10000 && std::abs(s.sensor_theta_rad) <= 100;
+}
+
 SlamLog LoadSlamLog(const std::string& path, bool progress) {
   glue::LogReader file(path);  // throws naming the file when it cannot be opened
   SlamLog log;
@@ -63,11 +70,7 @@ SlamLog LoadSlamLog(const std::string& path, bool progress) {
       ++log.odometry;
     } else if (e.channel == channels::kLaserScan) {
       const auto s = glue::Decode<laser_scan_t>(e.data.data(), e.data.size(), &error);
-      // As the laser-slam process checks a scan (processes/laser_slam).
-      if (!s || s->ranges_m.empty() || !std::isfinite(s->angle_min_rad) || !std::isfinite(s->angle_increment_rad) ||
-          s->angle_increment_rad == 0 || !(s->range_min_m >= 0) || !(s->range_max_m > s->range_min_m) ||
-          !(s->range_max_m <= 10000) || !(std::abs(s->sensor_x_m) <= 10000) || !(std::abs(s->sensor_y_m) <= 10000) ||
-          !(std::abs(s->sensor_theta_rad) <= 100)) {
+      if (!s || !UsableScan(*s)) {
         ++log.rejected;
         continue;
       }

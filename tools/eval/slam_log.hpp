@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/laser_slam.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/trajectory.hpp"
@@ -37,6 +38,10 @@ struct SlamLog {
   uint64_t damaged_bytes = 0;
   std::vector<std::string> damage;
 };
+
+// A decoded LASER_SCAN the SLAM log keeps (the checks of the laser-slam process); the others are
+// counted as rejected.
+bool UsableScan(const laser_scan_t& scan);
 
 // Reads a log made by log-import (or recorded on the bus). Undecodable or invalid messages are
 // counted in `rejected`; a damaged file (truncated, corrupt) is read up to and after the damage,

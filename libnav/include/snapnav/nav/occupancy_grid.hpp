@@ -1,0 +1,66 @@
+#pragma once
+// Occupancy grid maps from laser scans at known poses (issue 22, "maps out"): MRPT's
+// COccupancyGridMap2D (log-odds cells, each beam's free cells and its hit) and its CSimpleMap of
+// (pose, scan) keyframes, so that MRPT's apps and ROS's map_server read the maps snapnav makes.
+// Pure: the caller writes files (tools/map).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <mrpt/maps/COccupancyGridMap2D.h>
+#include <mrpt/maps/CSimpleMap.h>
+
+#include "snapnav/nav/pose2.hpp"
+
+namespace snapnav::nav {
+
+// One scan as the laser measured it, and the robot's pose when it did.
+struct GridScan {
+  int64_t utime = 0;
+  Pose2 robot_pose;            // in the map frame
+  Pose2 sensor_on_robot;       // the laser's mount on the robot
+  float angle_min_rad = 0;     // bearing of the first beam in the sensor frame
+  float angle_increment_rad = 0;
+  float range_min_m = 0, range_max_m = 0;  // readings outside [min, max) are no return
+  std::vector<float> ranges_m;
+};
+
+struct OccupancyGridOptions {
+  double resolution_m = 0.05;    // cell size [m]
+  double max_range_m = 0;        // beams longer than this insert only their free cells up to it [m, 0: the laser's range]
+  bool no_return_is_free = true; // a beam with no return clears its cells up to max range (MRPT's
+                                 // considerInvalidRangesAsFreeSpace)
+  double occupied_threshold = 0.65;  // exported as occupied at or above this probability (ROS's default)
+  double free_threshold = 0.196;     // ... as free at or below it (ROS's default)
+  void Validate() const;          // throws std::invalid_argument naming the bad option
+};
+
+// MRPT's range scan of `scan` (its beams symmetric about the sensor's axis, as MRPT wants them:
+// the sensor's heading turned so that its first beam has the scan's first bearing). MRPT's
+// documented beam spacing (CObservation2DRangeScan::getScanAngle, point maps) is aperture / (N - 1);
+// its occupancy grid's insertion (MRPT 2.5) spaces N beams by aperture / N from -aperture / 2
+// (measured: the last of 5 beams 0.1 rad apart landed 0.083 rad short). `for_grid` sets the
+// aperture so that the grid puts every beam at its bearing.
+mrpt::obs::CObservation2DRangeScan ToMrptScan(const GridScan& scan, double max_range_m = 0, bool for_grid = false);
+
+// The grid of every scan inserted at its pose; it grows to hold them. Throws std::invalid_argument
+// on bad options or a scan with fewer than 2 beams.
+mrpt::maps::COccupancyGridMap2D BuildOccupancyGrid(const std::vector<GridScan>& scans,
+                                                   const OccupancyGridOptions& options);
+
+// MRPT's simple map: each scan with its pose (a keyframe), the input of MRPT's map building apps.
+mrpt::maps::CSimpleMap BuildSimpleMap(const std::vector<GridScan>& scans, double max_range_m = 0);
+
+// A cell's occupancy as ROS's nav_msgs/OccupancyGrid and map_server have it: 0 free .. 100
+// occupied, -1 unknown (never observed). Row-major from the grid's (x_min, y_min) corner, x along
+// a row.
+struct OccupancyCells {
+  double resolution_m = 0;
+  double origin_x_m = 0, origin_y_m = 0;  // the corner of cell (0, 0)
+  int width = 0, height = 0;
+  std::vector<int8_t> cells;   // width * height
+  int occupied = 0, free = 0, unknown = 0;  // by options' thresholds
+};
+OccupancyCells ToOccupancyCells(const mrpt::maps::COccupancyGridMap2D& grid, const OccupancyGridOptions& options);
+
+}  // namespace snapnav::nav

@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# map-export on a simulated run (slam-sim-eval --write-log: LASER_SCAN, ODOMETRY and
+# POSE_GROUND_TRUTH of 40 s in the indoor13 scene): the map from the laser SLAM run over the log
+# and the map from the recorded ground truth (--pose-channel) agree (the SLAM map's occupied
+# pixels lie within 2 pixels of the truth's); every file is written and the YAML points at the PGM;
+# a missing log and a log without scans are errors that name the file.
+set -euo pipefail
+BIN="$1"
+OUT="$(mktemp -d)"
+trap 'rm -rf "$OUT"' EXIT
+"$BIN/slam-sim-eval" --scene indoor13 --duration-s 40 --write-log --out "$OUT/sim" > /dev/null
+"$BIN/map-export" "$OUT/sim/sim.lcmlog" --out "$OUT/slam"
+"$BIN/map-export" "$OUT/sim/sim.lcmlog" --pose-channel POSE_GROUND_TRUTH --out "$OUT/truth"
+for f in map.pgm map.yaml map.gridmap map.simplemap map.png map_trajectory.csv; do
+  test -s "$OUT/slam/$f" || { echo "FAIL: $OUT/slam/$f missing"; exit 1; }
+done
+python3 - "$OUT" <<'PY'
+import math, sys
+out = sys.argv[1]
+def pgm(path):
+    data = open(path, 'rb').read()
+    parts, i = [], 0
+    while len(parts) < 4:
+        if data[i:i+1] == b'#':
+            i = data.index(b'\n', i) + 1
+            continue
+        j = i
+        while data[j:j+1] not in b' \n': j += 1
+        parts.append(data[i:j]); i = j + 1
+    assert parts[0] == b'P5', parts
+    w, h = int(parts[1]), int(parts[2])
+    px = data[i:i + w * h]
+    assert len(px) == w * h, (len(px), w * h)
+    return w, h, px
+def yaml(path):
+    d = {}
+    for line in open(path):
+        k, v = line.split(':', 1)
+        d[k.strip()] = v.strip()
+    return d
+ys, yt = yaml(out + '/slam/map.yaml'), yaml(out + '/truth/map.yaml')
+assert ys['image'] == 'map.pgm' and ys['mode'] == 'trinary' and float(ys['resolution']) == 0.05, ys
+def occupied(dirname):
+    y = yaml(out + '/' + dirname + '/map.yaml')
+    ox, oy, _ = [float(v) for v in y['origin'].strip('[]').split(',')]
+    w, h, px = pgm(out + '/' + dirname + '/map.pgm')
+    res = float(y['resolution'])
+    cells = set()
+    for r in range(h):
+        for c in range(w):
+            if px[r * w + c] == 0:
+                cells.add((math.floor(ox / res + 0.5) + c, math.floor(oy / res + 0.5) + (h - 1 - r)))
+    return cells
+s, t = occupied('slam'), occupied('truth')
+# The laser SLAM's map frame is its start pose, the truth's the world's: place the SLAM's cells by
+# the first scan's pose in each (map_trajectory.csv).
+import csv, math
+a = next(csv.DictReader(open(out + '/slam/map_trajectory.csv')))
+b = next(csv.DictReader(open(out + '/truth/map_trajectory.csv')))
+assert a['utime'] == b['utime'], (a, b)
+ta = float(a['theta_rad'])
+th0 = float(b['theta_rad']) - ta
+ax, ay = float(a['x_m']), float(a['y_m'])
+x0 = float(b['x_m']) - (math.cos(th0) * ax - math.sin(th0) * ay)
+y0 = float(b['y_m']) - (math.sin(th0) * ax + math.cos(th0) * ay)
+res = 0.05
+def to_world(cell):
+    x, y = (cell[0] + 0.5) * res, (cell[1] + 0.5) * res
+    wx = x0 + math.cos(th0) * x - math.sin(th0) * y
+    wy = y0 + math.sin(th0) * x + math.cos(th0) * y
+    return (math.floor(wx / res), math.floor(wy / res))
+s = {to_world(c) for c in s}
+near = sum(1 for (x, y) in s if any((x + dx, y + dy) in t for dx in range(-2, 3) for dy in range(-2, 3)))
+print(f"map-export test: {len(s)} occupied cells from the laser SLAM, {len(t)} from the ground truth; "
+      f"{near / max(1, len(s)):.3f} of the SLAM's within 2 cells of the truth's")
+assert len(s) > 500 and len(t) > 500
+assert near >= 0.9 * len(s), near
+PY
+if "$BIN/map-export" "$OUT/nothing.lcmlog" --out "$OUT/x" 2> "$OUT/err"; then echo "FAIL: a missing log exported"; exit 1; fi
+grep -q "nothing.lcmlog" "$OUT/err" || { echo "FAIL: the error does not name the log:"; cat "$OUT/err"; exit 1; }
+if "$BIN/map-export" "$OUT/slam/map.pgm" --out "$OUT/x" 2> "$OUT/err"; then echo "FAIL: a PGM exported as a log"; exit 1; fi
+grep -q "map.pgm" "$OUT/err" || { echo "FAIL: the error does not name the file:"; cat "$OUT/err"; exit 1; }
+echo "map-export test: passed"

@@ -1,0 +1,29 @@
+#pragma once
+// Map files from an occupancy grid: ROS map_server's PGM + YAML, MRPT's .gridmap and .simplemap,
+// and a PNG with the trajectory to look at (./snapnav map export).
+#include <string>
+#include <vector>
+
+#include "snapnav/nav/occupancy_grid.hpp"
+#include "snapnav/nav/pose2.hpp"
+
+namespace snapnav::map {
+
+// DIR/NAME.pgm (binary P5, row 0 the top: the largest y) and DIR/NAME.yaml (image, resolution,
+// origin [x, y, yaw] of the lower-left pixel, negate, occupied_thresh, free_thresh, mode trinary):
+// occupied 0, free 254, unknown 205, as ROS's map_saver writes them. Throws std::runtime_error
+// naming the file when it cannot be written.
+void WriteRosMap(const nav::OccupancyCells& cells, const nav::OccupancyGridOptions& options, const std::string& dir,
+                 const std::string& name = "map");
+
+// MRPT's files, gzip-compressed serializations as MRPT's apps write and read them.
+void WriteGridmap(const mrpt::maps::COccupancyGridMap2D& grid, const std::string& path);
+void WriteSimplemap(const mrpt::maps::CSimpleMap& map, const std::string& path);
+// Reads a .gridmap back (MRPT's own reader); throws std::runtime_error naming the file.
+mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path);
+
+// A PNG of the trinary map with `trajectory` drawn over it (red), one pixel per cell.
+void WriteMapPng(const nav::OccupancyCells& cells, const nav::OccupancyGridOptions& options,
+                 const std::vector<nav::Pose2>& trajectory, const std::string& path);
+
+}  // namespace snapnav::map

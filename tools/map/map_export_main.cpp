@@ -1,0 +1,178 @@
+// map-export (./snapnav map export LOG --out DIR): the occupancy grid of a recorded run as the files
+// labs' other tools read: ROS map_server's map.pgm + map.yaml, MRPT's map.gridmap and
+// map.simplemap (pf-localization, the map viewers), and map.png with the trajectory.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <optional>
+
+#include "slam_config.hpp"
+#include "slam_log.hpp"
+#include "map_export.hpp"
+#include "snapnav/glue/app.hpp"
+#include "snapnav/glue/channels.hpp"
+#include "snapnav/glue/codec.hpp"
+#include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/log_reader.hpp"
+#include "snapnav/laser_scan_t.hpp"
+#include "snapnav/nav/occupancy_grid.hpp"
+#include "snapnav/pose_t.hpp"
+
+namespace {
+
+using namespace snapnav;
+
+// The poses of `channel` in the log, by utime.
+std::map<int64_t, nav::Pose2> ReadPoses(const std::string& path, const std::string& channel, int* rejected) {
+  glue::LogReader file(path);
+  glue::LogEvent e;
+  std::map<int64_t, nav::Pose2> poses;
+  while (file.Next(&e)) {
+    if (e.channel != channel) continue;
+    std::string error;
+    const auto p = glue::Decode<pose_t>(e.data.data(), e.data.size(), &error);
+    if (!p || !std::isfinite(p->x_m) || !std::isfinite(p->y_m) || !std::isfinite(p->theta_rad)) {
+      ++*rejected;
+      continue;
+    }
+    poses[p->utime] = {p->x_m, p->y_m, p->theta_rad};
+  }
+  return poses;
+}
+
+int Main(int argc, char** argv) {
+  std::string log_path, out_dir, pose_channel, name = "map";
+  nav::OccupancyGridOptions grid_options;
+  eval::LaserSlamConfigChoice config;
+  std::vector<std::string> sets;
+  double max_dt_s = 0.05;
+  glue::Flags flags("map-export",
+                    "The occupancy grid of a recorded run (LASER_SCAN and ODOMETRY, as log-import writes them or\n"
+                    "lcm-logger records them) as files other tools read: NAME.pgm + NAME.yaml (ROS map_server,\n"
+                    "trinary: occupied 0, free 254, unknown 205; origin = the lower-left pixel), NAME.gridmap\n"
+                    "(MRPT's COccupancyGridMap2D) and NAME.simplemap (MRPT's keyframes: each scan at its pose), and\n"
+                    "NAME.png with the trajectory in red, NAME_trajectory.csv (utime,x_m,y_m,theta_rad: each scan's\n"
+                    "pose). The poses: the laser SLAM run over the log with --config\n"
+                    "(default: the shipped config/laser_slam.ini) and --set, or with --pose-channel the poses a live\n"
+                    "run recorded (e.g. POSE_LASER_SLAM), the nearest within --max-dt-s of each scan. The grid is\n"
+                    "MRPT's: each beam clears the cells it crossed and marks its hit.");
+  flags.AllowPositional("LOG", "the LCM log");
+  flags.AddString("out", &out_dir, "output folder (required)");
+  flags.AddString("name", &name, "base name of the files");
+  flags.AddDouble("resolution-m", &grid_options.resolution_m, "cell size [m]");
+  flags.AddDouble("max-range-m", &grid_options.max_range_m, "beams beyond this insert free cells only up to it [m, 0: the laser's range]");
+  flags.AddString("pose-channel", &pose_channel, "take the poses of this channel in the log instead of running the laser SLAM");
+  flags.AddDouble("max-dt-s", &max_dt_s, "with --pose-channel: a scan's pose is the nearest within this [s]");
+  flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options the laser SLAM runs");
+  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE");
+  if (!flags.Parse(argc, argv)) return 0;
+  if (flags.positional().size() != 1) throw glue::FlagError("give one LOG (see --help)");
+  log_path = flags.positional()[0];
+  if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
+  try {
+    grid_options.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::FlagError(e.what());
+  }
+
+  // The scans as the laser measured them, in log order (the SLAM log's scans, the same checks).
+  std::vector<nav::GridScan> scans;
+  int64_t rejected_scans = 0;
+  {
+    glue::LogReader file(log_path);
+    glue::LogEvent e;
+    while (file.Next(&e)) {
+      if (e.channel != channels::kLaserScan) continue;
+      std::string error;
+      const auto s = glue::Decode<laser_scan_t>(e.data.data(), e.data.size(), &error);
+      if (!s || !eval::UsableScan(*s)) {
+        ++rejected_scans;
+        continue;
+      }
+      nav::GridScan g;
+      g.utime = s->utime;
+      g.sensor_on_robot = {s->sensor_x_m, s->sensor_y_m, s->sensor_theta_rad};
+      g.angle_min_rad = s->angle_min_rad;
+      g.angle_increment_rad = s->angle_increment_rad;
+      g.range_min_m = s->range_min_m;
+      g.range_max_m = s->range_max_m;
+      g.ranges_m = s->ranges_m;
+      scans.push_back(std::move(g));
+    }
+    file.ReportDamage(std::cerr, "map-export");
+  }
+  if (scans.empty()) throw std::runtime_error(log_path + " holds no usable " + std::string(channels::kLaserScan) + " messages");
+
+  std::vector<nav::Pose2> trajectory;  // of the placed scans, in order
+  std::vector<nav::GridScan> placed;
+  if (pose_channel.empty()) {
+    config.overrides = sets;
+    const nav::LaserSlamOptions options = eval::LoadLaserSlamOptions(config);
+    const eval::SlamLog log = eval::LoadSlamLog(log_path, true);
+    std::cerr << "map-export: laser SLAM over " << log.scans << " scans (" << config.path << ")\n";
+    const eval::SlamRun run = eval::RunSlam(log, options);
+    if (run.slam.size() != scans.size()) {
+      throw std::runtime_error("internal: " + std::to_string(run.slam.size()) + " SLAM poses for " +
+                               std::to_string(scans.size()) + " scans");
+    }
+    for (size_t i = 0; i < scans.size(); ++i) {
+      scans[i].robot_pose = run.slam[i];
+      trajectory.push_back(run.slam[i]);
+    }
+    placed = std::move(scans);
+  } else {
+    int rejected = 0;
+    const std::map<int64_t, nav::Pose2> poses = ReadPoses(log_path, pose_channel, &rejected);
+    if (poses.empty()) throw std::runtime_error(log_path + " holds no pose_t messages on " + pose_channel);
+    const auto max_dt = static_cast<int64_t>(max_dt_s * 1e6);
+    int64_t unplaced = 0;
+    for (nav::GridScan& s : scans) {
+      auto it = poses.lower_bound(s.utime);
+      std::optional<std::pair<int64_t, nav::Pose2>> best;
+      for (auto c : {it, it == poses.begin() ? poses.end() : std::prev(it)}) {
+        if (c == poses.end()) continue;
+        if (!best || std::llabs(c->first - s.utime) < std::llabs(best->first - s.utime)) best = *c;
+      }
+      if (!best || std::llabs(best->first - s.utime) > max_dt) {
+        ++unplaced;
+        continue;
+      }
+      s.robot_pose = best->second;
+      trajectory.push_back(best->second);
+      placed.push_back(std::move(s));
+    }
+    std::cerr << "map-export: " << poses.size() << " poses on " << pose_channel << " (" << rejected
+              << " undecodable or not finite); " << placed.size() << " scans placed, " << unplaced
+              << " without a pose within " << max_dt_s << " s\n";
+    if (placed.empty()) throw std::runtime_error("no scan of " + log_path + " has a pose on " + pose_channel + " within " + std::to_string(max_dt_s) + " s");
+  }
+
+  const mrpt::maps::COccupancyGridMap2D grid = nav::BuildOccupancyGrid(placed, grid_options);
+  const nav::OccupancyCells cells = nav::ToOccupancyCells(grid, grid_options);
+  const std::filesystem::path out(out_dir);
+  map::WriteRosMap(cells, grid_options, out_dir, name);
+  map::WriteGridmap(grid, (out / (name + ".gridmap")).string());
+  map::WriteSimplemap(nav::BuildSimpleMap(placed, grid_options.max_range_m), (out / (name + ".simplemap")).string());
+  map::WriteMapPng(cells, grid_options, trajectory, (out / (name + ".png")).string());
+  {
+    const std::string csv = (out / (name + "_trajectory.csv")).string();
+    std::ofstream f(csv);
+    f << "utime,x_m,y_m,theta_rad\n" << std::setprecision(10);
+    for (const nav::GridScan& s : placed) f << s.utime << "," << s.robot_pose.x_m << "," << s.robot_pose.y_m << "," << s.robot_pose.theta_rad << "\n";
+    if (!f) throw std::runtime_error(csv + ": cannot write");
+  }
+  std::cout << "map-export: " << placed.size() << " scans (" << rejected_scans << " unusable), " << cells.width << " x "
+            << cells.height << " cells of " << cells.resolution_m << " m from (" << cells.origin_x_m << ", "
+            << cells.origin_y_m << "): " << cells.occupied << " occupied, " << cells.free << " free, " << cells.unknown
+            << " unknown\nmap-export: wrote " << (out / (name + ".pgm")).string() << ", " << name << ".yaml, " << name
+            << ".gridmap, " << name << ".simplemap, " << name << ".png, " << name << "_trajectory.csv\n";
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return glue::RunMain(argc, argv, Main); }
