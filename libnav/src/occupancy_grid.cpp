@@ -51,8 +51,34 @@ mrpt::maps::COccupancyGridMap2D BuildOccupancyGrid(const std::vector<GridScan>& 
                                                    const OccupancyGridOptions& options) {
   options.Validate();
   const float res = static_cast<float>(options.resolution_m);
-  mrpt::maps::COccupancyGridMap2D grid(-1.0f, 1.0f, -1.0f, 1.0f, res);
-  grid.insertionOptions.considerInvalidRangesAsFreeSpace = options.no_return_is_free;
+  // The grid sized once to hold every beam's end (one allocation, no resizing as scans arrive).
+  double x0 = 0, x1 = 0, y0 = 0, y1 = 0;
+  bool any = false;
+  for (const GridScan& scan : scans) {
+    const Pose2 sensor = scan.robot_pose.Compose(scan.sensor_on_robot);
+    const double limit = options.max_range_m > 0 ? std::min<double>(options.max_range_m, scan.range_max_m) : scan.range_max_m;
+    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      const float r = scan.ranges_m[i];
+      const bool valid = std::isfinite(r) && r >= scan.range_min_m && r < scan.range_max_m && r < limit;
+      if (!valid) continue;
+      const double range = r;
+      const double a = scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
+      const Eigen::Vector2d end = sensor.Transform(Eigen::Vector2d(range * std::cos(a), range * std::sin(a)));
+      if (!any) {
+        x0 = x1 = end.x();
+        y0 = y1 = end.y();
+        any = true;
+      }
+      x0 = std::min({x0, end.x(), sensor.x_m});
+      x1 = std::max({x1, end.x(), sensor.x_m});
+      y0 = std::min({y0, end.y(), sensor.y_m});
+      y1 = std::max({y1, end.y(), sensor.y_m});
+    }
+  }
+  constexpr double kMargin = 1.0;
+  mrpt::maps::COccupancyGridMap2D grid(static_cast<float>(x0 - kMargin), static_cast<float>(x1 + kMargin),
+                                       static_cast<float>(y0 - kMargin), static_cast<float>(y1 + kMargin), res);
+  grid.insertionOptions.considerInvalidRangesAsFreeSpace = false;  // see the header
   grid.insertionOptions.maxDistanceInsertion = 1e4f;  // the scans' own limits (ToMrptScan) apply
   for (const GridScan& scan : scans) {
     const mrpt::obs::CObservation2DRangeScan obs = ToMrptScan(scan, options.max_range_m, true);

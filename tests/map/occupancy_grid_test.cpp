@@ -136,6 +136,22 @@ TEST(OccupancyGrid, HitsWhereTheLasersGeometrySaysAsymmetricBeamsAndATurnedMount
   EXPECT_FALSE(obs.getScanRangeValidity(3));
 }
 
+// A scan with one return among 361 (open space, a SICK's 81.9 m no-return readings): MRPT 2.5
+// crashed inserting such scans with no-return beams as free space; they clear nothing now.
+TEST(OccupancyGrid, ScanWithFewReturnsIsInserted) {
+  GridScan s;
+  s.angle_min_rad = static_cast<float>(-M_PI / 2);
+  s.angle_increment_rad = static_cast<float>(M_PI / 360);
+  s.range_min_m = 0.1f;
+  s.range_max_m = 81.91f;
+  s.ranges_m.assign(361, 81.91f);
+  s.ranges_m[180] = 4.0f;
+  nav::OccupancyGridOptions options;
+  const auto c = nav::ToOccupancyCells(nav::BuildOccupancyGrid({s, s}, options), options);
+  EXPECT_GE(Near(c, 4.0, 0.0), 65);
+  EXPECT_EQ(c.occupied, 1);
+}
+
 TEST(OccupancyGrid, BadOptionsAndScansAreRefused) {
   nav::OccupancyGridOptions o;
   o.resolution_m = 0;

@@ -28,8 +28,9 @@ struct GridScan {
 struct OccupancyGridOptions {
   double resolution_m = 0.05;    // cell size [m]
   double max_range_m = 0;        // beams longer than this insert only their free cells up to it [m, 0: the laser's range]
-  bool no_return_is_free = true; // a beam with no return clears its cells up to max range (MRPT's
-                                 // considerInvalidRangesAsFreeSpace)
+  // A beam with no return clears nothing (MRPT's considerInvalidRangesAsFreeSpace is off: MRPT 2.5
+  // crashes in COccupancyGridMap2D::resizeGrid when a scan with few returns is inserted with it on,
+  // measured with 1 of 361 beams returning).
   double occupied_threshold = 0.65;  // exported as occupied at or above this probability (ROS's default)
   double free_threshold = 0.196;     // ... as free at or below it (ROS's default)
   void Validate() const;          // throws std::invalid_argument naming the bad option
