@@ -45,6 +45,7 @@ std::string RegexEscape(const std::string& text) {
 ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   ViewerConfig c;
   const std::string regex_prefix = RegexEscape(channel_prefix);
+  c.channel_prefix = channel_prefix;
   c.point_map_channel = channel_prefix + ini.GetString("channels", "point_map");
   c.pose_channels = regex_prefix + ini.GetString("channels", "poses");
   c.truth_channel = channel_prefix + ini.GetString("channels", "ground_truth");
@@ -312,7 +313,9 @@ void ViewerNode::UpdatePanorama() {
 const viewer::ViewerScene& ViewerNode::Scene() {
   UpdatePanorama();
   scene_.channel_counts.clear();
-  for (const auto& [ch, s] : bus_.stats()) scene_.channel_counts[ch] = static_cast<int64_t>(s.received);
+  for (const auto& [ch, s] : bus_.stats()) {
+    if (ch.rfind(config_.channel_prefix, 0) == 0) scene_.channel_counts[ch] = static_cast<int64_t>(s.received);
+  }
   scene_.rejected = static_cast<int64_t>(bus_.total_errors()) + rejected_total();
   return scene_;
 }
