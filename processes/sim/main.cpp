@@ -1,6 +1,7 @@
 // sim: the simulated lab (robot, omni camera, laser, odometry, ground truth).
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 
 #include "scene_file.hpp"
@@ -19,7 +20,7 @@ int Main(int argc, char** argv) {
   std::string scene_override;
   double duration_override = -1;
   int seed_override = -1;
-  std::string mode_override, encoding_override, start_time_override;
+  std::string mode_override, encoding_override, start_time_override, frame_times_path;
   double clock_offset_override = std::nan("");
   int jpeg_quality_override = -1;
   glue::Flags flags("sim",
@@ -34,6 +35,9 @@ int Main(int argc, char** argv) {
   flags.AddInt("jpeg-quality", &jpeg_quality_override, "JPEG quality 1..100 (overrides [camera] jpeg_quality)");
   flags.AddString("start-time-s", &start_time_override,
                   "utime of the first message [s since the epoch], or now: the wall clock (overrides [sim] start_time_s)");
+  flags.AddString("frame-times", &frame_times_path,
+                  "write each raw frame's utime and the wall-clock time it was handed to the bus to this CSV file\n"
+                  "(utime,publish_utime): with a subscriber's receive times (latency-probe --frames-csv), its time on the bus");
   flags.AddDouble("clock-offset-s", &clock_offset_override,
                   "added to every utime it publishes: a robot whose clock is off (overrides [sim] clock_offset_s)");
   if (!flags.Parse(argc, argv)) return 0;
@@ -76,6 +80,13 @@ int Main(int argc, char** argv) {
   glue::InstallShutdownHandlers();
   glue::Bus bus(common.lcm_url);
   processes::SimNode node(bus, config, scene);
+  std::ofstream frame_times;
+  if (!frame_times_path.empty()) {
+    frame_times.open(frame_times_path);
+    if (!frame_times) throw glue::FlagError("--frame-times: cannot write " + frame_times_path);
+    frame_times << "utime,publish_utime\n";
+    node.LogFramePublishTimes(&frame_times);
+  }
   node.Run(&std::cerr);
   std::cerr << "sim: done at t=" << (node.utime() - node.start_utime()) * 1e-6 << " s: " << node.frames()
             << " frames, " << node.scans() << " scans, " << node.odometry_messages() << " odometry, "

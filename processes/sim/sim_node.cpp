@@ -255,6 +255,7 @@ void SimNode::PublishFrames() {
     } else {
       glue::SetPanorama(config_.camera.panorama, &f);
     }
+    if (raw && frame_times_) *frame_times_ << f.utime << "," << glue::WallUtime() << "\n";
     bus_.Publish(channel, f);
   };
   if (config_.publish_raw) publish(config_.omni_channel, true);

@@ -61,6 +61,11 @@ class SimNode {
  public:
   SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene& scene);
 
+  // From now on, one CSV line "utime,publish_utime" per raw frame: its stamp and the wall-clock
+  // time when it was handed to the bus (null: none). Another process of the same clock that
+  // notes its arrival gets the frame's time on the bus.
+  void LogFramePublishTimes(std::ostream* out) { frame_times_ = out; }
+
   // Runs until duration_s of simulated time, the end of the route, or shutdown.
   void Run(std::ostream* progress);
   // One physics step, publishing the sensors that are due. Returns false when done.
@@ -85,6 +90,7 @@ class SimNode {
   void CheckWatchdog();
 
   glue::Bus& bus_;
+  std::ostream* frame_times_ = nullptr;
   SimConfig config_;
   const nav::sim::Scene& scene_;
   nav::sim::World world_;
