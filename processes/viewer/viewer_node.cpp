@@ -122,7 +122,10 @@ ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
     : bus_(bus), config_(config), frames_to_panoramas_(config.panorama, config.mirror) {
   scene_.truth_channel = config_.truth_channel;
   scene_.source = bus_.url();
-  bus_.SubscribeRaw(config_.pose_channels, [this](const void* d, size_t n) { OnPose(d, n); });
+  // Every pose channel in one subscription: ground truth and dead reckoning at 50 Hz each, the others
+  // at up to 10 Hz; drawing a snapshot stalls the loop for a while, so the queue holds seconds of them.
+  bus_.SubscribeRaw(config_.pose_channels, [this](const void* d, size_t n) { OnPose(d, n); },
+                    glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.point_map_channel, &ViewerNode::OnPointMap, this);
   bus_.Subscribe(config_.panorama_channel, &ViewerNode::OnPanorama, this);
   bus_.Subscribe(config_.omni_channel, &ViewerNode::OnOmniFrame, this);
