@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# How many simulated robots this machine keeps at 10 Hz with nothing dropped (`./snapnav bench
+# robots`, inside the private bus namespace). For N = 1, 2, ... robots (config/deploy/robots.deploy
+# through tools/deploy/robots.sh: each robot's sim in real time with dead reckoning, laser SLAM,
+# place cells and homing, one lcm-logger and one viewer for all) it runs --duration-s and checks that
+# every sim kept real time at its rates (10 Hz frames and scans, 50 Hz odometry) and that no
+# subscriber or the logger missed a message; it stops at the first N that fails (--runs runs each:
+# N passes when most of its runs pass). bench.json and bench.md: the largest N that passed, the
+# CPU of each N, and at the first failing N what failed and the busiest process.
+set -euo pipefail
+BIN="$1"; shift
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+OUT="$ROOT/logs/bench-robots"
+DURATION=40
+MAX=8
+RUNS=1
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --out) OUT="$2"; shift 2 ;;
+    --duration-s) DURATION="$2"; shift 2 ;;
+    --max) MAX="$2"; shift 2 ;;
+    --runs) RUNS="$2"; shift 2 ;;
+    -h | --help)
+      echo "usage: ./snapnav bench robots [--out DIR] [--duration-s 40] [--max 8] [--runs 1]"; exit 0 ;;
+    *) echo "bench robots: unknown argument $1 (--out DIR, --duration-s S, --max N, --runs R)" >&2; exit 2 ;;
+  esac
+done
+mkdir -p "$OUT"
+OUT="$(cd "$OUT" && pwd)"
+rm -rf "$OUT"/n* "$OUT/bench.json" "$OUT/bench.md"
+echo "bench robots: 1..$MAX robots, $DURATION s each, $RUNS run(s) per count; $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+# The place-cell memory once, for every run.
+"$BIN/launch" "$ROOT/config/deploy/robots.deploy" --group explore --out "$OUT/explored" --status-every-s 0 \
+  >"$OUT/explore.log" 2>&1 || { echo "bench robots: exploring failed (see $OUT/explore.log)" >&2; exit 1; }
+for n in $(seq "$MAX"); do
+  passed=0
+  for r in $(seq "$RUNS"); do
+    dir="$OUT/n$n-run$r"
+    "$ROOT/tools/deploy/robots.sh" "$BIN" --count "$n" --duration-s "$DURATION" --explored "$OUT/explored" \
+      --out "$dir" --drop-log >"$dir.txt" 2>&1 && passed=$((passed + 1)) || true
+    python3 - "$dir/robots.json" "$n" "$r" <<'PY'
+import json, sys
+try:
+    j = json.load(open(sys.argv[1]))
+except (OSError, ValueError):
+    j = {}
+print(f"  {sys.argv[2]} robots, run {sys.argv[3]}: {'PASS' if j.get('robots_ok') else 'FAIL'}; "
+      f"CPU {j.get('robots_cpu_total_percent', '?')} % of one core, busiest {j.get('robots_busiest_process', '?')} "
+      f"{j.get('robots_busiest_process_cpu_percent', '?')} %")
+PY
+  done
+  [ $((2 * passed)) -gt "$RUNS" ] || break
+done
+python3 - "$OUT" "$RUNS" "$DURATION" <<'PY'
+import glob, json, os, re, statistics, sys
+out, runs, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
+by_n = {}
+for d in sorted(glob.glob(os.path.join(out, "n*-run*"))):
+    n = int(re.search(r"n(\d+)-run", d).group(1))
+    try:
+        j = json.load(open(os.path.join(d, "robots.json")))
+    except (OSError, ValueError):
+        j = {"robots_ok": False}
+    failed = []
+    try:
+        failed = [ln[8:].split(":")[0] for ln in open(os.path.join(d, "robots.md")) if ln.startswith("- FAIL:")]
+    except OSError:
+        failed = ["no report"]
+    by_n.setdefault(n, []).append((j, failed))
+best = 0
+s = {"duration_s": duration, "runs_per_count": runs, "cores": os.cpu_count()}
+md = ["# Robots on one bus at 10 Hz", "",
+      f"Each count of robots for {duration:g} s in real time ({runs} run(s) each; a count passes when most runs pass): "
+      "every sim at 10 Hz frames and scans and 50 Hz odometry in real time, no subscriber or logger missing a message.",
+      "", "| robots | passed runs | CPU, all processes (% of one core; median) | busiest process (% of one core) | what failed |",
+      "|---|---|---|---|---|"]
+for n in sorted(by_n):
+    rs = by_n[n]
+    ok = sum(1 for j, _ in rs if j.get("robots_ok"))
+    cpu = statistics.median([j.get("robots_cpu_total_percent", 0) for j, _ in rs])
+    j0 = rs[0][0]
+    fails = sorted({f for _, fs in rs for f in fs})
+    s[f"robots_{n}_passed_runs"] = ok
+    s[f"robots_{n}_cpu_total_percent"] = cpu
+    if 2 * ok > len(rs):
+        best = n
+    md.append(f"| {n} | {ok}/{len(rs)} | {cpu} | {j0.get('robots_busiest_process', '?')} "
+              f"{j0.get('robots_busiest_process_cpu_percent', '?')} | {'; '.join(fails) or '-'} |")
+s["robots_max_at_10hz"] = best
+first_fail = next((n for n in sorted(by_n) if n > best), None)
+if first_fail:
+    j, fails = by_n[first_fail][0]
+    s["limiting_count"] = first_fail
+    s["limiting_process"] = j.get("robots_busiest_process")
+    md += ["", f"**{best} robots** keep 10 Hz with nothing dropped; at {first_fail}: {'; '.join(fails)} (the busiest "
+               f"process {j.get('robots_busiest_process')}, {j.get('robots_busiest_process_cpu_percent')} % of one core; "
+               f"all {j.get('robots_cpu_total_percent')} % of the 200 % of 2 cores)."]
+else:
+    md += ["", f"**{best} robots** passed: the largest count tried (--max)."]
+json.dump(s, open(os.path.join(out, "bench.json"), "w"), indent=2)
+open(os.path.join(out, "bench.md"), "w").write("\n".join(md) + "\n")
+print("\n".join(md))
+PY
