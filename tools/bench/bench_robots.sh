@@ -36,8 +36,11 @@ for n in $(seq "$MAX"); do
   passed=0
   for r in $(seq "$RUNS"); do
     dir="$OUT/n$n-run$r"
+    load_before=$(cut -d' ' -f1 /proc/loadavg)
     "$ROOT/tools/deploy/robots.sh" "$BIN" --count "$n" --duration-s "$DURATION" --explored "$OUT/explored" \
-      --out "$dir" --drop-log >"$dir.txt" 2>&1 && passed=$((passed + 1)) || true
+      --out "$dir" --drop-log >"$OUT/n$n-run$r.log" 2>&1 && passed=$((passed + 1)) || true
+    # The machine's load around the run (other users' work counts: the cores are shared).
+    echo "$load_before $(cut -d' ' -f1 /proc/loadavg)" >"$dir/loadavg.txt"
     python3 - "$dir/robots.json" "$n" "$r" <<'PY'
 import json, sys
 try:
@@ -46,7 +49,8 @@ except (OSError, ValueError):
     j = {}
 print(f"  {sys.argv[2]} robots, run {sys.argv[3]}: {'PASS' if j.get('robots_ok') else 'FAIL'}; "
       f"CPU {j.get('robots_cpu_total_percent', '?')} % of one core, busiest {j.get('robots_busiest_process', '?')} "
-      f"{j.get('robots_busiest_process_cpu_percent', '?')} %")
+      f"{j.get('robots_busiest_process_cpu_percent', '?')} %; load average before/after "
+      f"{open(sys.argv[1].replace('robots.json', 'loadavg.txt')).read().strip()}")
 PY
   done
   [ $((2 * passed)) -gt "$RUNS" ] || break
@@ -55,7 +59,7 @@ python3 - "$OUT" "$RUNS" "$DURATION" <<'PY'
 import glob, json, os, re, statistics, sys
 out, runs, duration = sys.argv[1], int(sys.argv[2]), float(sys.argv[3])
 by_n = {}
-for d in sorted(glob.glob(os.path.join(out, "n*-run*"))):
+for d in sorted(p for p in glob.glob(os.path.join(out, "n*-run*")) if os.path.isdir(p)):
     n = int(re.search(r"n(\d+)-run", d).group(1))
     try:
         j = json.load(open(os.path.join(d, "robots.json")))
@@ -66,14 +70,19 @@ for d in sorted(glob.glob(os.path.join(out, "n*-run*"))):
         failed = [ln[8:].split(":")[0] for ln in open(os.path.join(d, "robots.md")) if ln.startswith("- FAIL:")]
     except OSError:
         failed = ["no report"]
+    try:
+        j["load"] = open(os.path.join(d, "loadavg.txt")).read().split()
+    except OSError:
+        j["load"] = ["?", "?"]
     by_n.setdefault(n, []).append((j, failed))
 best = 0
 s = {"duration_s": duration, "runs_per_count": runs, "cores": os.cpu_count()}
 md = ["# Robots on one bus at 10 Hz", "",
       f"Each count of robots for {duration:g} s in real time ({runs} run(s) each; a count passes when most runs pass): "
       "every sim at 10 Hz frames and scans and 50 Hz odometry in real time, no subscriber or logger missing a message.",
-      "", "| robots | passed runs | CPU, all processes (% of one core; median) | busiest process (% of one core) | what failed |",
-      "|---|---|---|---|---|"]
+      "", "| robots | passed runs | CPU, all processes (% of one core; median) | busiest process (% of one core) "
+      "| machine load average before / after | what failed |",
+      "|---|---|---|---|---|---|"]
 for n in sorted(by_n):
     rs = by_n[n]
     ok = sum(1 for j, _ in rs if j.get("robots_ok"))
@@ -85,7 +94,7 @@ for n in sorted(by_n):
     if 2 * ok > len(rs):
         best = n
     md.append(f"| {n} | {ok}/{len(rs)} | {cpu} | {j0.get('robots_busiest_process', '?')} "
-              f"{j0.get('robots_busiest_process_cpu_percent', '?')} | {'; '.join(fails) or '-'} |")
+              f"{j0.get('robots_busiest_process_cpu_percent', '?')} | {' / '.join(j0['load'])} | {'; '.join(fails) or '-'} |")
 s["robots_max_at_10hz"] = best
 first_fail = next((n for n in sorted(by_n) if n > best), None)
 if first_fail:
