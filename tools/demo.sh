@@ -61,9 +61,9 @@ usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROC
   --clock-offset-s S  the robot's clock S seconds off: sim adds S to every utime it publishes
   --laps N          the navigator's laps of the route (default 3; 0: until the run ends)
   --soak            a long run (./snapnav soak --stack): the route repeated (--laps 0), no bus-health
-                    step; judged: RSS growth per process after a 10-minute warm-up (at most 20 MB),
-                    nothing lost, no estimator's error growing over time (--ate-window-s, default
-                    duration/12)
+                    step; judged: RSS growth per process after the warm-up (10 minutes; a quarter of
+                    runs under 20 minutes) at most 20 MB, nothing lost or missed, no restart, no
+                    estimator's error growing over time (--ate-window-s, default duration/12)
   --ate-window-s S  the report's error-over-time windows [s] (default: none, or duration/12 with --soak)
 EOF
 }

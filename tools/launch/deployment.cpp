@@ -103,7 +103,7 @@ class Variables {
     return std::nullopt;
   }
 
-  // Variables known only while `extra` lives (an include's ${VAR} and ${index}).
+  // Variables known until the next SetExtra (an include's ${VAR} and ${index}).
   void SetExtra(std::map<std::string, std::string> extra) { extra_ = std::move(extra); }
 
   // `text` with its variables substituted; errors name `at`.
