@@ -316,6 +316,22 @@ command = ${bin}/viewer --prefixes ${robots}
   three.overrides["robots"] = "A_,B_,C_";
   EXPECT_EQ(LoadDeployment((dir / "top.deploy").string(), three).processes.size(), 8u);
 
+  // processes = ...: some of the other file's processes, so that every robot's stack can start
+  // before any robot's sim.
+  std::ofstream(dir / "split.deploy") << File(R"(
+[include stack]
+file = robot.deploy
+for_each = prefix in ${robots}
+processes = slam
+[include robot]
+file = robot.deploy
+for_each = prefix in ${robots}
+processes = sim
+)", "[variables]\nrobots = A_,B_\n");
+  names.clear();
+  for (const auto& p : LoadDeployment((dir / "split.deploy").string(), Options()).processes) names.push_back(p.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"stack1.slam", "stack2.slam", "robot1.sim", "robot2.sim"}));
+
   // Errors name the including section.
   auto error_of = [&](const std::string& include) {
     std::ofstream(dir / "bad.deploy") << File("[process logger]\ncommand = lcm-logger\n" + include);
@@ -333,6 +349,8 @@ command = ${bin}/viewer --prefixes ${robots}
   EXPECT_NE(unknown.find("variable 'speed' set on the"), std::string::npos) << unknown;
   EXPECT_NE(unknown.find("bad.deploy:"), std::string::npos) << unknown;
   EXPECT_NE(error_of("[include r]\nfile = nosuch.deploy\n").find("nosuch.deploy"), std::string::npos);
+  const std::string no_such = error_of("[include r]\nfile = robot.deploy\nprocesses = sim,lidar\n");
+  EXPECT_NE(no_such.find("has no process 'lidar' (it has: sim, slam)"), std::string::npos) << no_such;
   EXPECT_NE(error_of("[include r]\nfile = bad.deploy\n").find("nested more than"), std::string::npos);
   EXPECT_NE(error_of("[process r.sim]\ncommand = x\n[include r]\nfile = robot.deploy\n").find("defined twice"),
             std::string::npos);

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -359,6 +360,12 @@ void ReadInclude(const glue::IniFile& ini, const std::string& section, const std
     values = glue::SplitList(m[2]);
     if (values.empty()) throw ConfigError(at("for_each") + ": no values");
   }
+  // processes = P1,P2,...: only these of the other file's processes (in that file's order).
+  std::set<std::string> only;
+  if (ini.Has(section, "processes")) {
+    for (const auto& p : glue::SplitList(vars->Apply(ini.GetString(section, "processes"), at("processes")))) only.insert(p);
+    if (only.empty()) throw ConfigError(at("processes") + ": no process names");
+  }
   for (size_t k = 0; k < values.size(); ++k) {
     const std::string copy = loop_var.empty() ? name : name + std::to_string(k + 1);
     std::map<std::string, std::string> extra;
@@ -372,7 +379,7 @@ void ReadInclude(const glue::IniFile& ini, const std::string& section, const std
     if (file.is_relative()) file = std::filesystem::path(origin).parent_path() / file;
     if (!loop_var.empty()) sub.overrides[loop_var] = values[k];  // the other file's variable of that name
     for (const auto& key : ini.Keys(section)) {
-      if (key == "file" || key == "for_each") continue;
+      if (key == "file" || key == "for_each" || key == "processes") continue;
       sub.overrides[key] = vars->Apply(ini.GetString(section, key), at(key));
     }
     vars->SetExtra({});
@@ -382,7 +389,16 @@ void ReadInclude(const glue::IniFile& ini, const std::string& section, const std
     } catch (const ConfigError& e) {
       throw ConfigError(std::string(e.what()) + "\n  (included by " + at("") + (loop_var.empty() ? "" : ", " + loop_var + " = " + values[k]) + ")");
     }
+    for (const auto& name_only : only) {
+      if (std::none_of(included.processes.begin(), included.processes.end(),
+                       [&](const ProcessSpec& p) { return p.name == name_only; })) {
+        std::string known;
+        for (const auto& p : included.processes) known += (known.empty() ? "" : ", ") + p.name;
+        throw ConfigError(at("processes") + ": " + file.string() + " has no process '" + name_only + "' (it has: " + known + ")");
+      }
+    }
     for (auto& p : included.processes) {
+      if (!only.empty() && !only.count(p.name)) continue;
       p.name = copy + "." + p.name;
       d->processes.push_back(std::move(p));
     }

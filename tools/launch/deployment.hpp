@@ -7,8 +7,9 @@
 //   [defaults]     any process key below, for every process that does not set it
 //   [process NAME] command = PROGRAM ARGS... (required here), and the process keys
 //   [include NAME] file = OTHER.deploy (relative to this file), for_each = VAR in V1,V2,...
-//                  (optional), and VARIABLE = VALUE for the other file's [variables]: that file's
-//                  processes, here in file order, named NAME.PROCESS (NAME1.PROCESS, NAME2.PROCESS
+//                  (optional), processes = P1,P2,... (optional: only these), and VARIABLE = VALUE
+//                  for the other file's [variables]: that file's (chosen) processes, here in its
+//                  file order, named NAME.PROCESS (NAME1.PROCESS, NAME2.PROCESS
 //                  ... with for_each: one copy per value, ${VAR} the value and ${index} 1, 2, ...
 //                  in this section's keys, and VAR set in the other file, one of its [variables]).
 //                  The other file keeps its own [defaults] and variables.
