@@ -14,6 +14,9 @@
 # joined by a veth pair, as two machines on a LAN (tools/deploy/two_host_net.sh); --soak runs the
 # lab for hours with the route repeated and judges memory, delivery and the estimators' error over
 # time (./snapnav soak --stack). Every process's RSS and CPU time are sampled (processes.csv).
+# The whole script is one block, read before it runs: a run of an hour is not thrown off when the file
+# changes under it (bash reads a script as it goes).
+{
 set -euo pipefail
 BIN="$1"; shift
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -393,3 +396,4 @@ sed -n '1,/^### Messages/p' "$OUT/demo-report.md" | head -n -1
 rc=0
 for r in $live_rc $replay_rc $explore_rc $lab_rc $report_rc $fault_rc $link_rc $soak_rc; do [ "$r" = 0 ] || rc=1; done
 exit $rc
+}
