@@ -386,10 +386,6 @@ cv::Mat RenderScene(const ViewerScene& scene, const RenderOptions& options) {
   return img;
 }
 
-}  // namespace snapnav::viewer
-
-namespace snapnav::viewer {
-
 cv::Mat TileViews(const std::vector<cv::Mat>& views, const std::vector<std::string>& titles, int max_width_px) {
   if (views.empty() || views.size() != titles.size()) throw std::invalid_argument("TileViews: one title per view, at least one view");
   if (max_width_px < 100) throw std::invalid_argument("TileViews: max_width_px must be at least 100");

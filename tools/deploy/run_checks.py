@@ -4,9 +4,10 @@ process samples of process_stats.py, the recorded log). Each writes CHECK.json (
 the names) and CHECK.md into the folder, prints the markdown, and exits 1 when a verdict fails.
 
   run_checks.py link OUT [--clock-offset-s S] [--max-median-ms 3] [--max-lab-median-ms 20] [--frames ENC]
-      Two hosts (tools/demo.sh --two-host): every frame's time from the robot to the base
-      (latency-probe --frames-csv on each side: link-robot.csv, link-base.csv; one clock), frames
-      lost on the way, every sensor channel of the robot in the base's log, the navigator's
+      Two hosts (tools/demo.sh --two-host): every frame's time from the robot to the base (sim
+      --frame-times on the robot, latency-probe --frames-csv on the base; one clock): the link alone
+      (link-idle-sent.csv, link-idle-arrived.csv) and during the lab (processes/sim-frame-times.csv,
+      link-base.csv), frames lost on the way, every sensor channel of the robot in the base's log, the navigator's
       commands received by the robot, and each channel's stamps against the base's clock in the log
       (with the robot's clock S s off, every channel, sensors and estimators' outputs alike, must be
       S s off: message time only).

@@ -84,5 +84,4 @@ two_host_down() {
   local p
   for p in "${TWO_HOST_HOLDERS[@]:-}"; do [ -n "$p" ] && kill "$p" 2>/dev/null || true; done
   TWO_HOST_HOLDERS=()
-TWO_HOST_MTU=${TWO_HOST_MTU:-1500}
 }
