@@ -263,6 +263,9 @@ def check_robots(a):
                          if r["channel"] in published and r["recorded"] < published[r["channel"]]})
     j["robots_subscribers_short"] = len(short)
     j["robots_channels_not_fully_recorded"] = len(unrecorded)
+    # Who fell behind, for a bench's "what limits it": each short subscriber (its process name) and the
+    # recorder when the log lacks messages.
+    j["robots_short_processes"] = sorted({s_.split(" ")[0] for s_ in short} | ({"lcm-logger"} if unrecorded else set()))
     verdict(not short and not unrecorded, "nothing dropped: every subscriber and lcm-logger have every message"
             + (f" (short: {'; '.join(short[:5])})" if short else "") + (f" (log: {'; '.join(unrecorded[:5])})" if unrecorded else ""))
     # Rates: each sim published 10 Hz frames and scans and 50 Hz odometry for the whole run.
@@ -287,6 +290,7 @@ def check_robots(a):
             wall = float(ln.rsplit("wall", 1)[1].split()[0])
             if wall > t + 0.5:
                 late.append(f"{p} {t:g} s at wall {wall:g} s")
+    j["robots_late_sims"] = sorted({ln.split(" ")[0] + "/sim" for ln in late})
     verdict(not late, "every sim kept real time (its simulated time within 0.5 s of its wall time)"
             + (f" (late: {'; '.join(late[:5])})" if late else ""))
     stats = process_stats.summarize(process_stats.load_rows(os.path.join(out, "processes.csv")), 10)
