@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "scene_file.hpp"
 #include "sim_node.hpp"
@@ -229,6 +230,43 @@ TEST(SimNode, ClockOffsetShiftsEveryUtimeAndNothingElse) {
     EXPECT_EQ(b[i].first - a[i].first, 2'000'000);
     EXPECT_EQ(b[i].second, a[i].second);
   }
+}
+
+// sim --frame-times: one line per omni frame (not per panorama), its utime as published and the wall
+// clock when it was handed to the bus, after it was encoded (the two-host test times the link from it).
+TEST(SimNode, FrameTimesNameEveryOmniFrameAndWhenItWasPublished) {
+  glue::Bus bus("memq://");
+  auto config = ShippedConfig("F_");
+  config.duration_s = 0.5;
+  config.publish_panorama = true;
+  config.clock_offset_us = 2'000'000;  // the utime as published, the robot's clock, against the wall clock
+  const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+  std::vector<int64_t> published;
+  bus.Subscribe<omni_frame_t>("F_OMNI_FRAME", [&](const omni_frame_t& m) { published.push_back(m.utime); });
+  std::ostringstream times;
+  SimNode node(bus, config, scene);
+  node.LogFramePublishTimes(&times);
+  const int64_t wall_before = glue::WallUtime();
+  while (node.Step()) {
+    while (bus.HandleOnce(0)) {
+    }
+  }
+  const int64_t wall_after = glue::WallUtime();
+  ASSERT_EQ(published.size(), 5u);
+  std::istringstream in(times.str());
+  std::string line;
+  std::vector<int64_t> logged;
+  int64_t last_wall = wall_before;
+  while (std::getline(in, line)) {
+    const auto comma = line.find(',');
+    ASSERT_NE(comma, std::string::npos) << line;
+    logged.push_back(std::stoll(line.substr(0, comma)));
+    const int64_t wall = std::stoll(line.substr(comma + 1));
+    EXPECT_GE(wall, last_wall);
+    EXPECT_LE(wall, wall_after);
+    last_wall = wall;
+  }
+  EXPECT_EQ(logged, published);
 }
 
 TEST(SimNode, KidnappingMovesTheTruthNotTheOdometry) {
