@@ -22,6 +22,7 @@ int Main(int argc, char** argv) {
   int seed_override = -1;
   std::string mode_override, encoding_override, start_time_override, frame_times_path;
   double clock_offset_override = std::nan("");
+  double realtime_factor_override = std::nan("");
   int jpeg_quality_override = -1;
   glue::Flags flags("sim",
                     "The simulated lab: drives a robot through a scene and publishes its omni camera frames,\n"
@@ -31,6 +32,9 @@ int Main(int argc, char** argv) {
   flags.AddDouble("duration-s", &duration_override, "simulated seconds to run (overrides [sim] duration_s)");
   flags.AddInt("seed", &seed_override, "random seed (overrides [sim] seed)");
   flags.AddString("mode", &mode_override, "realtime | lockstep (overrides [sim] mode)");
+  flags.AddDouble("realtime-factor", &realtime_factor_override,
+                  "realtime: simulated seconds per wall-clock second, 0.01..100; 0.5: half as fast as life, every rate\n"
+                  "and every utime as at 1 (overrides [sim] realtime_factor)");
   flags.AddString("encoding", &encoding_override, "frames: gray8 | rgb8 | jpeg | png (overrides [camera] encoding)");
   flags.AddInt("jpeg-quality", &jpeg_quality_override, "JPEG quality 1..100 (overrides [camera] jpeg_quality)");
   flags.AddString("start-time-s", &start_time_override,
@@ -49,6 +53,7 @@ int Main(int argc, char** argv) {
     if (mode_override != "realtime" && mode_override != "lockstep") throw glue::FlagError("--mode must be realtime or lockstep");
     config.realtime = mode_override == "realtime";
   }
+  if (!std::isnan(realtime_factor_override)) config.realtime_factor = realtime_factor_override;
   if (!encoding_override.empty()) {
     try {
       config.encoding = glue::ParseFrameEncoding(encoding_override);

@@ -40,6 +40,7 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   const std::string mode = ini.GetString("sim", "mode");
   if (mode != "realtime" && mode != "lockstep") throw glue::ConfigError(ini.origin() + ": [sim] mode must be realtime or lockstep");
   c.realtime = mode == "realtime";
+  c.realtime_factor = ini.GetDouble("sim", "realtime_factor");
   c.duration_s = ini.GetDouble("sim", "duration_s");
   if (ini.GetString("sim", "start_time_s") == "now") {
     c.start_at_wall_clock = true;
@@ -133,6 +134,7 @@ void SimConfig::Validate() const {
   EveryNSteps(physics_rate_hz, laser_rate_hz, "laser");
   EveryNSteps(physics_rate_hz, odometry_rate_hz, "odometry");
   if (!(duration_s >= 0)) throw std::invalid_argument("duration_s must be >= 0");
+  if (!(realtime_factor >= 0.01 && realtime_factor <= 100)) throw std::invalid_argument("realtime_factor must be in 0.01..100");
   if (!(command_watchdog_s >= 0) || !(command_max_age_s >= 0)) {
     throw std::invalid_argument("command_watchdog_s and command_max_age_s must be >= 0 (0: off)");
   }
@@ -148,6 +150,7 @@ void SimConfig::Validate() const {
 
 void SimConfig::Print(std::ostream& o) const {
   o << "scene=" << scene << " seed=" << seed << " mode=" << (realtime ? "realtime" : "lockstep")
+    << " realtime_factor=" << realtime_factor
     << " duration_s=" << duration_s << " drive=" << drive << " physics_rate_hz=" << physics_rate_hz << "\n"
     << "clock: start_time_s=" << (start_at_wall_clock ? std::string("now (the wall clock)") : std::to_string(start_utime / 1'000'000))
     << " clock_offset_s=" << clock_offset_us * 1e-6 << " command_watchdog_s=" << command_watchdog_s
@@ -324,7 +327,8 @@ void SimNode::Run(std::ostream* progress) {
   int64_t next_report_s = 10;
   while (!glue::ShutdownRequested()) {
     if (config_.realtime) {
-      const int64_t due = wall_start + step_ * dt_us_;
+      // Simulated time runs realtime_factor times as fast as the wall clock (1: a live robot).
+      const int64_t due = wall_start + std::llround(static_cast<double>(step_ * dt_us_) / config_.realtime_factor);
       for (int64_t now = glue::MonotonicUtime(); now < due; now = glue::MonotonicUtime()) {
         bus_.HandleOnce(static_cast<int>(std::max<int64_t>(1, (due - now) / 1000)));
       }

@@ -22,6 +22,7 @@ struct SimConfig {
   std::string scene = "indoor13";     // scene name (config/scenes/NAME.scene) or path
   uint64_t seed = 1;
   bool realtime = false;              // false: lockstep, as fast as possible
+  double realtime_factor = 1.0;       // realtime: simulated seconds per wall-clock second (< 1: slower than life)
   double duration_s = 60;             // simulated time to run; 0: until stopped
   int64_t start_utime = 1'700'000'000'000'000;  // utime of the first message [us] (without the offset)
   bool start_at_wall_clock = false;   // start_time_s = now: the first message is stamped with the wall clock

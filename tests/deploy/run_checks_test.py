@@ -223,6 +223,19 @@ class RobotsCheckTest(unittest.TestCase):
         self.assertEqual(rc, 1, out)  # 100 frames are not 10 Hz for 11 s
         self.assertIn("FAIL: every sim published its frames and scans at 10 Hz", out)
 
+    def test_the_pace_is_judged_at_the_sims_realtime_factor(self):
+        d = self.make_run(late={"R1_": 20.2, "R2_": 19.9})  # 10 s of simulated time in about 20 s of wall time
+        rc, out = run_check("robots", d, "--prefixes", "R1_,R2_", "--duration-s", "10", "--realtime-factor", "0.5")
+        self.assertEqual(rc, 0, out)
+        self.assertIn("PASS: every sim kept its pace (0.5 s of simulated time per wall second", out)
+        rc, out = self.robots(d)  # at 1: 10 s late
+        self.assertEqual(rc, 1, out)
+        self.assertIn("late: R1_ 10 s at wall 20.2 s; R2_ 10 s at wall 19.9 s", out)
+        d = self.make_run(late={"R1_": 22.0})  # at 0.5: 1 s of simulated time late
+        rc, out = run_check("robots", d, "--prefixes", "R1_,R2_", "--duration-s", "10", "--realtime-factor", "0.5")
+        self.assertEqual(rc, 1, out)
+        self.assertIn("late: R1_ 10 s at wall 22 s", out)
+
 
 def write_lcm_log(path, events):
     """An LCM log of (log_utime, channel, message_utime) events; each payload: an 8-byte hash, the utime."""

@@ -1,6 +1,7 @@
 // The sim process on memq://: determinism, message contents, shipped scenes and config.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -347,6 +348,42 @@ TEST(SimConfig, ShippedConfigLoadsAndBadValuesAreErrors) {
   auto c = ShippedConfig("");
   c.command_watchdog_s = -1;
   EXPECT_THROW(c.Validate(), std::invalid_argument);
+  for (double factor : {0.0, -1.0, 1000.0, std::nan("")}) {
+    c = ShippedConfig("");
+    c.realtime_factor = factor;
+    EXPECT_THROW(c.Validate(), std::invalid_argument) << factor;
+  }
+}
+
+// realtime_factor paces simulated time against the wall clock (0.5: half as fast as life) and changes
+// nothing else: the messages are those of factor 1, byte for byte.
+TEST(SimNode, RealtimeFactorPacesTheRunAndChangesNoMessage) {
+  const auto run = [](double factor, double* wall_s) {
+    glue::Bus bus("memq://");
+    auto config = ShippedConfig("RT_");
+    config.realtime = true;
+    config.realtime_factor = factor;
+    config.duration_s = 0.3;
+    const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+    std::vector<std::string> got;
+    bus.SubscribeRaw("RT_.*", [&](const void* d, size_t n) {
+      got.push_back(bus.current().channel + std::string(static_cast<const char*>(d), n));
+    });
+    SimNode node(bus, config, scene);
+    const int64_t start = glue::MonotonicUtime();
+    node.Run(nullptr);
+    *wall_s = (glue::MonotonicUtime() - start) * 1e-6;
+    while (bus.HandleOnce(0)) {
+    }
+    return got;
+  };
+  double wall_half = 0, wall_fast = 0;
+  const auto half = run(0.5, &wall_half);
+  const auto fast = run(4.0, &wall_fast);
+  ASSERT_GT(half.size(), 30u);  // 3 frames, 3 scans, 15 odometry and 15 ground-truth poses
+  EXPECT_TRUE(half == fast);
+  // 0.3 s of simulated time at half speed: at least 0.6 s of wall time (the last step is due at 0.59 s).
+  EXPECT_GE(wall_half, 0.58);
 }
 
 TEST(SimConfig, StartTimeNowStampsWithTheWallClockPlusTheOffset) {

@@ -16,17 +16,21 @@ DURATION=60
 SCENE=indoor13
 EXPLORED=""
 FRAME_ENCODING=jpeg
+FACTOR=1
 KEEP_LOG=1
 usage() {
   cat <<'EOF'
 usage: ./snapnav robots [--count N] [--duration-s S] [--out DIR] [--explored DIR] [--scene NAME]
-                        [--raw-frames] [--drop-log]
+                        [--raw-frames] [--realtime-factor F] [--drop-log]
   --count N         robots on the bus, prefixes R1_ .. RN_ (default 3)
   --duration-s S    seconds each robot's sim runs in real time (default 60)
   --out DIR         output folder (default logs/robots-<UTC time>)
   --explored DIR    reuse the place-cell memory and grid of an earlier run's folder (same scene)
   --scene NAME      config/scenes/NAME.scene (default indoor13)
   --raw-frames      raw 1 MB frames instead of JPEG ones
+  --realtime-factor F  simulated seconds per wall second (default 1: real time); 0.5: the same run, every
+                    rate and check in simulated time, at half the CPU (the ctest on shared cores); the
+                    capacity at 1 is ./snapnav bench robots
   --drop-log        delete run.lcmlog after the report
 Writes robots.md and robots.json (the checks), report.md / summary.json / delivery.csv (the whole
 log), R1_/report.md ... (each robot), processes.csv (RSS and CPU every 2 s), viewer/ (all robots).
@@ -40,6 +44,7 @@ while [ $# -gt 0 ]; do
     --explored) EXPLORED="$(cd "$2" && pwd)"; shift 2 ;;
     --scene) SCENE="$2"; shift 2 ;;
     --raw-frames) FRAME_ENCODING=rgb8; shift ;;
+    --realtime-factor) FACTOR="$2"; shift 2 ;;
     --drop-log) KEEP_LOG=0; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "robots: unknown argument $1" >&2; usage >&2; exit 2 ;;
@@ -65,13 +70,15 @@ else
     { echo "robots: exploring failed (see $OUT/explore.log)" >&2; exit 1; }
 fi
 
-echo "robots: $COUNT robots ($PREFIXES) for $DURATION s in real time, one lcm-logger, one viewer; bus $LCM_DEFAULT_URL"
+pace="in real time"
+[ "$FACTOR" = 1 ] || pace="at $FACTOR x real time"
+echo "robots: $COUNT robots ($PREFIXES) for $DURATION s $pace, one lcm-logger, one viewer; bus $LCM_DEFAULT_URL"
 STATUS="$OUT/launch.status"
 rm -rf "$OUT/processes" "$OUT/robots" "$OUT/run.lcmlog" "$STATUS"
 python3 "$ROOT/tools/deploy/process_stats.py" sample --out "$OUT/processes.csv" --interval-s 2 --status-file "$STATUS" &
 sampler_pid=$!; pids+=($sampler_pid)
 "$BIN/launch" "$DEPLOY" --group lab --out "$OUT" --status-every-s 0 --status-file "$STATUS" \
-  "robots=$PREFIXES" "scene=$SCENE" "duration_s=$DURATION" "frame_encoding=$FRAME_ENCODING" \
+  "robots=$PREFIXES" "scene=$SCENE" "duration_s=$DURATION" "realtime_factor=$FACTOR" "frame_encoding=$FRAME_ENCODING" \
   "memory=$EXPLORE_OUT/placecells.mem" "home_image=$EXPLORE_OUT/grid/images/6_6.png" >"$OUT/launch.log" 2>&1 &
 launch_pid=$!; pids+=($launch_pid)
 # The run ends when every sim has ended (each runs duration_s from its own start).
@@ -97,7 +104,7 @@ for p in ${PREFIXES//,/ }; do
     report_rc=$?
 done
 check_rc=0
-python3 "$ROOT/tools/deploy/run_checks.py" robots "$OUT" --prefixes "$PREFIXES" --duration-s "$DURATION" >/dev/null || check_rc=$?
+python3 "$ROOT/tools/deploy/run_checks.py" robots "$OUT" --prefixes "$PREFIXES" --duration-s "$DURATION" --realtime-factor "$FACTOR" >/dev/null || check_rc=$?
 {
   echo
   echo "Each robot's estimators against its own ground truth (ATE RMSE, m; \`$(basename "$OUT")/R*_/report.md\`):"
@@ -114,7 +121,7 @@ print(f"| {sys.argv[2]} | {g('pose_dead_reckoning_ate_rmse_m')} | {g('pose_laser
 PY
   done
   echo
-  echo "Log: $(stat -c %s "$LOG" 2>/dev/null || echo 0) bytes for $DURATION s of $COUNT robots; run time ${t_lab} s."
+  echo "Log: $(stat -c %s "$LOG" 2>/dev/null || echo 0) bytes for $DURATION s of $COUNT robots ($pace); run time ${t_lab} s."
   [ -s "$OUT/viewer/viewer-final.png" ] && printf '\n![every robot in one viewer](viewer/viewer-final.png)\n'
 } >>"$OUT/robots.md"
 [ "$KEEP_LOG" = 1 ] || rm -f "$LOG"

@@ -15,10 +15,11 @@ the names) and CHECK.md into the folder, prints the markdown, and exits 1 when a
       A long run (tools/demo.sh --soak): RSS growth per process after the warm-up, nothing lost or
       missed, no estimator's error growing over the run (log-report --ate-window-s; dead reckoning,
       which nothing corrects, is shown but not judged).
-  run_checks.py robots OUT --prefixes R1_,R2_,... --duration-s S
+  run_checks.py robots OUT --prefixes R1_,R2_,... --duration-s S [--realtime-factor 1]
       Several robots on one bus (tools/deploy/robots.sh): every process of robot k received only
       channels of robot k (no cross-talk), no subscriber missed a message, every sim published at its
-      rates for the whole run, CPU per process.
+      rates for the whole run (S simulated seconds) and kept its pace (realtime_factor simulated
+      seconds per wall second, within 0.5 s), CPU per process.
 """
 import argparse
 import csv
@@ -277,7 +278,9 @@ def check_robots(a):
         rates_ok = rates_ok and frames >= 10 * a.duration_s and scans >= 10 * a.duration_s and odo >= 50 * a.duration_s
         md.append(f"  - {p}: {frames} frames, {scans} scans, {odo} odometry in {a.duration_s:g} s")
     verdict(rates_ok, f"every sim published its frames and scans at 10 Hz and odometry at 50 Hz for {a.duration_s:g} s")
-    # Each sim kept real time: its own report ("wall W s" at each 10 s of simulated time).
+    # Each sim kept its pace: its own report ("wall W s" at each 10 s of simulated time) against
+    # realtime_factor simulated seconds per wall second (1: real time).
+    factor = a.realtime_factor
     late = []
     for p in prefixes:
         try:
@@ -288,11 +291,13 @@ def check_robots(a):
         for ln in lines:
             t = float(ln.split("t=")[1].split()[0])
             wall = float(ln.rsplit("wall", 1)[1].split()[0])
-            if wall > t + 0.5:
+            if wall * factor > t + 0.5:
                 late.append(f"{p} {t:g} s at wall {wall:g} s")
     j["robots_late_sims"] = sorted({ln.split(" ")[0] + "/sim" for ln in late})
-    verdict(not late, "every sim kept real time (its simulated time within 0.5 s of its wall time)"
-            + (f" (late: {'; '.join(late[:5])})" if late else ""))
+    pace = "real time (its simulated time within 0.5 s of its wall time)" if factor == 1 else \
+        f"its pace ({factor:g} s of simulated time per wall second, within 0.5 s)"
+    j["robots_realtime_factor"] = factor
+    verdict(not late, f"every sim kept {pace}" + (f" (late: {'; '.join(late[:5])})" if late else ""))
     stats = process_stats.summarize(process_stats.load_rows(os.path.join(out, "processes.csv")), 10)
     j.update({k: v for k, v in process_stats.flat_json(stats).items() if k.startswith("cpu_")})
     total = sum(v["cpu_s"] for v in stats.values())
@@ -323,7 +328,8 @@ def main():
     p = sub.add_parser("robots")
     p.add_argument("out")
     p.add_argument("--prefixes", required=True)
-    p.add_argument("--duration-s", type=float, required=True)
+    p.add_argument("--duration-s", type=float, required=True, help="each sim's simulated seconds")
+    p.add_argument("--realtime-factor", type=float, default=1.0, help="the sims' simulated seconds per wall second")
     a = ap.parse_args()
     return {"link": check_link, "soak": check_soak, "robots": check_robots}[a.cmd](a)
 
