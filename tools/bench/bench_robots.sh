@@ -8,7 +8,9 @@
 # N passes when most of its runs pass). bench.json and bench.md: the largest N that passed, the
 # CPU of each N, and at the first failing N what failed, the processes that fell behind (a subscriber
 # that missed messages, the recorder, a sim behind real time) and the busiest process. The machine's
-# load average is noted around each run: on shared cores other work takes its part.
+# load average and the CPU other sessions used are noted for each run: on shared cores other work takes
+# its part (the kernel's autogroup scheduling shares the cores between sessions, not processes: a
+# neighbouring session with two busy processes leaves the robots one core).
 set -euo pipefail
 BIN="$1"; shift
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -31,6 +33,8 @@ mkdir -p "$OUT"
 OUT="$(cd "$OUT" && pwd)"
 rm -rf "$OUT"/n* "$OUT/bench.json" "$OUT/bench.md"
 echo "bench robots: 1..$MAX robots, $DURATION s each, $RUNS run(s) per count; $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg)"
+# CPU time of the whole machine (all cores, busy and total jiffies) from /proc/stat.
+machine_cpu() { awk '/^cpu / { print $2 + $3 + $4 + $7 + $8 + $9, $2 + $3 + $4 + $5 + $6 + $7 + $8 + $9 }' /proc/stat; }
 # The place-cell memory once, for every run.
 "$BIN/launch" "$ROOT/config/deploy/robots.deploy" --group explore --out "$OUT/explored" --status-every-s 0 \
   >"$OUT/explore.log" 2>&1 || { echo "bench robots: exploring failed (see $OUT/explore.log)" >&2; exit 1; }
@@ -39,19 +43,25 @@ for n in $(seq "$MAX"); do
   for r in $(seq "$RUNS"); do
     dir="$OUT/n$n-run$r"
     load_before=$(cut -d' ' -f1 /proc/loadavg)
+    cpu_before=$(machine_cpu)
     "$ROOT/tools/deploy/robots.sh" "$BIN" --count "$n" --duration-s "$DURATION" --explored "$OUT/explored" \
       --out "$dir" --drop-log >"$OUT/n$n-run$r.log" 2>&1 && passed=$((passed + 1)) || true
     # The machine's load around the run (other users' work counts: the cores are shared).
     echo "$load_before $(cut -d' ' -f1 /proc/loadavg)" >"$dir/loadavg.txt"
+    echo "$cpu_before $(machine_cpu) $(nproc)" >"$dir/machine_cpu.txt"
     python3 - "$dir/robots.json" "$n" "$r" <<'PY'
 import json, sys
 try:
     j = json.load(open(sys.argv[1]))
 except (OSError, ValueError):
     j = {}
+b0, t0, b1, t1, ncpu = (float(x) for x in open(sys.argv[1].replace("robots.json", "machine_cpu.txt")).read().split())
+busy = round(100 * ncpu * (b1 - b0) / max(1.0, t1 - t0), 1)  # % of one core, all cores together
+ours = j.get("robots_cpu_total_percent", 0)
 print(f"  {sys.argv[2]} robots, run {sys.argv[3]}: {'PASS' if j.get('robots_ok') else 'FAIL'}; "
-      f"CPU {j.get('robots_cpu_total_percent', '?')} % of one core, busiest {j.get('robots_busiest_process', '?')} "
-      f"{j.get('robots_busiest_process_cpu_percent', '?')} %; load average before/after "
+      f"CPU {ours} % of one core, busiest {j.get('robots_busiest_process', '?')} "
+      f"{j.get('robots_busiest_process_cpu_percent', '?')} %; the machine {busy} % of {100 * ncpu:g} "
+      f"(other work about {max(0.0, busy - ours):.0f} %); load average before/after "
       f"{open(sys.argv[1].replace('robots.json', 'loadavg.txt')).read().strip()}")
 PY
   done
@@ -76,6 +86,11 @@ for d in sorted(p for p in glob.glob(os.path.join(out, "n*-run*")) if os.path.is
         j["load"] = open(os.path.join(d, "loadavg.txt")).read().split()
     except OSError:
         j["load"] = ["?", "?"]
+    try:
+        b0, t0, b1, t1, ncpu = (float(x) for x in open(os.path.join(d, "machine_cpu.txt")).read().split())
+        j["machine_busy"] = 100 * ncpu * (b1 - b0) / max(1.0, t1 - t0)
+    except (OSError, ValueError):
+        j["machine_busy"] = None
     by_n.setdefault(n, []).append((j, failed))
 best = 0
 s = {"duration_s": duration, "runs_per_count": runs, "cores": os.cpu_count()}
@@ -83,12 +98,15 @@ md = ["# Robots on one bus at 10 Hz", "",
       f"Each count of robots for {duration:g} s in real time ({runs} run(s) each; a count passes when most runs pass): "
       "every sim at 10 Hz frames and scans and 50 Hz odometry in real time, no subscriber or logger missing a message.",
       "", "| robots | passed runs | CPU, all processes (% of one core; median) | busiest process (% of one core) "
-      "| machine load average before / after | what failed | fell behind |",
-      "|---|---|---|---|---|---|---|"]
+      "| other work on the machine (% of one core; median) | machine load average before / after | what failed | fell behind |",
+      "|---|---|---|---|---|---|---|---|"]
 for n in sorted(by_n):
     rs = by_n[n]
     ok = sum(1 for j, _ in rs if j.get("robots_ok"))
     cpu = statistics.median([j.get("robots_cpu_total_percent", 0) for j, _ in rs])
+    others = [max(0.0, j["machine_busy"] - j.get("robots_cpu_total_percent", 0)) for j, _ in rs if j.get("machine_busy") is not None]
+    others_pct = round(statistics.median(others)) if others else "?"
+    s[f"robots_{n}_other_work_cpu_percent"] = others_pct
     j0 = rs[0][0]
     fails = sorted({f for _, fs in rs for f in fs})
     s[f"robots_{n}_passed_runs"] = ok
@@ -96,7 +114,7 @@ for n in sorted(by_n):
     if 2 * ok > len(rs):
         best = n
     md.append(f"| {n} | {ok}/{len(rs)} | {cpu} | {j0.get('robots_busiest_process', '?')} "
-              f"{j0.get('robots_busiest_process_cpu_percent', '?')} | {' / '.join(j0['load'])} | {'; '.join(fails) or '-'} "
+              f"{j0.get('robots_busiest_process_cpu_percent', '?')} | {others_pct} | {' / '.join(j0['load'])} | {'; '.join(fails) or '-'} "
               f"| {', '.join(sorted({p for jr, _ in rs for p in jr.get('robots_short_processes', []) + jr.get('robots_late_sims', [])})) or '-'} |")
 s["robots_max_at_10hz"] = best
 first_fail = next((n for n in sorted(by_n) if n > best), None)
