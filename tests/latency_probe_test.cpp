@@ -2,6 +2,8 @@
 // waits for AFTER's output of that frame, strangers and repeats are counted apart.
 #include <gtest/gtest.h>
 
+#include <sstream>
+
 #include "bus_check.hpp"
 #include "latency_probe.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -43,6 +45,26 @@ TEST(LatencyProbe, Quantiles) {
   EXPECT_EQ(Quantile(v, 0.95), 95);
   EXPECT_EQ(Quantile(v, 1.0), 100);
   EXPECT_THROW(Quantile(v, 1.5), std::invalid_argument);
+}
+
+TEST(LatencyProbe, LogsEveryFramesUtimeAndReceiveTime) {
+  glue::Bus bus("memq://");
+  LatencyProbe probe(bus, "F_FRAME", ParseLatencyOutputs("F_VEC"));
+  std::ostringstream log;
+  probe.LogFrames(&log);
+  for (int k = 0; k < 3; ++k) bus.Publish("F_FRAME", MakeProbeFrame(k, 100));
+  HandleAll(bus);
+  std::istringstream lines(log.str());
+  std::string line;
+  int n = 0;
+  while (std::getline(lines, line)) {
+    const auto comma = line.find(',');
+    ASSERT_NE(comma, std::string::npos) << line;
+    EXPECT_EQ(std::stoll(line.substr(0, comma)), MakeProbeFrame(n, 1).utime);
+    EXPECT_GT(std::stoll(line.substr(comma + 1)), 1'600'000'000'000'000);  // LCM's receive time: the wall clock
+    ++n;
+  }
+  EXPECT_EQ(n, 3);
 }
 
 TEST(LatencyProbe, PairsOutputsWithTheirFrames) {

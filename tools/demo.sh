@@ -10,6 +10,13 @@
 #     half-way and the launcher restarts it;
 #  4. log-report turns the recording and the process logs into report.md, summary.json and PNGs;
 #     demo-report.md gathers everything, with the verdicts.
+# --two-host runs the robot (sim) and the base station (everything else) in two network namespaces
+# joined by a veth pair, as two machines on a LAN (tools/deploy/two_host_net.sh); --soak runs the
+# lab for hours with the route repeated and judges memory, delivery and the estimators' error over
+# time (./snapnav soak --stack). Every process's RSS and CPU time are sampled (processes.csv).
+# The whole script is one block, read before it runs: a run of an hour is not thrown off when the file
+# changes under it (bash reads a script as it goes).
+{
 set -euo pipefail
 BIN="$1"; shift
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -23,10 +30,20 @@ EXPLORED=""
 FAULT_AT=""
 BUS_HEALTH=1
 KEEP_LOG=1
+TWO_HOST=0
+FRAME_ENCODING=jpeg
+CLOCK_OFFSET=0
+LAPS=3
+SOAK=0
+ATE_WINDOW=""
+MAX_GROWTH_MB=20
+LINK_GOAL_MS=3
 usage() {
   cat <<'EOF'
 usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROCESS]] [--fault-at-s T]
-                      [--explored DIR] [--no-bus-health] [--drop-log]
+                      [--explored DIR] [--no-bus-health] [--drop-log] [--two-host] [--raw-frames]
+                      [--link-mtu B] [--link-goal-ms MS] [--clock-offset-s S] [--laps N] [--soak]
+                      [--ate-window-s S]
   --out DIR         output folder (default logs/demo-<UTC time>)
   --duration-s S    seconds of the simulated lab in real time (default 60)
   --scene NAME      config/scenes/NAME.scene (default indoor13; its grid must have a 6_6 position)
@@ -36,7 +53,21 @@ usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROC
   --explored DIR    reuse the place-cell memory and grid of an earlier demo's folder DIR (same
                     scene): skips step 2
   --no-bus-health   skip step 1
-  --drop-log        delete run.lcmlog after the report (it holds every 1 MB frame: ~9 MB/s)
+  --drop-log        delete run.lcmlog after the report
+  --two-host        two hosts on this machine: sim in a "robot" network namespace, the recorder,
+                    estimators and viewer in a "base" one, joined by a veth pair (link-local
+                    addresses, no route out, ttl=1); the report adds the link: every message across,
+                    frame latency robot -> base (median, p95), commands back to the robot
+  --link-mtu B      --two-host: the veth's MTU (default 1500, Ethernet's; 9000: jumbo frames)
+  --link-goal-ms MS --two-host: the bound on the link's median latency of a 1 MB frame (default 3)
+  --raw-frames      raw 640x480 RGB frames (1 MB each) instead of JPEG ones
+  --clock-offset-s S  the robot's clock S seconds off: sim adds S to every utime it publishes
+  --laps N          the navigator's laps of the route (default 3; 0: until the run ends)
+  --soak            a long run (./snapnav soak --stack): the route repeated (--laps 0), no bus-health
+                    step; judged: RSS growth per process after the warm-up (10 minutes; a quarter of
+                    runs under 20 minutes) at most 20 MB, nothing lost or missed, no restart, no
+                    estimator's error growing over time (--ate-window-s, default duration/12)
+  --ate-window-s S  the report's error-over-time windows [s] (default: none, or duration/12 with --soak)
 EOF
 }
 while [ $# -gt 0 ]; do
@@ -50,11 +81,20 @@ while [ $# -gt 0 ]; do
     --explored) EXPLORED="$(cd "$2" && pwd)"; shift 2 ;;
     --no-bus-health) BUS_HEALTH=0; shift ;;
     --drop-log) KEEP_LOG=0; shift ;;
+    --two-host) TWO_HOST=1; shift ;;
+    --raw-frames) FRAME_ENCODING=rgb8; shift ;;
+    --link-mtu) export TWO_HOST_MTU="$2"; shift 2 ;;
+    --link-goal-ms) LINK_GOAL_MS="$2"; shift 2 ;;
+    --clock-offset-s) CLOCK_OFFSET="$2"; shift 2 ;;
+    --laps) LAPS="$2"; shift 2 ;;
+    --soak) SOAK=1; LAPS=0; BUS_HEALTH=0; shift ;;
+    --ate-window-s) ATE_WINDOW="$2"; shift 2 ;;
     -h | --help) usage; exit 0 ;;
     *) echo "demo: unknown argument $1" >&2; usage >&2; exit 2 ;;
   esac
 done
 [ -n "$FAULT_AT" ] || FAULT_AT=$(awk -v d="$DURATION" 'BEGIN { print d / 2 }')
+[ -n "$ATE_WINDOW" ] || { [ "$SOAK" = 0 ] || ATE_WINDOW=$(awk -v d="$DURATION" 'BEGIN { print d / 12 }'); }
 if [ -n "$FAULT" ]; then
   case "$FAULT" in
     lcm-logger | sim) echo "demo: --fault $FAULT: pick a processing process (homing, laser-slam, landmarks, placecells, navigator, dead-reckoning, ratslam, fused-slam, viewer)" >&2; exit 2 ;;
@@ -64,8 +104,23 @@ SIZES=100,65536,1048576
 mkdir -p "$OUT"
 OUT="$(cd "$OUT" && pwd)"
 pids=()
-cleanup() { for p in "${pids[@]:-}"; do kill "$p" 2>/dev/null || true; done; }
+cleanup() {
+  for p in "${pids[@]:-}"; do [ -n "$p" ] && kill "$p" 2>/dev/null || true; done
+  [ "$TWO_HOST" = 0 ] || two_host_down
+}
 trap cleanup EXIT
+# Where each side runs: on two hosts the robot's or the base's namespace, else here. `(at HOST CMD) &`
+# leaves CMD's own pid in $! (it execs), so it can be signalled.
+at() {
+  local host=$1
+  shift
+  if [ "$TWO_HOST" = 1 ]; then exec_on "$host" "$@"; else exec "$@"; fi
+}
+if [ "$TWO_HOST" = 1 ]; then
+  # shellcheck source=deploy/two_host_net.sh
+  source "$ROOT/tools/deploy/two_host_net.sh"
+  two_host_up || exit 1
+fi
 step() { printf '\n[demo] %s\n' "$*"; }
 wait_for_file() { for _ in $(seq 200); do [ -s "$1" ] && return 0; sleep 0.05; done; echo "demo: $1 did not appear" >&2; exit 1; }
 verdict() { [ "$1" = 0 ] && echo PASS || echo FAIL; }
@@ -75,23 +130,28 @@ quiet() { (trap '' INT; exec "$@"); }
 SECONDS=0
 STEPS=4
 
-step "private bus: $(ip -brief link show lo | tr -s ' '); route $(ip route show 224.0.0.0/4)"
+if [ "$TWO_HOST" = 1 ]; then
+  step "two hosts on this machine (network namespaces joined by a veth pair, bus $TWO_HOST_LCM_URL):"
+  two_host_describe | sed 's/^/  /'
+else
+  step "private bus: $(ip -brief link show lo | tr -s ' '); route $(ip route show 224.0.0.0/4)"
+fi
 live_rc=0; replay_rc=0
 if [ "$BUS_HEALTH" = 1 ]; then
   step "1/$STEPS bus health: $COUNT probe frames ($SIZES bytes) at 30 Hz, recorded and replayed"
   PROBES="$OUT/probes.lcmlog"
-  lcm-logger -f -q -c BUS_CHECK "$PROBES" &
+  (at base lcm-logger -f -q -c BUS_CHECK "$PROBES") &
   logger_pid=$!; pids+=($logger_pid)
-  "$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.live.ready" >"$OUT/probes-live.txt" 2>/dev/null &
+  (at base "$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.live.ready" >"$OUT/probes-live.txt" 2>/dev/null) &
   verify_pid=$!; pids+=($verify_pid)
   wait_for_file "$OUT/.live.ready"; sleep 0.5
-  "$BIN/bus-check" publish --count "$COUNT" --sizes "$SIZES" --rate-hz 30 2>/dev/null
+  (at robot "$BIN/bus-check" publish --count "$COUNT" --sizes "$SIZES" --rate-hz 30 2>/dev/null)
   wait "$verify_pid" || live_rc=$?
   sleep 0.3; kill -INT "$logger_pid"; wait "$logger_pid" || true
-  "$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.replay.ready" >"$OUT/probes-replay.txt" 2>/dev/null &
+  (at base "$BIN/bus-check" verify --count "$COUNT" --sizes "$SIZES" --timeout-s 15 --ready-file "$OUT/.replay.ready" >"$OUT/probes-replay.txt" 2>/dev/null) &
   verify_pid=$!; pids+=($verify_pid)
   wait_for_file "$OUT/.replay.ready"
-  lcm-logplayer -s 2 "$PROBES" >/dev/null
+  (at base lcm-logplayer -s 2 "$PROBES" >/dev/null)
   wait "$verify_pid" || replay_rc=$?
   rm -f "$OUT"/.*.ready "$PROBES"
   sed 's/^/  live:   /' "$OUT/probes-live.txt"; sed 's/^/  replay: /' "$OUT/probes-replay.txt"
@@ -110,7 +170,7 @@ if [ -n "$EXPLORED" ]; then
 else
   step "2/$STEPS place-cell memory of '$SCENE': launch $(basename "$DEPLOY") --group explore"
   set +e
-  "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE" 2>&1 |
+  (at base "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE") 2>&1 |
     quiet grep --line-buffered -vE '^ {11}|^launch: variable ' | quiet sed -u 's/^/  /'
   explore_rc=${PIPESTATUS[0]}
   set -e
@@ -120,14 +180,16 @@ t_explore=$((SECONDS - t_bus))
 HOME_XY=$(awk -F, '$1=="images/6_6.png" { printf "%s,%s", $4, $5 }' "$EXPLORE_OUT/grid/positions.csv" 2>/dev/null || true)
 
 step "3/$STEPS the simulated lab '$SCENE' for $DURATION s in real time: launch $(basename "$DEPLOY") --group lab${FAULT:+, fault: kill -9 $FAULT at ${FAULT_AT} s}"
-STATUS="$OUT/launch.status"
-rm -f "$STATUS" "$OUT/fault.txt" "$OUT/run.lcmlog"  # the logger appends (-a), so that a restart keeps the start
-rm -rf "$OUT/processes"                             # the process logs are appended to as well
+STATUS="$OUT/launch.status"                # the base's (every process but sim on two hosts)
+SIM_STATUS="$STATUS"
+[ "$TWO_HOST" = 0 ] || SIM_STATUS="$OUT/launch-robot.status"
+rm -f "$STATUS" "$SIM_STATUS" "$OUT/fault.txt" "$OUT/run.lcmlog"  # the logger appends (-a), so that a restart keeps the start
+rm -rf "$OUT/processes" "$OUT"/link-*.csv                         # the process logs are appended to as well
 if [ -n "$FAULT" ]; then
   (
     # Wait for sim to run, then kill the process by the pid the launcher reports.
     for _ in $(seq 1200); do
-      awk -F'\t' '$1=="sim" && $2=="running" { found=1 } END { exit !found }' "$STATUS" 2>/dev/null && break
+      awk -F'\t' '$1=="sim" && $2=="running" { found=1 } END { exit !found }' "$SIM_STATUS" 2>/dev/null && break
       sleep 0.1
     done
     sleep "$FAULT_AT"
@@ -142,19 +204,84 @@ if [ -n "$FAULT" ]; then
   ) &
   pids+=($!)
 fi
+LAB_VARS=("scene=$SCENE" "duration_s=$DURATION" "memory=$EXPLORE_OUT/placecells.mem"
+  "home_image=$EXPLORE_OUT/grid/images/6_6.png" "frame_encoding=$FRAME_ENCODING" "clock_offset_s=$CLOCK_OFFSET"
+  "laps=$LAPS")
+# Every process's RSS and CPU time, from the launchers' status files.
+STATUS_FILES=(--status-file "$STATUS")
+[ "$TWO_HOST" = 0 ] || STATUS_FILES+=(--status-file "$SIM_STATUS")
+python3 "$ROOT/tools/deploy/process_stats.py" sample --out "$OUT/processes.csv" --interval-s 5 "${STATUS_FILES[@]}" &
+sampler_pid=$!; pids+=($sampler_pid)
+# A launcher's output: all of it into its log, its processes' chosen lines (echo) to the terminal.
+show_launcher() {
+  quiet tee "$1" | quiet grep --line-buffered -vE '^ {11}|^launch: variable |^[a-z.-]+ +\|   [A-Z_]+ +received' |
+    quiet sed -u "s/^/  $2/"
+}
 set +e
-"$BIN/launch" "$DEPLOY" --group lab --out "$OUT" --status-every-s 10 --status-file "$STATUS" \
-  "scene=$SCENE" "duration_s=$DURATION" "memory=$EXPLORE_OUT/placecells.mem" \
-  "home_image=$EXPLORE_OUT/grid/images/6_6.png" 2>&1 | quiet tee "$OUT/launch.log" |
-  quiet grep --line-buffered -vE '^ {11}|^launch: variable |^[a-z-]+ +\|   [A-Z_]+ +received' | quiet sed -u 's/^/  /'
-lab_rc=${PIPESTATUS[0]}
+if [ "$TWO_HOST" = 0 ]; then
+  "$BIN/launch" "$DEPLOY" --group lab --out "$OUT" --status-every-s 10 --status-file "$STATUS" "${LAB_VARS[@]}" 2>&1 |
+    show_launcher "$OUT/launch.log" ""
+  lab_rc=${PIPESTATUS[0]}
+else
+  # The same file on both hosts: the base first (the recorder and everything that listens), then the
+  # robot, whose sim ends the run; then the base is stopped. sim notes when it hands each frame to
+  # the bus (processes/sim-frame-times.csv), a probe on the base when each arrives (link-base.csv):
+  # one clock, so the difference is the frame's time across the link.
+  LAB_VARS+=(robot=robot base=base start_time_s=now)
+  # The link alone first: 10 s of raw 1 MB frames from sim on the robot to a probe on the base, nothing
+  # else running (link-idle-*.csv), then the same probe during the lab.
+  (at base "$BIN/latency-probe" --frames-csv "$OUT/link-idle-arrived.csv" --ready-file "$OUT/.probe.ready" \
+    >/dev/null 2>"$OUT/latency-idle.log") &
+  probe_pid=$!; pids+=($probe_pid)
+  wait_for_file "$OUT/.probe.ready"
+  rm -f "$OUT/.probe.ready"
+  (at robot "$BIN/sim" --mode realtime --duration-s 10 --encoding rgb8 --start-time-s now \
+    --frame-times "$OUT/link-idle-sent.csv" >"$OUT/link-idle-sim.log" 2>&1)
+  sleep 0.5
+  kill -INT "$probe_pid"; wait "$probe_pid"
+  (at base "$BIN/latency-probe" --frames-csv "$OUT/link-base.csv" --out "$OUT/latency-base.json" \
+    --ready-file "$OUT/.probe.ready" >"$OUT/latency-base.txt" 2>"$OUT/latency-base.log") &
+  probe_pid=$!; pids+=($probe_pid)
+  wait_for_file "$OUT/.probe.ready"
+  rm -f "$OUT/.probe.ready"
+  (at base "$BIN/launch" "$DEPLOY" --group lab --host base --out "$OUT" --status-every-s 10 --status-file "$STATUS" \
+    "${LAB_VARS[@]}") > >(show_launcher "$OUT/launch.log" "[base]  ") 2>&1 &
+  base_pid=$!; pids+=($base_pid)
+  # The base is up when every process of it runs (its last, the viewer, printed its ready line).
+  for _ in $(seq 1200); do
+    awk -F'\t' '!/^#/ && NF > 1 { n++; if ($2 == "running") r++ } END { exit !(n > 0 && n == r) }' "$STATUS" 2>/dev/null && break
+    kill -0 "$base_pid" 2>/dev/null || break
+    sleep 0.1
+  done
+  (at robot "$BIN/launch" "$DEPLOY" --group lab --host robot --out "$OUT" --status-every-s 10 --status-file "$SIM_STATUS" \
+    "${LAB_VARS[@]}") 2>&1 | show_launcher "$OUT/launch-robot.log" "[robot] "
+  robot_rc=${PIPESTATUS[0]}
+  sleep 2  # the last messages reach the base
+  kill -INT "$base_pid"
+  wait "$base_pid"
+  base_rc=$?
+  kill -INT "$probe_pid"
+  wait "$probe_pid"
+  lab_rc=$((robot_rc || base_rc))
+fi
+kill -INT "$sampler_pid" 2>/dev/null; wait "$sampler_pid"
 set -e
 t_lab=$((SECONDS - t_bus - t_explore))
 
 step "4/$STEPS report"
 report_rc=0
 LOG="$OUT/run.lcmlog"
-"$BIN/log-report" "$LOG" --out "$OUT" ${HOME_XY:+--home "$HOME_XY"} --process-logs "$OUT/processes" >/dev/null || report_rc=$?
+"$BIN/log-report" "$LOG" --out "$OUT" ${HOME_XY:+--home "$HOME_XY"} --process-logs "$OUT/processes" \
+  ${ATE_WINDOW:+--ate-window-s "$ATE_WINDOW"} >/dev/null || report_rc=$?
+# Every process's memory and CPU; the link between the hosts; the long run's verdicts.
+CHECKS="$ROOT/tools/deploy/run_checks.py"
+python3 "$ROOT/tools/deploy/process_stats.py" summary "$OUT/processes.csv" --json "$OUT/processes.json" \
+  --md "$OUT/processes.md" >/dev/null || true
+link_rc=0
+[ "$TWO_HOST" = 0 ] || python3 "$CHECKS" link "$OUT" --clock-offset-s "$CLOCK_OFFSET" --frames "$FRAME_ENCODING" --max-median-ms "$LINK_GOAL_MS" >/dev/null || link_rc=$?
+soak_rc=0
+[ "$SOAK" = 0 ] || python3 "$CHECKS" soak "$OUT" --warmup-s "$(awk -v d="$DURATION" 'BEGIN { print (d >= 1200) ? 600 : d / 4 }')" \
+  --max-rss-growth-mb "$MAX_GROWTH_MB" >/dev/null || soak_rc=$?
 # The fault's verdict: restarted, sim's channels complete in the log, the other processes never restarted.
 fault_rc=0
 fault_text=""
@@ -188,7 +315,12 @@ fi
   echo "# snapnav demo report"
   echo
   echo "- Date (UTC): $(date -u +%Y-%m-%dT%H:%M:%SZ); run time ${SECONDS} s (bus health ${t_bus} s, place-cell memory ${t_explore} s, lab ${t_lab} s)"
-  echo "- Bus: UDP multicast in a private network namespace (loopback only, ttl=0)"
+  if [ "$TWO_HOST" = 1 ]; then
+    echo "- Bus: UDP multicast between two hosts: network namespaces \"robot\" (sim) and \"base\" (the rest) joined by a veth pair ($TWO_HOST_ROBOT_ADDR, $TWO_HOST_BASE_ADDR), ttl=1, no route out"
+  else
+    echo "- Bus: UDP multicast in a private network namespace (loopback only, ttl=0)"
+  fi
+  echo "- Frames: $FRAME_ENCODING; the robot's clock offset: $CLOCK_OFFSET s; the navigator's laps: $LAPS (0: until the end)"
   echo "- Deployment: \`config/deploy/demo.deploy\`, run by \`build/bin/launch\` (groups explore, lab); process logs in \`processes/\`"
   if [ -f "$LOG" ]; then
     if [ "$KEEP_LOG" = 1 ]; then
@@ -220,7 +352,9 @@ fi
   echo
   echo "The launcher's final status:"
   echo
-  sed -n '/^launch: final status/,$p' "$OUT/launch.log" | sed 's/^/    /'
+  for f in "$OUT/launch.log" "$OUT/launch-robot.log"; do
+    [ -f "$f" ] && sed -n '/^launch: final status/,$p' "$f" | sed 's/^/    /'
+  done
   echo
   echo "What each process did (its own last lines):"
   echo
@@ -233,6 +367,18 @@ fi
     echo "The viewer's last snapshot (\`viewer/viewer-final.png\`; one every 5 s of the run in \`viewer/\`):"
     echo
     echo "![the viewer at the end of the run](viewer/viewer-final.png)"
+  fi
+  echo
+  echo "Memory and CPU of each process, sampled every 5 s (\`processes.csv\`):"
+  echo
+  cat "$OUT/processes.md" 2>/dev/null || true
+  if [ "$TWO_HOST" = 1 ]; then
+    echo
+    sed 's/^#/##/' "$OUT/link.md" 2>/dev/null || echo "## Two hosts: no link report"
+  fi
+  if [ "$SOAK" = 1 ]; then
+    echo
+    sed 's/^#/##/' "$OUT/soak.md" 2>/dev/null || echo "## Soak: no soak report"
   fi
   if [ -n "$FAULT" ]; then
     echo
@@ -248,5 +394,6 @@ fi
 step "report: $OUT/demo-report.md ($(ls "$OUT"/*.png 2>/dev/null | wc -l) figures); run time ${SECONDS} s"
 sed -n '1,/^### Messages/p' "$OUT/demo-report.md" | head -n -1
 rc=0
-for r in $live_rc $replay_rc $explore_rc $lab_rc $report_rc $fault_rc; do [ "$r" = 0 ] || rc=1; done
+for r in $live_rc $replay_rc $explore_rc $lab_rc $report_rc $fault_rc $link_rc $soak_rc; do [ "$r" = 0 ] || rc=1; done
 exit $rc
+}

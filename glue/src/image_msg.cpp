@@ -57,9 +57,11 @@ omni_frame_t ImageToFrame(const cv::Mat& input, int8_t encoding, int jpeg_qualit
     case omni_frame_t::JPEG:
     case omni_frame_t::PNG: {
       std::vector<uint8_t> bytes;
-      const std::vector<int> params = encoding == omni_frame_t::JPEG
-                                          ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, jpeg_quality}
-                                          : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, 1};
+      // JPEG with optimised Huffman tables: about 2 % smaller, the same pixels.
+      const std::vector<int> params =
+          encoding == omni_frame_t::JPEG
+              ? std::vector<int>{cv::IMWRITE_JPEG_QUALITY, jpeg_quality, cv::IMWRITE_JPEG_OPTIMIZE, 1}
+              : std::vector<int>{cv::IMWRITE_PNG_COMPRESSION, 1};
       if (!cv::imencode(encoding == omni_frame_t::JPEG ? ".jpg" : ".png", image, bytes, params) || bytes.empty()) {
         throw std::runtime_error("OpenCV could not encode a " + std::to_string(image.cols) + "x" +
                                  std::to_string(image.rows) + " image as " +

@@ -1,5 +1,6 @@
 // navigator: route following with place-cell fixes, odometry and homing; publishes drive commands.
 #include <iostream>
+#include <limits>
 
 #include "navigator_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -13,6 +14,8 @@ int Main(int argc, char** argv) {
   glue::CommonFlags common;
   common.config = SNAPNAV_CONFIG_DIR "/navigator.ini";
   std::string route;
+  constexpr int kUnset = std::numeric_limits<int>::min();
+  int laps = kUnset;
   glue::Flags flags("navigator",
                     "Route following (thesis 5.1.2-5.1.3): tracks the pose from ODOMETRY and place-cell fixes\n"
                     "(POSE_PLACE_CELLS), follows the route of waypoints (ROUTE, or [route] of the config: the thesis'\n"
@@ -20,9 +23,14 @@ int Main(int argc, char** argv) {
                     "DRIVE_COMMAND (one per odometry message while a route is set) and NAVIGATOR_STATUS.");
   flags.AddCommon(&common);
   flags.AddString("route", &route, "thesis1 | thesis2 | none: overrides [route] route");
+  flags.AddInt("laps", &laps, "finish after this many laps, 0: no limit (overrides [route] laps)");
   if (!flags.Parse(argc, argv)) return 0;
   auto ini = glue::IniFile::Load(common.config);
   auto config = processes::NavigatorConfig::FromIni(ini, common.channel_prefix);
+  if (laps != kUnset) {
+    if (laps < 0) throw glue::FlagError("--laps must be >= 0 (0: no limit)");
+    config.route_laps = laps;
+  }
   if (!route.empty()) {
     if (route != "none" && !nav::ParseThesisRoute(route)) {
       throw glue::FlagError("--route must be thesis1, thesis2 or none, not '" + route + "'");

@@ -182,6 +182,17 @@ PlaceCellsNode::PlaceCellsNode(glue::Bus& bus, const PlaceCellsConfig& config, s
   if (config_.mode == PlaceCellsMode::kLocalize && memory_.size() == 0) {
     log_ << "placecells: warning: " << config_.memory_file << " holds no cells: nothing will be localized\n";
   }
+  if (config_.mode == PlaceCellsMode::kLocalize && memory_.size() > 0) {
+    // The index (vocabulary, line templates) now, before the process says it is ready: built lazily,
+    // the first frame trained it (seconds on a busy machine) while the next frames waited in LCM's
+    // queue of 30 and the later ones were dropped. The same index either way (seeded).
+    const auto t0 = std::chrono::steady_clock::now();
+    memory_.BuildIndex();
+    log_ << "placecells: index of " << memory_.size() << " cells built in " << std::fixed << std::setprecision(2)
+         << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s ("
+         << memory_.vocabulary().words() << " words)\n";
+    log_.unsetf(std::ios::floatfield);
+  }
   bus_.Subscribe(config_.input_channel(), &PlaceCellsNode::OnFrame, this);
   bus_.Subscribe(config_.odometry_channel, &PlaceCellsNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   if (config_.mode == PlaceCellsMode::kExplore) {

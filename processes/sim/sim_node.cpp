@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <iostream>
 #include <ostream>
 #include <stdexcept>
 #include <thread>
@@ -39,14 +40,22 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   const std::string mode = ini.GetString("sim", "mode");
   if (mode != "realtime" && mode != "lockstep") throw glue::ConfigError(ini.origin() + ": [sim] mode must be realtime or lockstep");
   c.realtime = mode == "realtime";
+  c.realtime_factor = ini.GetDouble("sim", "realtime_factor");
   c.duration_s = ini.GetDouble("sim", "duration_s");
-  c.start_utime = static_cast<int64_t>(ini.GetDouble("sim", "start_time_s") * 1e6);
+  if (ini.GetString("sim", "start_time_s") == "now") {
+    c.start_at_wall_clock = true;
+  } else {
+    c.start_utime = static_cast<int64_t>(ini.GetDouble("sim", "start_time_s") * 1e6);
+  }
+  c.clock_offset_us = std::llround(ini.GetDouble("sim", "clock_offset_s") * 1e6);
   c.physics_rate_hz = ini.GetDouble("sim", "physics_rate_hz");
   c.drive = ini.GetString("sim", "drive");
   c.route_speed_mps = ini.GetDouble("sim", "route_speed_mps");
   c.route_tolerance_m = ini.GetDouble("sim", "route_tolerance_m");
   c.route_loop = ini.GetBool("sim", "route_loop");
   c.command_timeout_s = ini.GetDouble("sim", "command_timeout_s");
+  c.command_watchdog_s = ini.GetDouble("sim", "command_watchdog_s");
+  c.command_max_age_s = ini.GetDouble("sim", "command_max_age_s");
 
   c.camera_rate_hz = ini.GetDouble("camera", "rate_hz");
   c.publish_raw = ini.GetBool("camera", "publish_raw");
@@ -125,6 +134,11 @@ void SimConfig::Validate() const {
   EveryNSteps(physics_rate_hz, laser_rate_hz, "laser");
   EveryNSteps(physics_rate_hz, odometry_rate_hz, "odometry");
   if (!(duration_s >= 0)) throw std::invalid_argument("duration_s must be >= 0");
+  if (!(realtime_factor >= 0.01 && realtime_factor <= 100)) throw std::invalid_argument("realtime_factor must be in 0.01..100");
+  if (!(command_watchdog_s >= 0) || !(command_max_age_s >= 0)) {
+    throw std::invalid_argument("command_watchdog_s and command_max_age_s must be >= 0 (0: off)");
+  }
+  if (std::abs(clock_offset_us) > int64_t{86'400} * 1'000'000) throw std::invalid_argument("clock_offset_s must be within a day");
   if (!publish_raw && !publish_panorama) throw std::invalid_argument("publish at least raw frames or panoramas");
   if (jpeg_quality < 1 || jpeg_quality > 100) throw std::invalid_argument("jpeg_quality must be in 1..100");
   camera.Validate();
@@ -136,10 +150,15 @@ void SimConfig::Validate() const {
 
 void SimConfig::Print(std::ostream& o) const {
   o << "scene=" << scene << " seed=" << seed << " mode=" << (realtime ? "realtime" : "lockstep")
+    << " realtime_factor=" << realtime_factor
     << " duration_s=" << duration_s << " drive=" << drive << " physics_rate_hz=" << physics_rate_hz << "\n"
+    << "clock: start_time_s=" << (start_at_wall_clock ? std::string("now (the wall clock)") : std::to_string(start_utime / 1'000'000))
+    << " clock_offset_s=" << clock_offset_us * 1e-6 << " command_watchdog_s=" << command_watchdog_s
+    << " command_max_age_s=" << command_max_age_s << "\n"
     << "camera: rate_hz=" << camera_rate_hz << " raw=" << publish_raw << " " << camera.omni_width_px << "x"
     << camera.omni_height_px << " panorama=" << publish_panorama << " " << camera.panorama.width_px << "x"
     << camera.panorama.height_px << " encoding=" << static_cast<int>(encoding) << " height_m=" << camera.height_m
+    << " (" << glue::FrameEncodingName(encoding) << (encoding == omni_frame_t::JPEG ? " quality " + std::to_string(jpeg_quality) : std::string()) << ")"
     << " mirror=(" << camera.mirror.center_x_px << "," << camera.mirror.center_y_px << ") r="
     << camera.mirror.inner_radius_px << ".." << camera.mirror.outer_radius_px << "\n"
     << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
@@ -165,6 +184,7 @@ SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene&
       renderer_(scene, config.camera),
       effects_rng_(config.seed ^ 0x9e3779b97f4a7c15ULL) {
   config_.Validate();
+  start_utime_ = (config_.start_at_wall_clock ? glue::WallUtime() : config_.start_utime) + config_.clock_offset_us;
   dt_us_ = static_cast<int64_t>(std::llround(1e6 / config_.physics_rate_hz));
   camera_every_ = EveryNSteps(config_.physics_rate_hz, config_.camera_rate_hz, "camera");
   laser_every_ = EveryNSteps(config_.physics_rate_hz, config_.laser_rate_hz, "laser");
@@ -177,16 +197,39 @@ SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene&
   world_.SetKidnap(config_.kidnap);  // throws when the robot does not fit at the destination
 }
 
-int64_t SimNode::utime() const { return config_.start_utime + step_ * dt_us_; }
+int64_t SimNode::utime() const { return start_utime_ + step_ * dt_us_; }
 
 void SimNode::OnDriveCommand(const drive_command_t& msg) {
   if (!std::isfinite(msg.linear_velocity_mps) || !std::isfinite(msg.angular_velocity_radps)) {
     throw std::invalid_argument("drive command is not finite");
   }
+  // A command is answered to this robot's own sensor time: one stamped far from it comes from
+  // elsewhere (a replayed log, another robot's controller, a clock that is off) and is not obeyed.
+  const double age_s = (utime() - msg.utime) * 1e-6;
+  if (config_.command_max_age_s > 0 && std::abs(age_s) > config_.command_max_age_s) {
+    if (++stale_commands_ <= 5 || stale_commands_ % 100 == 0) {
+      std::cerr << "sim: ignored drive command #" << stale_commands_ << " from '" << msg.source << "': stamped "
+                << std::fixed << std::setprecision(3) << -age_s << " s from the robot's clock (command_max_age_s "
+                << config_.command_max_age_s << ")\n";
+    }
+    return;
+  }
   cmd_linear_ = msg.linear_velocity_mps;
   cmd_angular_ = msg.angular_velocity_radps;
   last_command_utime_ = msg.utime;
+  last_command_arrival_utime_ = utime();
   ++commands_;
+}
+
+void SimNode::CheckWatchdog() {
+  if (config_.command_watchdog_s <= 0 || (cmd_linear_ == 0 && cmd_angular_ == 0)) return;
+  const int64_t since = last_command_arrival_utime_ < 0 ? utime() - start_utime_ : utime() - last_command_arrival_utime_;
+  if (since <= static_cast<int64_t>(config_.command_watchdog_s * 1e6)) return;
+  cmd_linear_ = cmd_angular_ = 0;
+  ++watchdog_stops_;
+  std::cerr << "sim: watchdog: no drive command for " << std::fixed << std::setprecision(2) << since * 1e-6
+            << " s at t=" << (utime() - start_utime_) * 1e-6 << " s: robot stopped (command_watchdog_s "
+            << config_.command_watchdog_s << ")\n";
 }
 
 void SimNode::WaitForCommand() {
@@ -215,6 +258,7 @@ void SimNode::PublishFrames() {
     } else {
       glue::SetPanorama(config_.camera.panorama, &f);
     }
+    if (raw && frame_times_) *frame_times_ << f.utime << "," << glue::WallUtime() << "\n";
     bus_.Publish(channel, f);
   };
   if (config_.publish_raw) publish(config_.omni_channel, true);
@@ -263,6 +307,7 @@ bool SimNode::Step() {
   if (config_.drive == "commands") {
     while (bus_.HandleOnce(0)) {
     }
+    CheckWatchdog();
   } else if (route_) {
     const Eigen::Vector2d cmd = route_->Command(world_.true_pose());
     cmd_linear_ = cmd.x();
@@ -282,7 +327,8 @@ void SimNode::Run(std::ostream* progress) {
   int64_t next_report_s = 10;
   while (!glue::ShutdownRequested()) {
     if (config_.realtime) {
-      const int64_t due = wall_start + step_ * dt_us_;
+      // Simulated time runs realtime_factor times as fast as the wall clock (1: a live robot).
+      const int64_t due = wall_start + std::llround(static_cast<double>(step_ * dt_us_) / config_.realtime_factor);
       for (int64_t now = glue::MonotonicUtime(); now < due; now = glue::MonotonicUtime()) {
         bus_.HandleOnce(static_cast<int>(std::max<int64_t>(1, (due - now) / 1000)));
       }

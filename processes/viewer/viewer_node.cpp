@@ -45,6 +45,7 @@ std::string RegexEscape(const std::string& text) {
 ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   ViewerConfig c;
   const std::string regex_prefix = RegexEscape(channel_prefix);
+  c.channel_prefix = channel_prefix;
   c.point_map_channel = channel_prefix + ini.GetString("channels", "point_map");
   c.pose_channels = regex_prefix + ini.GetString("channels", "poses");
   c.truth_channel = channel_prefix + ini.GetString("channels", "ground_truth");
@@ -121,7 +122,10 @@ ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
     : bus_(bus), config_(config), frames_to_panoramas_(config.panorama, config.mirror) {
   scene_.truth_channel = config_.truth_channel;
   scene_.source = bus_.url();
-  bus_.SubscribeRaw(config_.pose_channels, [this](const void* d, size_t n) { OnPose(d, n); });
+  // Every pose channel in one subscription: ground truth and dead reckoning at 50 Hz each, the others
+  // at up to 10 Hz; drawing a snapshot stalls the loop for a while, so the queue holds seconds of them.
+  bus_.SubscribeRaw(config_.pose_channels, [this](const void* d, size_t n) { OnPose(d, n); },
+                    glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.point_map_channel, &ViewerNode::OnPointMap, this);
   bus_.Subscribe(config_.panorama_channel, &ViewerNode::OnPanorama, this);
   bus_.Subscribe(config_.omni_channel, &ViewerNode::OnOmniFrame, this);
@@ -312,7 +316,9 @@ void ViewerNode::UpdatePanorama() {
 const viewer::ViewerScene& ViewerNode::Scene() {
   UpdatePanorama();
   scene_.channel_counts.clear();
-  for (const auto& [ch, s] : bus_.stats()) scene_.channel_counts[ch] = static_cast<int64_t>(s.received);
+  for (const auto& [ch, s] : bus_.stats()) {
+    if (ch.rfind(config_.channel_prefix, 0) == 0) scene_.channel_counts[ch] = static_cast<int64_t>(s.received);
+  }
   scene_.rejected = static_cast<int64_t>(bus_.total_errors()) + rejected_total();
   return scene_;
 }

@@ -31,6 +31,7 @@ namespace snapnav::processes {
 struct ViewerConfig {
   // Channels, prefixed. pose_channels and landmark_channels are regular expressions (LCM's,
   // anchored at both ends); the prefix is matched literally.
+  std::string channel_prefix;  // the counts panel lists only the channels with this prefix
   std::string point_map_channel, pose_channels, truth_channel, panorama_channel, omni_channel, landmark_channels,
       homing_vector_channel, place_cell_match_channel, scan_channel;
   double refresh_hz = 4;              // window refresh [Hz, wall clock]

@@ -386,4 +386,29 @@ cv::Mat RenderScene(const ViewerScene& scene, const RenderOptions& options) {
   return img;
 }
 
+cv::Mat TileViews(const std::vector<cv::Mat>& views, const std::vector<std::string>& titles, int max_width_px) {
+  if (views.empty() || views.size() != titles.size()) throw std::invalid_argument("TileViews: one title per view, at least one view");
+  if (max_width_px < 100) throw std::invalid_argument("TileViews: max_width_px must be at least 100");
+  const int n = static_cast<int>(views.size());
+  const int cols = n <= 3 ? n : static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+  const int rows = (n + cols - 1) / cols;
+  const int cell_w = max_width_px / cols, title_h = 30;
+  int cell_h = 0;
+  for (const auto& v : views) {
+    if (v.empty() || v.type() != CV_8UC3) throw std::invalid_argument("TileViews: views must be non-empty BGR images");
+    cell_h = std::max(cell_h, static_cast<int>(std::lround(v.rows * static_cast<double>(cell_w) / v.cols)));
+  }
+  cv::Mat out(rows * (cell_h + title_h), cols * cell_w, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (int i = 0; i < n; ++i) {
+    const cv::Rect cell((i % cols) * cell_w, (i / cols) * (cell_h + title_h), cell_w, cell_h + title_h);
+    const int h = static_cast<int>(std::lround(views[i].rows * static_cast<double>(cell_w) / views[i].cols));
+    cv::resize(views[i], out(cv::Rect(cell.x, cell.y + title_h, cell_w, h)), cv::Size(cell_w, h), 0, 0, cv::INTER_AREA);
+    cv::rectangle(out, cv::Rect(cell.x, cell.y, cell_w, title_h), cv::Scalar(60, 60, 60), cv::FILLED);
+    cv::putText(out, titles[i], {cell.x + 8, cell.y + 21}, cv::FONT_HERSHEY_SIMPLEX, 0.6, cv::Scalar(255, 255, 255), 1,
+                cv::LINE_AA);
+    cv::rectangle(out, cell, cv::Scalar(60, 60, 60), 1);
+  }
+  return out;
+}
+
 }  // namespace snapnav::viewer

@@ -133,4 +133,9 @@ std::optional<std::pair<std::string, PoseSample>> RobotPose(const ViewerScene& s
 // The picture (CV_8UC3). Throws std::invalid_argument for invalid options.
 cv::Mat RenderScene(const ViewerScene& scene, const RenderOptions& options);
 
+// Several views (BGR, e.g. one robot's RenderScene each) in one picture at most max_width_px wide:
+// a row of up to 3, then a grid of ceil(sqrt(n)) columns; each view scaled to its cell with its
+// title in a band above it. Throws std::invalid_argument on no views or a title count that differs.
+cv::Mat TileViews(const std::vector<cv::Mat>& views, const std::vector<std::string>& titles, int max_width_px);
+
 }  // namespace snapnav::viewer

@@ -3,6 +3,7 @@
 
 #include <csignal>
 #include <filesystem>
+#include <fstream>
 #include <regex>
 
 #include "deployment.hpp"
@@ -277,6 +278,82 @@ TEST(Deployment, HostsAndSignals) {
   EXPECT_TRUE(FindProgram("sh").has_value());
   EXPECT_FALSE(FindProgram("/nonexistent/program").has_value());
   EXPECT_FALSE(FindProgram("snapnav-no-such-program").has_value());
+}
+
+// [include NAME]: another deployment file's processes, once or once per for_each value, with the
+// section's keys as that file's variables.
+TEST(Deployment, IncludeAddsAnotherFilesProcessesPerValue) {
+  const std::filesystem::path dir = std::filesystem::path(testing::TempDir()) / "deploy-include";
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "robot.deploy") << File(R"(
+[process sim]
+command = ${bin}/sim --channel-prefix ${prefix} --seed ${seed}
+log_file = ${out}/${prefix}/sim.log
+[process slam]
+command = ${bin}/laser-slam --channel-prefix ${prefix}
+)", "[variables]\nprefix = R_\nseed = 1\n");
+  const std::string top = File(R"(
+[process logger]
+command = lcm-logger ${out}/run.lcmlog
+[include robot]
+file = robot.deploy
+for_each = prefix in ${robots}
+seed = ${index}0
+[process viewer]
+command = ${bin}/viewer --prefixes ${robots}
+)", "[variables]\nrobots = A_,B_\n");
+  std::ofstream(dir / "top.deploy") << top;
+  const Deployment d = LoadDeployment((dir / "top.deploy").string(), Options());
+  std::vector<std::string> names;
+  for (const auto& p : d.processes) names.push_back(p.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"logger", "robot1.sim", "robot1.slam", "robot2.sim", "robot2.slam", "viewer"}));
+  EXPECT_EQ(d.processes[1].CommandLine(), "/opt/snapnav/bin/sim --channel-prefix A_ --seed 10");
+  EXPECT_EQ(d.processes[3].CommandLine(), "/opt/snapnav/bin/sim --channel-prefix B_ --seed 20");
+  EXPECT_EQ(d.processes[3].log_file, "/runs/r1/B_/sim.log");
+  EXPECT_EQ(d.variables.at("robot2.prefix"), "B_");
+  // The list from the command line: three copies.
+  LoadOptions three = Options();
+  three.overrides["robots"] = "A_,B_,C_";
+  EXPECT_EQ(LoadDeployment((dir / "top.deploy").string(), three).processes.size(), 8u);
+
+  // processes = ...: some of the other file's processes, so that every robot's stack can start
+  // before any robot's sim.
+  std::ofstream(dir / "split.deploy") << File(R"(
+[include stack]
+file = robot.deploy
+for_each = prefix in ${robots}
+processes = slam
+[include robot]
+file = robot.deploy
+for_each = prefix in ${robots}
+processes = sim
+)", "[variables]\nrobots = A_,B_\n");
+  names.clear();
+  for (const auto& p : LoadDeployment((dir / "split.deploy").string(), Options()).processes) names.push_back(p.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"stack1.slam", "stack2.slam", "robot1.sim", "robot2.sim"}));
+
+  // Errors name the including section.
+  auto error_of = [&](const std::string& include) {
+    std::ofstream(dir / "bad.deploy") << File("[process logger]\ncommand = lcm-logger\n" + include);
+    try {
+      LoadDeployment((dir / "bad.deploy").string(), Options());
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_NE(error_of("[include r]\nfor_each = prefix in A_\n").find("missing key 'file'"), std::string::npos);
+  EXPECT_NE(error_of("[include r]\nfile = robot.deploy\nfor_each = prefix A_\n").find("expected 'VARIABLE in"),
+            std::string::npos);
+  const std::string unknown = error_of("[include r]\nfile = robot.deploy\nspeed = 3\n");
+  EXPECT_NE(unknown.find("variable 'speed' set on the"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("bad.deploy:"), std::string::npos) << unknown;
+  EXPECT_NE(error_of("[include r]\nfile = nosuch.deploy\n").find("nosuch.deploy"), std::string::npos);
+  const std::string no_such = error_of("[include r]\nfile = robot.deploy\nprocesses = sim,lidar\n");
+  EXPECT_NE(no_such.find("has no process 'lidar' (it has: sim, slam)"), std::string::npos) << no_such;
+  EXPECT_NE(error_of("[include r]\nfile = bad.deploy\n").find("nested more than"), std::string::npos);
+  EXPECT_NE(error_of("[process r.sim]\ncommand = x\n[include r]\nfile = robot.deploy\n").find("defined twice"),
+            std::string::npos);
 }
 
 // Every shipped deployment file loads, for every host, and names only processes whose

@@ -77,6 +77,56 @@ TEST(ProcessLogs, DeliveryComparesPublishedWithRecorded) {
   EXPECT_TRUE(lost_one);
 }
 
+// A subscriber that ran once, start to end, and has fewer messages of an exact channel than its
+// publisher sent missed them; a restarted one is not judged (it was down for a while).
+TEST(ProcessLogs, SubscribersThatMissedMessagesAreCountedAndListed) {
+  const char kNavigatorLog[] = R"(--- launch: navigator run 1, pid 400: /bin/navigator
+  ODOMETRY                 received 2990, published 0, rejected 0, handler errors 0
+  DRIVE_COMMAND            received 0, published 3000, rejected 0, handler errors 0
+)";
+  const std::vector<ProcessLog> logs{Parse("homing", kHomingLog), Parse("sim", kSimLog), Parse("navigator", kNavigatorLog)};
+  const std::map<std::string, int64_t> recorded{{"OMNI_FRAME", 600}, {"ODOMETRY", 3000}, {"DRIVE_COMMAND", 3000}};
+  const Section s = DeliverySection(logs, recorded);
+  EXPECT_NE(s.markdown.find("navigator 2990 (10 missed)"), std::string::npos) << s.markdown;
+  EXPECT_NE(s.markdown.find("homing 288 |"), std::string::npos) << s.markdown;  // restarted: not judged
+  std::map<std::string, std::string> json(s.json.begin(), s.json.end());
+  EXPECT_EQ(json.at("delivery_missed_by_subscribers_total"), "10");
+  EXPECT_EQ(json.at("delivery_lost_total"), "0");
+  // delivery.csv: every process's counts per channel beside the log's.
+  const std::string csv = DeliveryCsv(logs, recorded);
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), "process,runs,reported_runs,channel,published,received,rejected,handler_errors,recorded");
+  EXPECT_NE(csv.find("\nhoming,2,1,OMNI_FRAME,0,288,2,1,600\n"), std::string::npos) << csv;
+  EXPECT_NE(csv.find("\nnavigator,1,1,ODOMETRY,0,2990,0,0,3000\n"), std::string::npos) << csv;
+}
+
+// The error per window of message time: an estimator 1 cm off in the first half and 5 cm off in the
+// second has windows of 1 and 5 cm, a positive trend and growth; a constant error has neither.
+TEST(RunSections, AteWindowsShowAnErrorGrowingWithTime) {
+  std::vector<nav::StampedPose> truth, growing, steady;
+  const int64_t t0 = 1'000'000'000;
+  for (int i = 0; i < 120; ++i) {  // 120 s at 1 Hz
+    const int64_t t = t0 + i * 1'000'000LL;
+    truth.push_back({t, {0.1 * i, 0, 0}});
+    growing.push_back({t, {0.1 * i, i < 60 ? 0.01 : 0.05, 0}});
+    steady.push_back({t, {0.1 * i + 0.02, 0, 0}});
+  }
+  const AteWindows g = EvaluateAteWindows(growing, truth, t0, 30);
+  ASSERT_EQ(g.rmse_m.size(), 4u);
+  EXPECT_EQ(g.start_s, (std::vector<double>{0, 30, 60, 90}));
+  EXPECT_EQ(g.poses, (std::vector<int>{30, 30, 30, 30}));
+  EXPECT_NEAR(g.rmse_m[0], 0.01, 1e-9);
+  EXPECT_NEAR(g.rmse_m[3], 0.05, 1e-9);
+  EXPECT_NEAR(g.growth_m, 0.04, 1e-9);  // last third (one window) minus the first third
+  EXPECT_NEAR(g.max_m, 0.05, 1e-9);
+  EXPECT_NEAR(g.mean_m, 0.03, 1e-9);
+  EXPECT_GT(g.trend_m_per_h, 1.0);      // 4 cm over 1.5 minutes between window centres: about 1.6 m per hour
+  const AteWindows s = EvaluateAteWindows(steady, truth, t0, 30);
+  EXPECT_NEAR(s.growth_m, 0, 1e-9);
+  EXPECT_NEAR(s.trend_m_per_h, 0, 1e-9);
+  EXPECT_NEAR(s.mean_m, 0.02, 1e-9);
+  EXPECT_THROW(EvaluateAteWindows(steady, truth, t0, 0), std::invalid_argument);
+}
+
 TEST(RunSections, HomingErrorAgainstTheTrueDirectionHome) {
   // The robot at (1, 0) heading +y; home at the origin: the true direction is +90 deg (left).
   std::vector<nav::StampedPose> truth{{1000, {1, 0, M_PI / 2}}, {2000, {2, 0, 0}}};

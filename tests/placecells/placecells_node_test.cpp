@@ -153,6 +153,11 @@ TEST(PlaceCellsNode, LocalizeNamesTheCellTheRobotIsAtAndPublishesAPose) {
   glue::Bus bus("memq://");
   std::ostringstream log;
   PlaceCellsNode node(bus, config, log);
+  // The index is built when the node starts, not on the first frame (which would hold the frames after it).
+  EXPECT_TRUE(node.memory().vocabulary().trained());
+  EXPECT_NE(log.str().find("placecells: index of " + std::to_string(node.memory().size()) + " cells built in "),
+            std::string::npos)
+      << log.str();
   LocalizeRun run;
   bus.Subscribe<place_cell_match_t>("L1b_PLACE_CELL_MATCH",
                                     [&](const place_cell_match_t& m) { run.matches.push_back(m); });

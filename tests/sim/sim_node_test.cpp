@@ -1,12 +1,15 @@
 // The sim process on memq://: determinism, message contents, shipped scenes and config.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/time.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/omni_frame_t.hpp"
@@ -76,8 +79,9 @@ TEST(SimNode, PublishesEverySensorWithConsistentTimes) {
   EXPECT_EQ(raw[3].utime - raw[2].utime, 100000);
   EXPECT_EQ(raw[0].width, 640);
   EXPECT_EQ(raw[0].height, 480);
-  EXPECT_EQ(raw[0].encoding, omni_frame_t::RGB8);
-  EXPECT_EQ(raw[0].data_size, 640 * 480 * 3);
+  EXPECT_EQ(raw[0].encoding, omni_frame_t::JPEG);  // the shipped default: compact frames on the bus and in logs
+  EXPECT_LT(raw[0].data_size, 640 * 480 * 3 / 8);
+  EXPECT_EQ(glue::FrameToImage(raw[0]).size(), cv::Size(640, 480));
   EXPECT_FLOAT_EQ(raw[0].mirror_outer_radius_px, 230.f);
   EXPECT_EQ(pano[0].kind, omni_frame_t::PANORAMA);
   EXPECT_EQ(pano[0].width, 720);
@@ -103,6 +107,7 @@ TEST(SimNode, FollowsDriveCommands) {
   config.drive = "commands";
   config.realtime = true;  // do not wait for a controller per frame
   config.camera_rate_hz = 1;
+  config.command_watchdog_s = 0;  // one command, obeyed for the whole run
   const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
   pose_t last{};
   bus.Subscribe<pose_t>("S2_POSE_GROUND_TRUTH", [&](const pose_t& m) { last = m; });
@@ -120,6 +125,149 @@ TEST(SimNode, FollowsDriveCommands) {
   EXPECT_EQ(node.commands(), 1);
   EXPECT_NEAR(last.theta_rad, 0.5 * 2.0, 0.1);  // turned in place for 2 s
   EXPECT_NEAR(last.x_m, scene.start_pose.x(), 0.01);
+}
+
+// Drives by commands in real-time mode (no per-frame wait), publishing each command (0.2 m/s
+// forward) at its time of the run [s] stamped with the robot's clock plus its offset [s].
+struct DriveRun {
+  std::vector<pose_t> truth;  // 50 Hz
+  int64_t accepted = 0, stale = 0, watchdog_stops = 0;
+};
+DriveRun DriveWith(SimConfig config, const std::vector<std::pair<double, double>>& commands, double seconds = 2.0) {
+  glue::Bus bus("memq://");
+  config.duration_s = seconds;
+  config.drive = "commands";
+  config.realtime = true;
+  config.camera_rate_hz = 1;
+  const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+  DriveRun run;
+  bus.Subscribe<pose_t>("W_POSE_GROUND_TRUTH", [&](const pose_t& m) { run.truth.push_back(m); });
+  SimNode node(bus, config, scene);
+  size_t next = 0;
+  for (int step = 0;; ++step) {
+    const double t = step / config.physics_rate_hz;
+    for (; next < commands.size() && commands[next].first <= t; ++next) {
+      drive_command_t cmd{};
+      cmd.utime = node.utime() + std::llround(commands[next].second * 1e6);
+      cmd.source = "test";
+      cmd.linear_velocity_mps = 0.2;
+      bus.Publish("W_DRIVE_COMMAND", cmd);
+    }
+    if (!node.Step()) break;
+  }
+  while (bus.HandleOnce(0)) {
+  }
+  run.accepted = node.commands();
+  run.stale = node.stale_commands();
+  run.watchdog_stops = node.watchdog_stops();
+  return run;
+}
+
+TEST(SimNode, WatchdogStopsTheRobotWhenCommandsStop) {
+  auto config = ShippedConfig("W_");
+  ASSERT_GT(config.command_watchdog_s, 0);
+  // Commands every 0.1 s for the first 0.5 s, then none: the robot stops command_watchdog_s later.
+  std::vector<std::pair<double, double>> commands;
+  for (double t = 0; t < 0.5; t += 0.1) commands.emplace_back(t, 0.0);
+  const DriveRun run = DriveWith(config, commands);
+  ASSERT_EQ(run.accepted, 5);
+  EXPECT_EQ(run.watchdog_stops, 1);
+  const auto x_at = [&](double t) { return run.truth.at(static_cast<size_t>(t * config.odometry_rate_hz)).x_m; };
+  const double stop_s = 0.4 + config.command_watchdog_s + 0.05;
+  const auto dist = [&](double t0, double t1) {
+    const auto& a = run.truth.at(static_cast<size_t>(t0 * config.odometry_rate_hz));
+    const auto& b = run.truth.at(static_cast<size_t>(t1 * config.odometry_rate_hz));
+    return std::hypot(b.x_m - a.x_m, b.y_m - a.y_m);
+  };
+  EXPECT_GT(dist(0.0, stop_s), 0.12);  // 0.2 m/s for about 0.9 s
+  EXPECT_NEAR(run.truth.back().x_m, x_at(stop_s), 0.01);  // then still
+  EXPECT_NEAR(dist(stop_s, 1.98), 0.0, 0.01);
+  // Off: the last command holds for the whole run.
+  config.command_watchdog_s = 0;
+  const DriveRun free_run = DriveWith(config, commands);
+  EXPECT_EQ(free_run.watchdog_stops, 0);
+  EXPECT_GT(std::hypot(free_run.truth.back().x_m - free_run.truth.front().x_m,
+                       free_run.truth.back().y_m - free_run.truth.front().y_m), 0.3);
+}
+
+TEST(SimNode, IgnoresCommandsStampedFarFromItsClock) {
+  auto config = ShippedConfig("W_");
+  ASSERT_DOUBLE_EQ(config.command_max_age_s, 1.0);
+  // Stamped 2 s behind and 2 s ahead (another clock, a replayed log): ignored, the robot stays.
+  DriveRun run = DriveWith(config, {{0.0, -2.0}, {0.1, 2.0}, {0.2, -2.0}});
+  EXPECT_EQ(run.accepted, 0);
+  EXPECT_EQ(run.stale, 3);
+  EXPECT_NEAR(run.truth.back().x_m, run.truth.front().x_m, 1e-6);
+  // Stamped within the limit: obeyed.
+  run = DriveWith(config, {{0.0, -0.5}, {0.1, 0.0}}, 0.5);
+  EXPECT_EQ(run.accepted, 2);
+  EXPECT_EQ(run.stale, 0);
+  EXPECT_GT(std::hypot(run.truth.back().x_m - run.truth.front().x_m, run.truth.back().y_m - run.truth.front().y_m), 0.05);
+}
+
+TEST(SimNode, ClockOffsetShiftsEveryUtimeAndNothingElse) {
+  auto config = ShippedConfig("C_");
+  config.duration_s = 0.5;
+  const auto record = [&](int64_t offset_us) {
+    glue::Bus bus("memq://");
+    config.clock_offset_us = offset_us;
+    const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+    std::vector<std::pair<int64_t, std::vector<double>>> got;  // utime, pose or first ranges
+    bus.Subscribe<pose_t>("C_POSE_GROUND_TRUTH", [&](const pose_t& m) { got.push_back({m.utime, {m.x_m, m.y_m, m.theta_rad}}); });
+    bus.Subscribe<laser_scan_t>("C_LASER_SCAN", [&](const laser_scan_t& m) {
+      got.push_back({m.utime, std::vector<double>(m.ranges_m.begin(), m.ranges_m.begin() + 5)});
+    });
+    SimNode node(bus, config, scene);
+    while (node.Step()) {
+      while (bus.HandleOnce(0)) {
+      }
+    }
+    return got;
+  };
+  const auto a = record(0), b = record(2'000'000);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GT(a.size(), 20u);
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(b[i].first - a[i].first, 2'000'000);
+    EXPECT_EQ(b[i].second, a[i].second);
+  }
+}
+
+// sim --frame-times: one line per omni frame (not per panorama), its utime as published and the wall
+// clock when it was handed to the bus, after it was encoded (the two-host test times the link from it).
+TEST(SimNode, FrameTimesNameEveryOmniFrameAndWhenItWasPublished) {
+  glue::Bus bus("memq://");
+  auto config = ShippedConfig("F_");
+  config.duration_s = 0.5;
+  config.publish_panorama = true;
+  config.clock_offset_us = 2'000'000;  // the utime as published, the robot's clock, against the wall clock
+  const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+  std::vector<int64_t> published;
+  bus.Subscribe<omni_frame_t>("F_OMNI_FRAME", [&](const omni_frame_t& m) { published.push_back(m.utime); });
+  std::ostringstream times;
+  SimNode node(bus, config, scene);
+  node.LogFramePublishTimes(&times);
+  const int64_t wall_before = glue::WallUtime();
+  while (node.Step()) {
+    while (bus.HandleOnce(0)) {
+    }
+  }
+  const int64_t wall_after = glue::WallUtime();
+  ASSERT_EQ(published.size(), 5u);
+  std::istringstream in(times.str());
+  std::string line;
+  std::vector<int64_t> logged;
+  int64_t last_wall = wall_before;
+  while (std::getline(in, line)) {
+    const auto comma = line.find(',');
+    ASSERT_NE(comma, std::string::npos) << line;
+    logged.push_back(std::stoll(line.substr(0, comma)));
+    const int64_t wall = std::stoll(line.substr(comma + 1));
+    EXPECT_GE(wall, last_wall);
+    EXPECT_LE(wall, wall_after);
+    last_wall = wall;
+  }
+  EXPECT_EQ(logged, published);
 }
 
 TEST(SimNode, KidnappingMovesTheTruthNotTheOdometry) {
@@ -197,6 +345,58 @@ TEST(SceneFiles, ErrorsNameFileAndLine) {
 TEST(SimConfig, ShippedConfigLoadsAndBadValuesAreErrors) {
   EXPECT_NO_THROW(ShippedConfig(""));
   EXPECT_THROW(SimConfig::FromIni(glue::IniFile::Parse("[sim]\nscene = x\n", "t.ini"), ""), glue::ConfigError);
+  auto c = ShippedConfig("");
+  c.command_watchdog_s = -1;
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+  for (double factor : {0.0, -1.0, 1000.0, std::nan("")}) {
+    c = ShippedConfig("");
+    c.realtime_factor = factor;
+    EXPECT_THROW(c.Validate(), std::invalid_argument) << factor;
+  }
+}
+
+// realtime_factor paces simulated time against the wall clock (0.5: half as fast as life) and changes
+// nothing else: the messages are those of factor 1, byte for byte.
+TEST(SimNode, RealtimeFactorPacesTheRunAndChangesNoMessage) {
+  const auto run = [](double factor, double* wall_s) {
+    glue::Bus bus("memq://");
+    auto config = ShippedConfig("RT_");
+    config.realtime = true;
+    config.realtime_factor = factor;
+    config.duration_s = 0.3;
+    const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+    std::vector<std::string> got;
+    bus.SubscribeRaw("RT_.*", [&](const void* d, size_t n) {
+      got.push_back(bus.current().channel + std::string(static_cast<const char*>(d), n));
+    });
+    SimNode node(bus, config, scene);
+    const int64_t start = glue::MonotonicUtime();
+    node.Run(nullptr);
+    *wall_s = (glue::MonotonicUtime() - start) * 1e-6;
+    while (bus.HandleOnce(0)) {
+    }
+    return got;
+  };
+  double wall_half = 0, wall_fast = 0;
+  const auto half = run(0.5, &wall_half);
+  const auto fast = run(4.0, &wall_fast);
+  ASSERT_GT(half.size(), 30u);  // 3 frames, 3 scans, 15 odometry and 15 ground-truth poses
+  EXPECT_TRUE(half == fast);
+  // 0.3 s of simulated time at half speed: at least 0.6 s of wall time (the last step is due at 0.59 s).
+  EXPECT_GE(wall_half, 0.58);
+}
+
+TEST(SimConfig, StartTimeNowStampsWithTheWallClockPlusTheOffset) {
+  glue::Bus bus("memq://");
+  auto config = ShippedConfig("N_");
+  config.start_at_wall_clock = true;
+  config.clock_offset_us = 2'000'000;
+  const auto scene = LoadSceneFile(SceneFilePath("indoor13"));
+  const int64_t before = glue::WallUtime();
+  SimNode node(bus, config, scene);
+  const int64_t after = glue::WallUtime();
+  EXPECT_GE(node.start_utime(), before + 2'000'000);
+  EXPECT_LE(node.start_utime(), after + 2'000'000);
 }
 
 }  // namespace

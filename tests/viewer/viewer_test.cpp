@@ -159,6 +159,25 @@ TEST(ViewerRender, EmptySceneIsAPictureToo) {
   EXPECT_THROW(RenderScene(ViewerScene{}, bad), std::invalid_argument);
 }
 
+TEST(ViewerRender, TileViewsPutsEachRobotInItsCellWithItsTitle) {
+  std::vector<cv::Mat> views;
+  for (const auto& colour : {cv::Scalar(0, 0, 255), cv::Scalar(0, 255, 0), cv::Scalar(255, 0, 0)}) {
+    views.emplace_back(1000, 1400, CV_8UC3, colour);
+  }
+  const cv::Mat out = viewer::TileViews(views, {"robot R1_", "robot R2_", "robot R3_"}, 2400);
+  EXPECT_EQ(out.cols, 2400);  // one row of three 800-px cells
+  EXPECT_EQ(out.rows, 30 + 571);
+  // The middle of each cell has its view's colour.
+  EXPECT_EQ(out.at<cv::Vec3b>(300, 400), cv::Vec3b(0, 0, 255));
+  EXPECT_EQ(out.at<cv::Vec3b>(300, 1200), cv::Vec3b(0, 255, 0));
+  EXPECT_EQ(out.at<cv::Vec3b>(300, 2000), cv::Vec3b(255, 0, 0));
+  // Five views: a grid of three columns, two rows.
+  views.resize(5, views[0]);
+  EXPECT_EQ(viewer::TileViews(views, std::vector<std::string>(5, "r"), 2400).rows, 2 * (30 + 571));
+  EXPECT_THROW(viewer::TileViews(views, {"one title"}, 2400), std::invalid_argument);
+  EXPECT_THROW(viewer::TileViews({}, {}, 2400), std::invalid_argument);
+}
+
 TEST(ViewerRender, ChannelColoursAreFixedAndPrefixed) {
   EXPECT_EQ(ChannelColour("POSE_GROUND_TRUTH"), cv::Scalar(0, 0, 0));
   EXPECT_EQ(ChannelColour("RUN2_POSE_LASER_SLAM"), ChannelColour("POSE_LASER_SLAM"));

@@ -1,6 +1,8 @@
 // bench-sim: omni frames rendered per second at 640x480 (raw catadioptric and
-// panorama) and laser scans per second, on the shipped indoor scene. Prints the
-// median of several runs and writes summary.json into --out.
+// panorama) and laser scans per second, on the shipped indoor scene; the frames as
+// messages: JPEG encode (sim) and decode (each subscriber) ms per frame and bytes per frame
+// at several qualities, beside raw RGB8. Prints the median of several runs and writes
+// summary.json into --out.
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -27,13 +29,14 @@ double MedianRate(int runs, int per_run, Fn&& fn) {
 }
 
 int Main(int argc, char** argv) {
-  std::string scene_name = "indoor13", out_dir;
+  std::string scene_name = "indoor13", out_dir, qualities_text = "75,80,85,90,95";
   int runs = 5, frames = 30;
   glue::Flags flags("bench-sim", "Rendering and laser throughput of the simulator on one core (median of --runs).");
   flags.AddString("scene", &scene_name, "scene");
   flags.AddInt("runs", &runs, "runs per figure");
   flags.AddInt("frames", &frames, "frames (and 10x scans) per run");
   flags.AddString("out", &out_dir, "folder for summary.json");
+  flags.AddString("jpeg-qualities", &qualities_text, "JPEG qualities to time (comma-separated, 1..100)");
   if (!flags.Parse(argc, argv)) return 0;
   const auto config = processes::SimConfig::FromIni(glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini"), "");
   const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
@@ -55,6 +58,35 @@ int Main(int argc, char** argv) {
     auto r = world.Scan();
     (void)r;
   });
+  // The frames as messages: encoded by sim, decoded by every subscriber (glue's ImageToFrame and
+  // FrameToImage, as the processes do), over 20 views of the scene.
+  std::vector<cv::Mat> views(20);
+  for (int i = 0; i < 20; ++i) renderer.RenderOmni(pose(7 * i), {}, &views[i]);
+  struct Codec {
+    std::string name;
+    int8_t encoding;
+    int quality;
+    double encode_ms = 0, decode_ms = 0, bytes = 0;
+  };
+  std::vector<Codec> codecs{{"rgb8", omni_frame_t::RGB8, 0}};
+  for (const auto& q : glue::SplitList(qualities_text)) {
+    const int quality = std::stoi(q);
+    if (quality < 1 || quality > 100) throw glue::FlagError("--jpeg-qualities: " + q + " is not in 1..100");
+    codecs.push_back({"jpeg" + q, omni_frame_t::JPEG, quality});
+  }
+  for (auto& c : codecs) {
+    std::vector<omni_frame_t> encoded;
+    for (const auto& v : views) encoded.push_back(glue::ImageToFrame(v, c.encoding, std::max(c.quality, 1)));
+    for (const auto& f : encoded) c.bytes += f.data_size / static_cast<double>(encoded.size());
+    c.encode_ms = 1000 * bench::MedianSecondsPerCall(runs, frames, [&](int i) {
+      auto f = glue::ImageToFrame(views[i % views.size()], c.encoding, std::max(c.quality, 1));
+      (void)f;
+    });
+    c.decode_ms = 1000 * bench::MedianSecondsPerCall(runs, frames, [&](int i) {
+      const cv::Mat m = glue::FrameToImage(encoded[i % encoded.size()]);
+      (void)m;
+    });
+  }
   std::cout << "scene " << scene.name << ", one core, median of " << runs << " runs\n"
             << std::fixed << std::setprecision(1)
             << "  raw omni " << config.camera.omni_width_px << "x" << config.camera.omni_height_px
@@ -62,14 +94,28 @@ int Main(int argc, char** argv) {
             << "  raw omni + rgb8 message frames/s:    " << raw_msg_fps << "\n"
             << "  panorama " << config.camera.panorama.width_px << "x" << config.camera.panorama.height_px
             << " frames/s:            " << pano_fps << "  (" << 1000 / pano_fps << " ms)\n"
-            << "  laser scans/s (" << config.laser.beams << " beams):         " << scans_ps << "\n";
+            << "  laser scans/s (" << config.laser.beams << " beams):         " << scans_ps << "\n"
+            << "  frames as messages (shipped: " << glue::FrameEncodingName(config.encoding)
+            << (config.encoding == omni_frame_t::JPEG ? " quality " + std::to_string(config.jpeg_quality) : std::string())
+            << "), per 640x480 frame:\n"
+            << "    encoding   bytes      encode ms  decode ms  at 10 Hz: encode + 5 subscribers' decodes (% of one core)\n";
+  // ms per frame x 10 frames/s = ms per second of work; / 1000 ms x 100 %: the same number as a percentage.
+  for (const auto& c : codecs) {
+    std::cout << "    " << std::left << std::setw(10) << c.name << std::right << std::setw(8) << std::setprecision(0)
+              << c.bytes << std::setprecision(2) << std::setw(12) << c.encode_ms << std::setw(11) << c.decode_ms
+              << std::setprecision(1) << std::setw(12) << c.encode_ms + 5 * c.decode_ms << "\n";
+  }
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
     std::ofstream json(std::filesystem::path(out_dir) / "summary.json");
     json << std::fixed << std::setprecision(2) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"runs\": " << runs
          << ",\n  \"omni_frames_per_second\": " << raw_fps << ",\n  \"omni_message_frames_per_second\": " << raw_msg_fps
-         << ",\n  \"panorama_frames_per_second\": " << pano_fps << ",\n  \"laser_scans_per_second\": " << scans_ps
-         << "\n}\n";
+         << ",\n  \"panorama_frames_per_second\": " << pano_fps << ",\n  \"laser_scans_per_second\": " << scans_ps;
+    for (const auto& c : codecs) {
+      json << ",\n  \"" << c.name << "_frame_bytes\": " << c.bytes << ",\n  \"" << c.name << "_encode_ms\": " << c.encode_ms
+           << ",\n  \"" << c.name << "_decode_ms\": " << c.decode_ms;
+    }
+    json << "\n}\n";
   }
   return 0;
 }

@@ -54,6 +54,7 @@ void LatencyProbe::OnFrame(const void* data, size_t size) {
   if (utime < 0) throw std::runtime_error("frame too short for a utime (" + std::to_string(size) + " bytes)");
   ++frames_;
   frames_by_utime_[utime].recv_utime = bus_.current().recv_utime;
+  if (frame_log_) *frame_log_ << utime << "," << bus_.current().recv_utime << "\n";
   newest_utime_ = std::max(newest_utime_, utime);
   while (!frames_by_utime_.empty() && frames_by_utime_.begin()->first < newest_utime_ - window_us_) {
     frames_by_utime_.erase(frames_by_utime_.begin());

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <map>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,9 @@ class LatencyProbe {
   LatencyProbe(glue::Bus& bus, const std::string& input, const std::vector<LatencyOutput>& outputs,
                double window_s = 30);
 
+  // Every frame's utime and receive time from now on, as CSV lines "utime,recv_utime" (null: none).
+  void LogFrames(std::ostream* out) { frame_log_ = out; }
+
   int64_t frames() const { return frames_; }
   // Figures of one output channel (all zero when nothing came).
   LatencyStats Stats(const std::string& channel) const;
@@ -61,6 +65,7 @@ class LatencyProbe {
   void OnOutput(const LatencyOutput& out, const void* data, size_t size);
 
   glue::Bus& bus_;
+  std::ostream* frame_log_ = nullptr;
   std::vector<LatencyOutput> outputs_;
   int64_t window_us_;
   std::map<int64_t, Frame> frames_by_utime_;

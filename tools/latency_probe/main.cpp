@@ -28,7 +28,7 @@ int Main(int argc, char** argv) {
   std::string input = channels::kOmniFrame;
   std::string outputs_text = std::string(channels::kHomingVector) + "," + channels::kPosePlaceCells + "," +
                              channels::kPoseFusedSlam + "@" + channels::kPosePlaceCells;
-  std::string out_json, csv, ready_file;
+  std::string out_json, csv, ready_file, frames_csv;
   double duration_s = 0, window_s = 30;
   glue::Flags flags("latency-probe",
                     "End-to-end latency: receives the frames of --input and the messages of every --outputs channel,\n"
@@ -45,6 +45,9 @@ int Main(int argc, char** argv) {
   flags.AddString("out", &out_json, "write the figures to this JSON file (flat keys, ms)");
   flags.AddString("csv", &csv, "write every latency sample to this CSV file (output,latency_ms)");
   flags.AddString("ready-file", &ready_file, "create this file once subscribed");
+  flags.AddString("frames-csv", &frames_csv,
+                  "write every --input frame's utime and this process's receive time (LCM's, the wall clock) to this\n"
+                  "CSV file (utime,recv_utime): two probes on two hosts of one clock give each frame's time across the link");
   if (!flags.Parse(argc, argv)) return 0;
   if (!common.config.empty()) throw glue::FlagError("latency-probe has no config file; use --input and --outputs");
   std::vector<tools::LatencyOutput> outputs;
@@ -62,6 +65,13 @@ int Main(int argc, char** argv) {
   glue::InstallShutdownHandlers();
   glue::Bus bus(common.lcm_url);
   tools::LatencyProbe probe(bus, input, outputs, window_s);
+  std::ofstream frame_times;
+  if (!frames_csv.empty()) {
+    frame_times.open(frames_csv);
+    if (!frame_times) throw glue::FlagError("--frames-csv: cannot write " + frames_csv);
+    frame_times << "utime,recv_utime\n";
+    probe.LogFrames(&frame_times);
+  }
   std::cerr << "latency-probe: frames " << input << ", outputs " << outputs_text << " (" << bus.url() << ")\n";
   if (!ready_file.empty()) std::ofstream(ready_file) << "ready\n";
   const int64_t end = duration_s > 0 ? glue::MonotonicUtime() + static_cast<int64_t>(duration_s * 1e6) : 0;

@@ -2,15 +2,19 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
+
+#include "snapnav/glue/flags.hpp"
 
 namespace snapnav::launch {
 namespace {
@@ -79,15 +83,17 @@ class Variables {
       if (it == raw_.end()) {
         std::string known;
         for (const auto& [k, _] : raw_) known += (known.empty() ? "" : ", ") + k;
-        throw ConfigError(ini.origin() + ": variable '" + name + "' set on the command line is not in [variables]" +
+        throw ConfigError(ini.origin() + ": variable '" + name + "' set on the " + options.overrides_origin +
+                          " is not in [variables]" +
                           (known.empty() ? " (the file has none)" : " (the file has: " + known + ")"));
       }
-      it->second = {value, "command line " + name + "=" + value};
+      it->second = {value, options.overrides_origin + " " + name + "=" + value};
     }
     for (const auto& [name, _] : raw_) deployment_->variables[name] = Resolve(name);
   }
 
   std::optional<std::string> Lookup(const std::string& name) {
+    if (const auto it = extra_.find(name); it != extra_.end()) return it->second;
     if (IsBuiltin(name)) {
       const auto it = options_.builtins.find(name);
       if (it == options_.builtins.end()) return std::nullopt;
@@ -97,6 +103,9 @@ class Variables {
     if (raw_.count(name)) return Resolve(name);
     return std::nullopt;
   }
+
+  // Variables known until the next SetExtra (an include's ${VAR} and ${index}).
+  void SetExtra(std::map<std::string, std::string> extra) { extra_ = std::move(extra); }
 
   // `text` with its variables substituted; errors name `at`.
   std::string Apply(const std::string& text, const std::string& at) {
@@ -121,6 +130,7 @@ class Variables {
     std::string known;
     for (const char* b : kBuiltins) known += std::string(known.empty() ? "" : ", ") + b;
     for (const auto& [k, _] : raw_) known += ", " + k;
+    for (const auto& [k, _] : extra_) known += ", " + k;
     return " (known: " + known + ")";
   }
 
@@ -130,6 +140,7 @@ class Variables {
   std::map<std::string, std::pair<std::string, std::string>> raw_;  // name -> (value, where)
   std::map<std::string, std::string> resolved_;
   std::set<std::string> resolving_;
+  std::map<std::string, std::string> extra_;
 };
 
 // The keys of one [process NAME] section, falling back to [defaults].
@@ -312,6 +323,90 @@ ProcessSpec ReadProcess(const glue::IniFile& ini, const std::string& section, co
   return p;
 }
 
+std::string KnownProcessKeys() {
+  std::string keys;
+  for (const char* k : kProcessKeys) keys += std::string(keys.empty() ? "" : ", ") + k;
+  return keys;
+}
+
+// The processes of one [include NAME] section: the other file, once or once per for_each value,
+// with the section's other keys as its variables; appended to `d` under their qualified names.
+void ReadInclude(const glue::IniFile& ini, const std::string& section, const std::string& name, Variables* vars,
+                 const LoadOptions& options, Deployment* d) {
+  const std::string origin = ini.origin();
+  const auto at = [&](const std::string& key) {
+    return origin + ":" + std::to_string(key.empty() ? ini.SectionLine(section) : ini.KeyLine(section, key)) + ": [" +
+           section + "]" + (key.empty() ? "" : " " + key);
+  };
+  if (!ini.Has(section, "file")) throw ConfigError(at("") + ": missing key 'file' (the deployment file to include)");
+  if (options.include_depth >= kMaxIncludeDepth) {
+    throw ConfigError(at("") + ": includes nested more than " + std::to_string(kMaxIncludeDepth) +
+                      " deep (does a file include itself?)");
+  }
+  // for_each = VAR in V1,V2,...: one copy per value.
+  std::string loop_var;
+  std::vector<std::string> values{""};
+  if (ini.Has(section, "for_each")) {
+    const std::string text = vars->Apply(ini.GetString(section, "for_each"), at("for_each"));
+    static const std::regex form(R"(^\s*([A-Za-z0-9_.-]+)\s+in\s+(.*\S)\s*$)");
+    std::smatch m;
+    if (!std::regex_match(text, m, form)) {
+      throw ConfigError(at("for_each") + " = '" + text + "': expected 'VARIABLE in VALUE1,VALUE2,...'");
+    }
+    loop_var = m[1];
+    if (IsBuiltin(loop_var) || loop_var == "index") {
+      throw ConfigError(at("for_each") + ": '" + loop_var + "' is a built-in variable; pick another name");
+    }
+    values = glue::SplitList(m[2]);
+    if (values.empty()) throw ConfigError(at("for_each") + ": no values");
+  }
+  // processes = P1,P2,...: only these of the other file's processes (in that file's order).
+  std::set<std::string> only;
+  if (ini.Has(section, "processes")) {
+    for (const auto& p : glue::SplitList(vars->Apply(ini.GetString(section, "processes"), at("processes")))) only.insert(p);
+    if (only.empty()) throw ConfigError(at("processes") + ": no process names");
+  }
+  for (size_t k = 0; k < values.size(); ++k) {
+    const std::string copy = loop_var.empty() ? name : name + std::to_string(k + 1);
+    std::map<std::string, std::string> extra;
+    if (!loop_var.empty()) extra = {{loop_var, values[k]}, {"index", std::to_string(k + 1)}};
+    vars->SetExtra(extra);
+    LoadOptions sub;
+    sub.builtins = options.builtins;
+    sub.include_depth = options.include_depth + 1;
+    sub.overrides_origin = at("");
+    std::filesystem::path file = vars->Apply(ini.GetString(section, "file"), at("file"));
+    if (file.is_relative()) file = std::filesystem::path(origin).parent_path() / file;
+    if (!loop_var.empty()) sub.overrides[loop_var] = values[k];  // the other file's variable of that name
+    for (const auto& key : ini.Keys(section)) {
+      if (key == "file" || key == "for_each" || key == "processes") continue;
+      sub.overrides[key] = vars->Apply(ini.GetString(section, key), at(key));
+    }
+    vars->SetExtra({});
+    Deployment included;
+    try {
+      included = LoadDeployment(file.string(), sub);
+    } catch (const ConfigError& e) {
+      throw ConfigError(std::string(e.what()) + "\n  (included by " + at("") + (loop_var.empty() ? "" : ", " + loop_var + " = " + values[k]) + ")");
+    }
+    for (const auto& name_only : only) {
+      if (std::none_of(included.processes.begin(), included.processes.end(),
+                       [&](const ProcessSpec& p) { return p.name == name_only; })) {
+        std::string known;
+        for (const auto& p : included.processes) known += (known.empty() ? "" : ", ") + p.name;
+        throw ConfigError(at("processes") + ": " + file.string() + " has no process '" + name_only + "' (it has: " + known + ")");
+      }
+    }
+    for (auto& p : included.processes) {
+      if (!only.empty() && !only.count(p.name)) continue;
+      p.name = copy + "." + p.name;
+      d->processes.push_back(std::move(p));
+    }
+    for (const auto& [v, value] : included.variables) d->variables[copy + "." + v] = value;
+    d->used_builtins.insert(included.used_builtins.begin(), included.used_builtins.end());
+  }
+}
+
 }  // namespace
 
 const char* RestartPolicyName(RestartPolicy p) {
@@ -459,11 +554,12 @@ Deployment ParseDeployment(const std::string& text, const std::string& origin, c
   Deployment d;
   d.path = origin;
   for (const auto& section : ini.SectionsInFileOrder()) {
-    if (section == "deployment" || section == "variables" || section == "defaults" || section.rfind("process ", 0) == 0) {
+    if (section == "deployment" || section == "variables" || section == "defaults" || section.rfind("process ", 0) == 0 ||
+        section.rfind("include ", 0) == 0) {
       continue;
     }
     throw ConfigError(origin + ":" + std::to_string(ini.SectionLine(section)) + ": unknown section [" + section +
-                      "] (expected [deployment], [variables], [defaults] or [process NAME])");
+                      "] (expected [deployment], [variables], [defaults], [process NAME] or [include NAME])");
   }
   if (!ini.Has("deployment", "name")) {
     throw ConfigError(origin + (ini.SectionLine("deployment") ? ":" + std::to_string(ini.SectionLine("deployment")) : "") +
@@ -482,30 +578,35 @@ Deployment ParseDeployment(const std::string& text, const std::string& origin, c
   for (const auto& key : ini.Keys("defaults")) {
     const std::string at = origin + ":" + std::to_string(ini.KeyLine("defaults", key));
     if (key == "command") throw ConfigError(at + ": [defaults] command: every process sets its own command");
-    if (!IsProcessKey(key)) {
-      std::string keys;
-      for (const char* k : kProcessKeys) keys += std::string(keys.empty() ? "" : ", ") + k;
-      throw ConfigError(at + ": [defaults] " + key + ": unknown key (process keys: " + keys + ")");
-    }
+    if (!IsProcessKey(key)) throw ConfigError(at + ": [defaults] " + key + ": unknown key (process keys: " + KnownProcessKeys() + ")");
     ini.GetString("defaults", key);  // used; read again per process
   }
   Variables vars(ini, options, &d);
   std::set<std::string> names;
   for (const auto& section : ini.SectionsInFileOrder()) {
-    if (section.rfind("process ", 0) != 0) continue;
+    const bool include = section.rfind("include ", 0) == 0;
+    if (section.rfind("process ", 0) != 0 && !include) continue;
     const std::string name = Trim(section.substr(8));
     const std::string at = origin + ":" + std::to_string(ini.SectionLine(section));
-    if (!ValidName(name)) throw ConfigError(at + ": [" + section + "]: expected a process name (letters, digits, _ - .)");
-    if (!names.insert(name).second) throw ConfigError(at + ": process '" + name + "' defined twice");
-    for (const auto& key : ini.Keys(section)) {
-      if (!IsProcessKey(key)) {
-        std::string keys;
-        for (const char* k : kProcessKeys) keys += std::string(keys.empty() ? "" : ", ") + k;
-        throw ConfigError(origin + ":" + std::to_string(ini.KeyLine(section, key)) + ": [" + section + "] " + key +
-                          ": unknown key (process keys: " + keys + ")");
-      }
+    if (!ValidName(name)) {
+      throw ConfigError(at + ": [" + section + "]: expected a" + (include ? "n include" : " process") +
+                        " name (letters, digits, _ - .)");
     }
-    d.processes.push_back(ReadProcess(ini, section, name, &vars));
+    const size_t before = d.processes.size();
+    if (include) {
+      ReadInclude(ini, section, name, &vars, options, &d);
+    } else {
+      for (const auto& key : ini.Keys(section)) {
+        if (!IsProcessKey(key)) {
+          throw ConfigError(origin + ":" + std::to_string(ini.KeyLine(section, key)) + ": [" + section + "] " + key +
+                            ": unknown key (process keys: " + KnownProcessKeys() + ")");
+        }
+      }
+      d.processes.push_back(ReadProcess(ini, section, name, &vars));
+    }
+    for (size_t i = before; i < d.processes.size(); ++i) {
+      if (!names.insert(d.processes[i].name).second) throw ConfigError(at + ": process '" + d.processes[i].name + "' defined twice");
+    }
   }
   if (d.processes.empty()) throw ConfigError(origin + ": no [process NAME] section");
   ini.CheckAllUsed();

@@ -6,6 +6,13 @@
 //   [variables]    NAME = VALUE, used as ${NAME}; `launch FILE NAME=VALUE` overrides one
 //   [defaults]     any process key below, for every process that does not set it
 //   [process NAME] command = PROGRAM ARGS... (required here), and the process keys
+//   [include NAME] file = OTHER.deploy (relative to this file), for_each = VAR in V1,V2,...
+//                  (optional), processes = P1,P2,... (optional: only these), and VARIABLE = VALUE
+//                  for the other file's [variables]: that file's (chosen) processes, here in its
+//                  file order, named NAME.PROCESS (NAME1.PROCESS, NAME2.PROCESS
+//                  ... with for_each: one copy per value, ${VAR} the value and ${index} 1, 2, ...
+//                  in this section's keys, and VAR set in the other file, one of its [variables]).
+//                  The other file keeps its own [defaults] and variables.
 //
 // Every process key comes from its section or from [defaults]; a key in neither, a key this
 // launcher does not know, an unknown ${variable} and a bad value are errors naming the file
@@ -73,7 +80,10 @@ struct Deployment {
 struct LoadOptions {
   std::map<std::string, std::string> builtins;   // bin, config, root, out, lcm_url, host
   std::map<std::string, std::string> overrides;  // NAME=VALUE of the command line ([variables] only)
+  std::string overrides_origin = "command line";  // where the overrides come from, for messages
+  int include_depth = 0;                          // files including this one (at most kMaxIncludeDepth)
 };
+inline constexpr int kMaxIncludeDepth = 4;
 
 // Throws ConfigError naming the file and line.
 Deployment LoadDeployment(const std::string& path, const LoadOptions& options);

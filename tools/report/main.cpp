@@ -53,7 +53,8 @@ struct Plot {
 
 int Main(int argc, char** argv) {
   std::string out_dir, truth_channel = channels::kPoseGroundTruth, scan_channel = channels::kLaserScan;
-  std::string home_text, process_logs_dir;
+  std::string home_text, process_logs_dir, prefix;
+  double ate_window_s = 0;
   glue::Flags flags("log-report LOG",
                     "Summarises an LCM log: messages per channel, and for every pose_t channel its trajectory\n"
                     "error (ATE) against the ground truth; writes report.md, summary.json and PNG plots.\n"
@@ -62,13 +63,23 @@ int Main(int argc, char** argv) {
   flags.AddString("out", &out_dir, "output folder (default: beside the log)");
   flags.AddString("truth", &truth_channel, "ground-truth pose channel");
   flags.AddString("scan", &scan_channel, "laser channel for the map drawn from the ground truth");
+  flags.AddString("channel-prefix", &prefix,
+                  "one robot of several on one bus: only the channels with this prefix (the truth and scan channels get it)");
+  flags.AddDouble("ate-window-s", &ate_window_s,
+                  "also each estimator's error per window of this much message time, its trend and growth "
+                  "(ate_over_time.png, ate_windows.csv) [s]; 0: not");
   flags.AddString("home", &home_text, "X,Y: the homing vectors' home in the map frame [m]; judged against the truth");
   flags.AddString("process-logs", &process_logs_dir,
-                  "folder of the launcher's process logs (NAME.log): published counts against the recorded ones");
+                  "folder of the launcher's process logs (NAME.log): published counts against the recorded ones and\n"
+                  "what each subscriber received (also delivery.csv); several folders comma-separated, the processes\n"
+                  "then named FOLDER/NAME");
   flags.AllowPositional("LOG", "the LCM log");
   if (!flags.Parse(argc, argv)) return 0;
   if (flags.positional().size() != 1) throw glue::FlagError("expected one LOG (see --help)");
   const std::string log_path = flags.positional()[0];
+  if (ate_window_s < 0) throw glue::FlagError("--ate-window-s must be >= 0");
+  truth_channel = prefix + truth_channel;
+  scan_channel = prefix + scan_channel;
   if (out_dir.empty()) out_dir = fs::path(log_path).parent_path().string();
   if (out_dir.empty()) out_dir = ".";
   fs::create_directories(out_dir);
@@ -83,16 +94,21 @@ int Main(int argc, char** argv) {
     home = Eigen::Vector2d(x, y);
   }
   std::vector<report::ProcessLog> process_logs;
-  if (!process_logs_dir.empty()) {
-    if (!fs::is_directory(process_logs_dir)) throw glue::FlagError("--process-logs: no folder '" + process_logs_dir + "'");
+  const std::vector<std::string> process_log_dirs = glue::SplitList(process_logs_dir);
+  for (const auto& dir : process_log_dirs) {
+    if (!fs::is_directory(dir)) throw glue::FlagError("--process-logs: no folder '" + dir + "'");
     std::vector<fs::path> files;
-    for (const auto& e : fs::directory_iterator(process_logs_dir)) {
+    for (const auto& e : fs::directory_iterator(dir)) {
       if (e.path().extension() == ".log") files.push_back(e.path());
     }
     std::sort(files.begin(), files.end());
+    const std::string folder = fs::path(dir).lexically_normal().filename().string().empty()
+                                   ? fs::path(dir).lexically_normal().parent_path().filename().string()
+                                   : fs::path(dir).lexically_normal().filename().string();
     for (const auto& f : files) {
       std::ifstream in(f);
-      process_logs.push_back(report::ParseProcessLog(f.stem().string(), in));
+      const std::string name = process_log_dirs.size() > 1 ? folder + "/" + f.stem().string() : f.stem().string();
+      process_logs.push_back(report::ParseProcessLog(name, in));
     }
   }
 
@@ -108,6 +124,7 @@ int Main(int argc, char** argv) {
   std::map<std::string, std::vector<navigator_status_t>> statuses;   // by channel
   glue::LogEvent ev;
   while (log.Next(&ev)) {
+    if (ev.channel.rfind(prefix, 0) != 0) continue;  // another robot's
     ChannelInfo& ci = info[ev.channel];
     if (ci.count == 0) ci.first_us = ev.timestamp_us;
     ++ci.count;
@@ -214,10 +231,16 @@ int Main(int argc, char** argv) {
   for (const auto& [ch, v] : homing) sections.push_back(report::HomingSection(ch, v, truth, home, t0_us, out_dir));
   for (const auto& [ch, m] : matches) sections.push_back(report::PlaceCellSection(ch, m, truth, t0_us, out_dir));
   for (const auto& [ch, st] : statuses) sections.push_back(report::NavigatorSection(ch, st, truth, t0_us, out_dir));
+  if (ate_window_s > 0 && !truth.empty()) {
+    std::map<std::string, std::vector<nav::StampedPose>> estimates = poses;
+    estimates.erase(truth_channel);
+    sections.push_back(report::AteOverTimeSection(estimates, truth, t0_us, ate_window_s, out_dir));
+  }
   if (!process_logs.empty()) {
     std::map<std::string, int64_t> recorded;
     for (const auto& [ch, ci] : info) recorded[ch] = ci.count;
     sections.push_back(report::DeliverySection(process_logs, recorded));
+    std::ofstream(fs::path(out_dir) / "delivery.csv") << report::DeliveryCsv(process_logs, recorded);
   }
   for (const auto& section : sections) {
     for (const auto& [k, v] : section.json) json << ",\n  \"" << k << "\": " << v;

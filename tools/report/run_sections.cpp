@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <set>
 #include <sstream>
 
@@ -348,12 +349,23 @@ Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std:
         "messages in the log. A run killed by a signal prints no counts: its channels' published counts are lower "
         "bounds (marked >=).\n\n"
      << "| channel | publisher | published | recorded | lost | received by |\n|---|---|---|---|---|---|\n";
-  uint64_t lost_total = 0;
+  // (A subscriber that ran once and received fewer than were published shows "(N missed)".)
+  uint64_t lost_total = 0, missed_total = 0;
   int exact_channels = 0;
+  std::map<std::string, const ProcessLog*> by_name;
+  for (const auto& log : logs) by_name[log.name] = &log;
   for (const auto& d : CompareDelivery(logs, recorded)) {
     std::string pubs, recv;
     for (const auto& p : d.publishers) pubs += (pubs.empty() ? "" : ", ") + p;
-    for (const auto& [name, n] : d.received) recv += (recv.empty() ? "" : ", ") + name + " " + std::to_string(n);
+    for (const auto& [name, n] : d.received) {
+      recv += (recv.empty() ? "" : ", ") + name + " " + std::to_string(n);
+      // A subscriber that ran once, start to end, should have every message of an exact channel.
+      const ProcessLog* log = by_name.at(name);
+      if (d.exact && log->runs.size() == 1 && log->complete() && n < d.published) {
+        missed_total += d.published - n;
+        recv += " (" + std::to_string(d.published - n) + " missed)";
+      }
+    }
     std::string lost;
     if (d.exact) {
       ++exact_channels;
@@ -371,6 +383,7 @@ Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std:
   }
   s.json.emplace_back("delivery_exact_channels", std::to_string(exact_channels));
   s.json.emplace_back("delivery_lost_total", std::to_string(lost_total));
+  s.json.emplace_back("delivery_missed_by_subscribers_total", std::to_string(missed_total));
   // The runs of each process and the launcher's words about them.
   md << "\n| process | runs | runs that reported counts | launcher |\n|---|---|---|---|\n";
   int restarts = 0;
@@ -390,6 +403,113 @@ Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std:
     s.json.emplace_back("process_" + Lower(log.name) + "_runs", std::to_string(log.runs.size()));
   }
   s.json.emplace_back("process_restarts_total", std::to_string(restarts));
+  s.markdown = md.str();
+  return s;
+}
+
+std::string DeliveryCsv(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded) {
+  std::ostringstream csv;
+  csv << "process,runs,reported_runs,channel,published,received,rejected,handler_errors,recorded\n";
+  for (const auto& log : logs) {
+    int reported = 0;
+    for (const auto& r : log.runs) reported += r.reported;
+    for (const auto& [ch, c] : log.Totals()) {
+      const auto it = recorded.find(ch);
+      csv << log.name << "," << log.runs.size() << "," << reported << "," << ch << "," << c.published << ","
+          << c.received << "," << c.rejected << "," << c.handler_errors << "," << (it == recorded.end() ? 0 : it->second)
+          << "\n";
+    }
+  }
+  return csv.str();
+}
+
+AteWindows EvaluateAteWindows(const std::vector<nav::StampedPose>& estimate, const std::vector<nav::StampedPose>& truth,
+                              int64_t t0_us, double window_s) {
+  if (!(window_s > 0)) throw std::invalid_argument("ATE window must be positive");
+  AteWindows w;
+  std::map<int64_t, std::pair<double, int>> bins;  // window index -> (sum of squared errors, poses)
+  for (const auto& e : estimate) {
+    const auto j = nav::NearestInTime(truth, e.utime, kTruthToleranceUs);
+    if (!j) continue;
+    const double err = std::hypot(e.pose.x_m - truth[*j].pose.x_m, e.pose.y_m - truth[*j].pose.y_m);
+    auto& b = bins[static_cast<int64_t>(std::floor((e.utime - t0_us) * 1e-6 / window_s))];
+    b.first += err * err;
+    ++b.second;
+  }
+  for (const auto& [k, b] : bins) {
+    w.start_s.push_back(k * window_s);
+    w.rmse_m.push_back(std::sqrt(b.first / b.second));
+    w.poses.push_back(b.second);
+  }
+  const size_t n = w.rmse_m.size();
+  if (n == 0) return w;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const double x = (w.start_s[i] + window_s / 2) / 3600.0, y = w.rmse_m[i];
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+    w.max_m = std::max(w.max_m, y);
+  }
+  w.mean_m = sy / n;
+  const double den = n * sxx - sx * sx;
+  w.trend_m_per_h = n >= 2 && den > 0 ? (n * sxy - sx * sy) / den : 0;
+  const size_t third = std::max<size_t>(1, n / 3);
+  double first = 0, last = 0;
+  for (size_t i = 0; i < third; ++i) {
+    first += w.rmse_m[i];
+    last += w.rmse_m[n - 1 - i];
+  }
+  w.growth_m = (last - first) / third;
+  return w;
+}
+
+Section AteOverTimeSection(const std::map<std::string, std::vector<nav::StampedPose>>& estimates,
+                           const std::vector<nav::StampedPose>& truth, int64_t t0_us, double window_s,
+                           const std::string& out_dir) {
+  Section s;
+  std::ostringstream md, csv;
+  md << "\n## Trajectory error over time (windows of " << Fixed(window_s, 0) << " s)\n\n"
+     << "Each estimator's RMSE against the ground truth per window of message time (no alignment): a trend is "
+        "the least-squares slope of the windows' RMSE, growth the mean of the last third of the windows minus "
+        "the first third's. Dead reckoning has no correction: its error grows by design.\n\n"
+     << "| estimator channel | windows | first window (m) | last window (m) | max (m) | mean (m) | trend (m per hour) "
+        "| growth (m) |\n|---|---|---|---|---|---|---|---|\n";
+  csv << "channel,window_start_s,window_end_s,poses,rmse_m\n";
+  std::vector<plot::Series> series;
+  for (const auto& [ch, traj] : estimates) {
+    const AteWindows w = EvaluateAteWindows(traj, truth, t0_us, window_s);
+    if (w.rmse_m.empty()) continue;
+    const std::string key = Lower(ch);
+    md << "| " << ch << " | " << w.rmse_m.size() << " | " << Fixed(w.rmse_m.front(), 3) << " | "
+       << Fixed(w.rmse_m.back(), 3) << " | " << Fixed(w.max_m, 3) << " | " << Fixed(w.mean_m, 3) << " | "
+       << Fixed(w.trend_m_per_h, 3) << " | " << Fixed(w.growth_m, 3) << " |\n";
+    s.json.emplace_back(key + "_ate_windows", std::to_string(w.rmse_m.size()));
+    s.json.emplace_back(key + "_ate_window_first_m", Fixed(w.rmse_m.front(), 4));
+    s.json.emplace_back(key + "_ate_window_last_m", Fixed(w.rmse_m.back(), 4));
+    s.json.emplace_back(key + "_ate_window_max_m", Fixed(w.max_m, 4));
+    s.json.emplace_back(key + "_ate_window_mean_m", Fixed(w.mean_m, 4));
+    s.json.emplace_back(key + "_ate_trend_m_per_h", Fixed(w.trend_m_per_h, 4));
+    s.json.emplace_back(key + "_ate_growth_m", Fixed(w.growth_m, 4));
+    plot::Series line{ch, {}, w.rmse_m};
+    for (size_t i = 0; i < w.rmse_m.size(); ++i) {
+      line.x.push_back((w.start_s[i] + window_s / 2) / 60.0);
+      csv << ch << "," << w.start_s[i] << "," << w.start_s[i] + window_s << "," << w.poses[i] << "," << w.rmse_m[i] << "\n";
+    }
+    series.push_back(std::move(line));
+  }
+  s.json.emplace_back("ate_window_s", Fixed(window_s, 1));
+  std::ofstream(fs::path(out_dir) / "ate_windows.csv") << csv.str();
+  if (!series.empty()) {
+    plot::Axes axes;
+    axes.title = "Position error per " + Fixed(window_s, 0) + " s window against the ground truth";
+    axes.x_label = "time [min]";
+    axes.y_label = "RMSE [m]";
+    axes.y_from_zero = true;
+    plot::SavePng(plot::LineChart(axes, series, {1000, 560}), (fs::path(out_dir) / "ate_over_time.png").string());
+    md << "\n![error over time](ate_over_time.png)\n";
+  }
   s.markdown = md.str();
   return s;
 }

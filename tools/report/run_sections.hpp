@@ -57,6 +57,23 @@ Section PlaceCellSection(const std::string& channel, const std::vector<place_cel
 Section NavigatorSection(const std::string& channel, const std::vector<navigator_status_t>& statuses,
                          const std::vector<nav::StampedPose>& truth, int64_t t0_us, const std::string& out_dir);
 
+// Each estimator's position error against the ground truth over time, window by window (long runs:
+// does the error grow?). Per window of window_s message time: the RMSE of the poses in it (no
+// alignment, as the plain ATE). trend_m_per_h: least-squares slope of the window RMSEs; growth_m:
+// the mean of the last third of the windows minus the mean of the first third.
+struct AteWindows {
+  std::vector<double> start_s, rmse_m;  // per window with poses
+  std::vector<int> poses;
+  double trend_m_per_h = 0, growth_m = 0, max_m = 0, mean_m = 0;
+};
+AteWindows EvaluateAteWindows(const std::vector<nav::StampedPose>& estimate, const std::vector<nav::StampedPose>& truth,
+                              int64_t t0_us, double window_s);
+// The table and chart (ate_over_time.png) of every estimator's windows, ate_windows.csv, and the
+// JSON keys <channel>_ate_window_{first,last,max,mean}_m, _ate_trend_m_per_h, _ate_growth_m.
+Section AteOverTimeSection(const std::map<std::string, std::vector<nav::StampedPose>>& estimates,
+                           const std::vector<nav::StampedPose>& truth, int64_t t0_us, double window_s,
+                           const std::string& out_dir);
+
 // Per channel: what the processes published (sum over the runs that reported it; a run killed
 // by a signal reports nothing, so its channel's count is a lower bound) against what the log
 // holds, and what each subscriber received. `recorded`: messages per channel in the log.
@@ -70,5 +87,8 @@ struct Delivery {
 };
 std::vector<Delivery> CompareDelivery(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded);
 Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded);
+// One CSV row per process and channel it used: process, runs, reported_runs, channel, published,
+// received, rejected, handler_errors, recorded (messages of the channel in the log).
+std::string DeliveryCsv(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded);
 
 }  // namespace snapnav::report

@@ -56,27 +56,16 @@ verifier_pid=$!; pids+=("$verifier_pid")
 wait_for_file "$OUT/.verifier.ready"
 sleep 0.5  # lcm-logger says nothing once subscribed
 
-echo "t_s,process,pid,rss_kb" >"$OUT/rss.csv"
 udp_before="$(udp_counters)"
 "$BIN/bus-check" soak-publish "${SOAK[@]}" --out "$OUT/publisher.json" 2> >(tee "$OUT/publisher.log" | grep --line-buffered -E "^bus-check soak-publish: [0-9]+ s:" | sed -u 's/^bus-check //' >&2) &
 publisher_pid=$!; pids+=("$publisher_pid")
-(
-  t0=$(date +%s.%N)
-  while kill -0 "$publisher_pid" 2>/dev/null; do
-    t=$(awk -v a="$(date +%s.%N)" -v b="$t0" 'BEGIN { printf "%.1f", a - b }')
-    for entry in "publisher:$publisher_pid" "verifier:$verifier_pid" "lcm-logger:$logger_pid" "log-verifier:$reader_pid"; do
-      name="${entry%%:*}"; pid="${entry##*:}"
-      rss=$(awk '/^VmRSS:/ { print $2 }' "/proc/$pid/status" 2>/dev/null || true)
-      [ -n "$rss" ] && echo "$t,$name,$pid,$rss" >>"$OUT/rss.csv"
-    done
-    sleep "$RSS_INTERVAL"
-  done
-) &
+python3 "$ROOT/tools/deploy/process_stats.py" sample --out "$OUT/rss.csv" --interval-s "$RSS_INTERVAL" \
+  --pid "publisher=$publisher_pid" --pid "verifier=$verifier_pid" --pid "lcm-logger=$logger_pid" --pid "log-verifier=$reader_pid" &
 sampler_pid=$!
 publisher_rc=0; wait "$publisher_pid" || publisher_rc=$?
 verifier_rc=0; wait "$verifier_pid" || verifier_rc=$?
 udp_after="$(udp_counters)"
-kill "$sampler_pid" 2>/dev/null || true; wait "$sampler_pid" 2>/dev/null || true; sampler_pid=""
+kill -INT "$sampler_pid" 2>/dev/null || true; wait "$sampler_pid" 2>/dev/null || true; sampler_pid=""
 sleep 0.5
 kill -INT "$logger_pid"; wait "$logger_pid" || true
 reader_rc=0; wait "$reader_pid" || reader_rc=$?

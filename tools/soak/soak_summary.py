@@ -4,10 +4,12 @@ verifier's JSON with the RSS samples and the kernel's UDP counters into OUT/summ
 units in the names) and OUT/soak.md. Exit 0 when nothing was dropped or corrupted and no process's
 RSS grew by more than --max-rss-growth-mb from the end of the warm-up to the end."""
 import argparse
-import csv
 import json
 import os
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "deploy"))
+import process_stats  # noqa: E402
 
 
 def load(path):
@@ -48,29 +50,16 @@ def main():
     # RSS per process: initial (first sample), start (first sample after the warm-up, when the
     # buffers are allocated), end (last sample), max.
     warmup_s = min(10.0, a.duration_s / 4)
-    samples = {}
     try:
-        with open(os.path.join(a.out, "rss.csv")) as f:
-            for row in csv.DictReader(f):
-                samples.setdefault(row["process"], []).append((float(row["t_s"]), int(row["rss_kb"])))
-    except OSError as e:
+        stats = process_stats.summarize(process_stats.load_rows(os.path.join(a.out, "rss.csv")), warmup_s)
+    except (OSError, ValueError, KeyError) as e:
         print(f"soak: rss.csv: {e}", file=sys.stderr)
+        stats = {}
     s["rss_warmup_s"] = warmup_s
-    rss_ok = bool(samples)
-    rss_rows = []
-    for proc, values in samples.items():
-        key = proc.replace("-", "_")
-        after_warmup = [v for v in values if v[0] >= warmup_s] or values[-1:]
-        start, end = after_warmup[0], values[-1]
-        growth = end[1] - start[1]
-        s[f"rss_{key}_initial_kb"] = values[0][1]
-        s[f"rss_{key}_start_kb"] = start[1]
-        s[f"rss_{key}_end_kb"] = end[1]
-        s[f"rss_{key}_max_kb"] = max(v[1] for v in values)
-        s[f"rss_{key}_growth_kb"] = growth
-        s[f"rss_{key}_samples"] = len(values)
-        rss_ok = rss_ok and growth <= a.max_rss_growth_mb * 1024
-        rss_rows.append((proc, values[0][1], start, end, max(v[1] for v in values), growth))
+    s.update({k: v for k, v in process_stats.flat_json(stats, a.max_rss_growth_mb * 1024).items()
+              if not k.startswith("cpu_")})
+    rss_ok = s.pop("goal_flat_rss_met")
+    s.pop("max_rss_growth_allowed_kb")
 
     exit_codes = dict(item.split("=") for item in a.exit_codes.split(",") if item)
     drops = 0
@@ -116,12 +105,7 @@ def main():
         f"{n('udp_rcvbuf_errors')} dropped for a full receive buffer (RcvbufErrors), {n('udp_in_errors')} in errors. "
         f"Publisher: {n('publisher_late_publishes')} publishes more than a frame period late (max {n('publisher_max_late_ms')} ms).",
         "",
-        f"| process | RSS at start (kB) | after {warmup_s:g} s warm-up (kB) | at end (kB) | max (kB) | growth after warm-up (kB) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for proc, initial, start, end, mx, growth in rss_rows:
-        md.append(f"| {proc} | {initial} | {start[1]} (t={start[0]:g} s) | {end[1]} (t={end[0]:g} s) | {mx} | {growth:+d} |")
-    md += [
+        process_stats.markdown(stats, warmup_s),
         "",
         f"Goals: zero dropped messages: **{'met' if zero_drops else 'MISSED'}**; RSS growth <= "
         f"{a.max_rss_growth_mb:g} MB per process: **{'met' if rss_ok else 'MISSED'}**.",
