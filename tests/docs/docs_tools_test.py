@@ -48,9 +48,9 @@ class ChannelGraphOfTheDemo(unittest.TestCase):
         # (--mode explore, from a file:// log) the other way round
         self.assertIn("POSE_PLACE_CELLS", self.p["placecells"]["pub"])
         self.assertNotIn("POSE_GROUND_TRUTH", self.p["placecells"]["sub"])
-        self.assertIn("POSE_GROUND_TRUTH", self.p["explore"]["sub"])
-        self.assertNotIn("POSE_PLACE_CELLS", self.p["explore"]["pub"])
-        self.assertIn("not the bus", self.p["explore"]["note"])
+        self.assertIn("POSE_GROUND_TRUTH", self.p["explore.placecells"]["sub"])
+        self.assertNotIn("POSE_PLACE_CELLS", self.p["explore.placecells"]["pub"])
+        self.assertIn("not the bus", self.p["explore.placecells"]["note"])
         self.assertEqual(self.p["landmarks"]["pub"], ["LANDMARKS_SURF"])
 
     def test_regular_expressions_match_the_published_channels(self):

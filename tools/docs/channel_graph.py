@@ -213,19 +213,31 @@ def rel(root, path):
     return path if r.startswith("..") else r
 
 
-def read_deployment(root, deploy_rel):
+def read_deployment(root, deploy_rel, given=None, prefix=""):
     deploy = Ini(os.path.join(root, deploy_rel), deploy_rel)
     defaults = deploy.sections.get("defaults", {})
     config_dir = os.path.join(root, "config")
     # The file's [variables], ${config} and ${root} are resolved (the configs are read); the other
-    # built-in variables (${out}, ${bin}, ...) are shown as written.
+    # built-in variables (${out}, ${bin}, ...) are shown as written. An included file's variables
+    # are the including section's keys (`given`).
     variables = {k: v for k, (v, _) in deploy.sections.get("variables", {}).items()}
+    variables.update(given or {})
     variables.update({"config": config_dir, "root": root})
     processes = []
     for section in deploy.order:
+        if section.startswith("include "):
+            # [include NAME]: another deployment file's processes, named NAME.PROCESS (launch's rule).
+            inc = section[len("include "):].strip()
+            keys = deploy.sections[section]
+            if "file" not in keys:
+                raise Error(f"{deploy_rel}:{deploy.section_lines[section]}: [{section}]: no file")
+            inc_rel = os.path.normpath(os.path.join(os.path.dirname(deploy_rel), keys["file"][0]))
+            inc_vars = {k: substitute(v, variables) for k, (v, _) in keys.items() if k not in ("file", "processes")}
+            processes += read_deployment(root, inc_rel, inc_vars, prefix + inc + ".")
+            continue
         if not section.startswith("process "):
             continue
-        name = section[len("process "):].strip()
+        name = prefix + section[len("process "):].strip()
         keys = deploy.sections[section]
         where = f"{deploy_rel}:{deploy.section_lines[section]}: [{section}]"
         if "command" not in keys:
