@@ -6,7 +6,7 @@
 #     the scene's grid, placecells explores it);
 #  3. the simulated lab in real time: `launch config/deploy/demo.deploy --group lab` (sim driven by
 #     the navigator, homing, landmarks, place cells, laser SLAM, dead reckoning, RatSLAM, fused
-#     SLAM, the viewer's snapshots, lcm-logger); with --fault, one process is killed with SIGKILL
+#     SLAM, the viewer's snapshots, the recorder); with --fault, one process is killed with SIGKILL
 #     half-way and the launcher restarts it;
 #  4. log-report turns the recording and the process logs into report.md, summary.json and PNGs;
 #     demo-report.md gathers everything, with the verdicts.
@@ -48,7 +48,7 @@ usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROC
   --duration-s S    seconds of the simulated lab in real time (default 60)
   --scene NAME      config/scenes/NAME.scene (default indoor13; its grid must have a 6_6 position)
   --fault [PROC]    kill -9 PROC (default homing) half-way; the launcher must restart it and the
-                    logger must lose nothing (the report compares published and recorded counts)
+                    recorder must lose nothing (the report compares published and recorded counts)
   --fault-at-s T    when to kill it, seconds after sim started (default: half the duration)
   --explored DIR    reuse the place-cell memory and grid of an earlier demo's folder DIR (same
                     scene): skips step 2
@@ -97,7 +97,7 @@ done
 [ -n "$ATE_WINDOW" ] || { [ "$SOAK" = 0 ] || ATE_WINDOW=$(awk -v d="$DURATION" 'BEGIN { print d / 12 }'); }
 if [ -n "$FAULT" ]; then
   case "$FAULT" in
-    lcm-logger | sim) echo "demo: --fault $FAULT: pick a processing process (homing, laser-slam, landmarks, placecells, navigator, dead-reckoning, ratslam, fused-slam, viewer)" >&2; exit 2 ;;
+    recorder | sim) echo "demo: --fault $FAULT: pick a processing process (homing, laser-slam, landmarks, placecells, navigator, dead-reckoning, ratslam, fused-slam, viewer)" >&2; exit 2 ;;
   esac
 fi
 SIZES=100,65536,1048576
@@ -183,7 +183,7 @@ step "3/$STEPS the simulated lab '$SCENE' for $DURATION s in real time: launch $
 STATUS="$OUT/launch.status"                # the base's (every process but sim on two hosts)
 SIM_STATUS="$STATUS"
 [ "$TWO_HOST" = 0 ] || SIM_STATUS="$OUT/launch-robot.status"
-rm -f "$STATUS" "$SIM_STATUS" "$OUT/fault.txt" "$OUT/run.lcmlog"  # the logger appends (-a), so that a restart keeps the start
+rm -f "$STATUS" "$SIM_STATUS" "$OUT/fault.txt" "$OUT/run.lcmlog"  # the recorder appends (--append), so that a restart keeps the start
 rm -rf "$OUT/processes" "$OUT"/link-*.csv                         # the process logs are appended to as well
 if [ -n "$FAULT" ]; then
   (

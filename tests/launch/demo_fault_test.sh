@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Run inside the private bus (./snapnav bus --): the demo deployment, short (30 s of the lab), with
 # the fault: homing is killed with SIGKILL 15 s in. The launcher must restart it, the other
-# processes must keep running (one run each), lcm-logger must have every message sim published,
+# processes must keep running (one run each), the recorder must have every message sim published,
 # the restarted homing must publish again, and the demo's report must say so.
 set -euo pipefail
 BIN="$1"; OUT="$2"
@@ -16,7 +16,7 @@ import json, re, sys
 s = json.load(open(sys.argv[1]))
 bad = []
 if s.get("process_homing_runs") != 2: bad.append("homing runs %s (want 2)" % s.get("process_homing_runs"))
-for name in ("sim", "lcm-logger", "dead-reckoning", "laser-slam", "placecells", "landmarks", "navigator", "ratslam",
+for name in ("sim", "recorder", "dead-reckoning", "laser-slam", "placecells", "landmarks", "navigator", "ratslam",
              "fused-slam", "viewer"):
     if s.get("process_%s_runs" % name) != 1: bad.append("%s runs %s (want 1)" % (name, s.get("process_%s_runs" % name)))
 for ch in ("omni_frame", "laser_scan", "odometry", "pose_ground_truth", "drive_command", "pose_laser_slam"):

@@ -2,7 +2,7 @@
 # How many simulated robots this machine keeps at 10 Hz with nothing dropped (`./snapnav bench
 # robots`, inside the private bus namespace). For N = 1, 2, ... robots (config/deploy/robots.deploy
 # through tools/deploy/robots.sh: each robot's sim in real time with dead reckoning, laser SLAM,
-# place cells and homing, one lcm-logger and one viewer for all) it runs --duration-s and checks that
+# place cells and homing, one recorder and one viewer for all) it runs --duration-s and checks that
 # every sim kept real time at its rates (10 Hz frames and scans, 50 Hz odometry) and that no
 # subscriber or the logger missed a message; it stops at the first N that fails (--runs runs each:
 # N passes when most of its runs pass). bench.json and bench.md: the largest N that passed, the

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Several simulated robots on one bus (`./snapnav robots`, inside the private bus namespace):
 # config/deploy/robots.deploy with N robots (robot.deploy once per channel prefix R1_, R2_, ...: sim
-# in real time on the scene's route, dead reckoning, laser SLAM, place cells, homing), one lcm-logger
+# in real time on the scene's route, dead reckoning, laser SLAM, place cells, homing), one recorder
 # and one viewer for all. Then: log-report of the whole log with every process's counts
 # (delivery.csv), one report per robot (its channels only: ATE against its own ground truth), and
 # the checks (tools/deploy/run_checks.py robots): no cross-talk, nothing dropped, every sim at its
@@ -72,7 +72,7 @@ fi
 
 pace="in real time"
 [ "$FACTOR" = 1 ] || pace="at $FACTOR x real time"
-echo "robots: $COUNT robots ($PREFIXES) for $DURATION s $pace, one lcm-logger, one viewer; bus $LCM_DEFAULT_URL"
+echo "robots: $COUNT robots ($PREFIXES) for $DURATION s $pace, one recorder, one viewer; bus $LCM_DEFAULT_URL"
 STATUS="$OUT/launch.status"
 rm -rf "$OUT/processes" "$OUT/robots" "$OUT/run.lcmlog" "$STATUS"
 python3 "$ROOT/tools/deploy/process_stats.py" sample --out "$OUT/processes.csv" --interval-s 2 --status-file "$STATUS" &

@@ -266,8 +266,8 @@ def check_robots(a):
     j["robots_channels_not_fully_recorded"] = len(unrecorded)
     # Who fell behind, for a bench's "what limits it": each short subscriber (its process name) and the
     # recorder when the log lacks messages.
-    j["robots_short_processes"] = sorted({s_.split(" ")[0] for s_ in short} | ({"lcm-logger"} if unrecorded else set()))
-    verdict(not short and not unrecorded, "nothing dropped: every subscriber and lcm-logger have every message"
+    j["robots_short_processes"] = sorted({s_.split(" ")[0] for s_ in short} | ({"recorder"} if unrecorded else set()))
+    verdict(not short and not unrecorded, "nothing dropped: every subscriber and the recorder have every message"
             + (f" (short: {'; '.join(short[:5])})" if short else "") + (f" (log: {'; '.join(unrecorded[:5])})" if unrecorded else ""))
     # Rates: each sim published 10 Hz frames and scans and 50 Hz odometry for the whole run.
     rates_ok = True

@@ -344,7 +344,7 @@ std::vector<Delivery> CompareDelivery(const std::vector<ProcessLog>& logs, const
 Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std::string, int64_t>& recorded) {
   Section s;
   std::ostringstream md;
-  md << "\n## Delivery: published by the processes, recorded by lcm-logger\n\n"
+  md << "\n## Delivery: published by the processes, recorded in the log\n\n"
      << "Counts each process printed at its end (its bus statistics, in the launcher's process logs) against the "
         "messages in the log. A run killed by a signal prints no counts: its channels' published counts are lower "
         "bounds (marked >=).\n\n"

@@ -3,7 +3,7 @@
 // ground truth: the homing vectors (angular error against the true direction home), the
 // place-cell matches (position error of the matched cell), the navigator's progress, and the
 // delivery of every message (counts each process published, from the launcher's process logs,
-// against what lcm-logger recorded).
+// against what the log holds).
 
 #include <cstdint>
 #include <map>

@@ -18,9 +18,14 @@ namespace snapnav::glue {
 
 class LogWriter {
  public:
-  // Creates (truncates) `path`; throws std::runtime_error if it cannot.
-  explicit LogWriter(const std::string& path) : path_(path), log_(std::make_unique<lcm::LogFile>(path, "w")) {
-    if (!log_->good()) throw std::runtime_error("cannot create LCM log '" + path + "': " + std::strerror(errno));
+  // Creates (truncates) `path`, or with `append` adds to its end (creating it when missing); throws
+  // std::runtime_error if it cannot.
+  explicit LogWriter(const std::string& path, bool append = false)
+      : path_(path), log_(std::make_unique<lcm::LogFile>(path, append ? "a" : "w")) {
+    if (!log_->good()) {
+      throw std::runtime_error(std::string("cannot ") + (append ? "open" : "create") + " LCM log '" + path +
+                               "': " + std::strerror(errno));
+    }
   }
   void WriteRaw(const std::string& channel, int64_t timestamp_us, const std::string& bytes) {
     if (!log_) throw std::logic_error("LCM log '" + path_ + "' is closed");
@@ -45,6 +50,12 @@ class LogWriter {
     const bool flushed = std::fflush(log_->getFilePtr()) == 0 && !std::ferror(log_->getFilePtr());
     log_.reset();
     if (!flushed) throw std::runtime_error("cannot write to LCM log '" + path_ + "': " + std::strerror(errno));
+  }
+  // Hands what is buffered to the operating system (a crash of the process then loses nothing written).
+  void Flush() {
+    if (log_ && std::fflush(log_->getFilePtr()) != 0) {
+      throw std::runtime_error("cannot write to LCM log '" + path_ + "': " + std::strerror(errno));
+    }
   }
   int64_t events() const { return events_; }
   const std::string& path() const { return path_; }
