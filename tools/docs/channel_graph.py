@@ -110,8 +110,11 @@ ROLES = {
 }
 # [channels] keys whose value is a regular expression.
 REGEX_KEYS = {("viewer", "poses"), ("viewer", "landmarks")}
+# Recorders: they subscribe to a regex (--channel, both; every channel by default).
+RECORDERS = {"recorder": "channel", "lcm-logger": "channel"}
 # Programs without a [channels] config: what they do on the bus.
 OTHER = {
+    "recorder": "records every channel",
     "lcm-logger": "records every channel",
     "gridgen": "no bus: writes the grid database and its log (`--out`)",
 }
@@ -256,8 +259,11 @@ def read_deployment(root, deploy_rel, given=None, prefix=""):
             p["note"] = f"reads `{url.split('?')[0][len('file://'):]}`, not the bus"
         if program in OTHER:
             p["note"] = OTHER[program]
-            if program == "lcm-logger":
-                p["regex"].append(".*")
+            if program in RECORDERS:
+                regex = flags.get(RECORDERS[program], ".*")
+                p["regex"].append(regex)
+                if regex != ".*":
+                    p["note"] = f"records `{regex}`"
             p["config"] = ""
         elif program in ROLES:
             read_channels(root, config_dir, p)
@@ -299,7 +305,7 @@ def read_channels(root, config_dir, p):
 
 
 def on_bus(p):
-    return not p["note"] or p["program"] == "lcm-logger"
+    return not p["note"] or p["program"] in RECORDERS
 
 
 def code(items):
@@ -344,7 +350,7 @@ def render(processes, deploy_rel):
     def cid(channel):
         return re.sub(r"[^A-Za-z0-9_]", "_", channel)
 
-    graph = [p for p in processes if on_bus(p) and p["program"] != "lcm-logger"]
+    graph = [p for p in processes if on_bus(p) and p["program"] not in RECORDERS]
     channels = []
     for p in graph:
         out.append(f"  {pid(p['name'])}[{p['name']}]")
@@ -363,7 +369,7 @@ def render(processes, deploy_rel):
     out.append("```")
     out.append("")
     out.append("Processes are white, channels blue; a dotted arrow: nothing in this deployment "
-               "publishes that channel (an input a lab may send). `lcm-logger` records every channel "
+               "publishes that channel (an input a lab may send). The recorder records every channel "
                "and is left out of the picture.")
     out.append("")
     out.append(END)
