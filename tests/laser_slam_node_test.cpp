@@ -17,6 +17,9 @@
 
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
+#include "snapnav/glue/occupancy_grid_msg.hpp"
+#include "snapnav/map_request_t.hpp"
+#include "snapnav/occupancy_grid_t.hpp"
 #include "snapnav/point_map_t.hpp"
 #include "snapnav/pose_t.hpp"
 
@@ -51,6 +54,13 @@ std::string IniText(const std::string& drop = "", const std::string& extra = "",
     s << key << " = " << (key == replace.first ? replace.second : value) << "\n";
   }
   s << extra;
+  // The occupancy grid's and --mode localize's keys as shipped.
+  const glue::IniFile shipped = glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/laser_slam.ini");
+  s << "[channels]\ngrid = LASER_SLAM_GRID\ngrid_request = LASER_SLAM_GRID_REQUEST\nlocalization_status = LOCALIZATION_STATUS\n";
+  for (const char* section : {"grid", "localize"}) {
+    s << "[" << section << "]\n";
+    for (const std::string& key : shipped.Keys(section)) s << key << " = " << shipped.GetString(section, key) << "\n";
+  }
   return s.str();
 }
 
@@ -335,6 +345,87 @@ TEST(LaserSlamConfig, InvalidValuesAreConfigErrors) {
       glue::ConfigError);
   EXPECT_THROW(LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"scan_step", "1.5"}), "x.ini"), ""),
                glue::ConfigError);
+}
+
+// The occupancy grid on the bus: every [grid] every_s of message time and on a request, its
+// occupied cells on the room's walls, the walls covered, the middle of the room free; a request
+// is answered at once.
+TEST(LaserSlamNode, PublishesAnOccupancyGridOfTheRoomAndOneOnRequest) {
+  glue::Bus bus("memq://");
+  const LaserSlamConfig config = TestConfig("LG_");
+  ASSERT_EQ(config.grid.channel, "LG_LASER_SLAM_GRID");
+  ASSERT_DOUBLE_EQ(config.grid.every_s, 5);
+  LaserSlamNode node(bus, config);
+  std::vector<occupancy_grid_t> grids;
+  bus.Subscribe<occupancy_grid_t>("LG_LASER_SLAM_GRID", [&](const occupancy_grid_t& g) { grids.push_back(g); });
+  constexpr double kRadius = 1.5, kStep = 0.05;
+  const double turn = kStep / kRadius;
+  const nav::Pose2 delta{kRadius * std::sin(turn), kRadius * (1 - std::cos(turn)), turn};
+  std::mt19937 rng(9);
+  nav::Pose2 truth{kRoom / 2, kRoom / 2 - kRadius, 0.0};
+  const int64_t t0 = 1'700'000'000'000'000;
+  for (int k = 0; k <= 120; ++k) {  // 12 s of scans at 10 Hz
+    const int64_t utime = t0 + k * 100'000;
+    if (k > 0) truth = truth.Compose(delta);
+    bus.Publish("LG_ODOMETRY", Odo(utime, truth, k > 0 ? delta : nav::Pose2{}));
+    bus.Publish("LG_LASER_SCAN", Scan(utime, CastRoom(truth, &rng)));
+    Drain(bus);
+  }
+  ASSERT_EQ(grids.size(), 2u);  // after 5 s and 10 s
+  EXPECT_EQ(grids[0].utime, t0 + 50 * 100'000);
+  EXPECT_EQ(grids[1].utime, t0 + 100 * 100'000);
+  map_request_t request{};
+  request.utime = t0;
+  request.requester = "test";
+  bus.Publish("LG_LASER_SLAM_GRID_REQUEST", request);
+  Drain(bus);
+  ASSERT_EQ(grids.size(), 3u);
+  EXPECT_EQ(grids[2].utime, t0 + 120 * 100'000);  // the newest scan's time
+  EXPECT_EQ(node.grid()->requests(), 1);
+  EXPECT_EQ(node.grid()->published(), 3);
+  EXPECT_GT(node.grid()->inserted(), 20);
+  const occupancy_grid_t& g = grids.back();
+  ASSERT_FALSE(glue::CheckOccupancyGrid(g));
+  EXPECT_EQ(g.source, "laser_slam");
+  EXPECT_EQ(g.frame, "map");
+  EXPECT_FLOAT_EQ(g.resolution_m, 0.05f);
+  const nav::OccupancyCells c = glue::FromOccupancyGridMsg(g);
+  const auto wall_distance = [](double x, double y) {
+    return std::min({std::abs(x), std::abs(x - kRoom), std::abs(y), std::abs(y - kRoom)});
+  };
+  int occupied = 0, on_walls = 0;
+  for (int y = 0; y < c.height; ++y) {
+    for (int x = 0; x < c.width; ++x) {
+      if (c.at(x, y) < 65) continue;
+      ++occupied;
+      on_walls += wall_distance(c.origin_x_m + (x + 0.5) * c.resolution_m, c.origin_y_m + (y + 0.5) * c.resolution_m) <= 0.1;
+    }
+  }
+  const auto occupied_near = [&](double wx, double wy) {
+    for (int dy = -2; dy <= 2; ++dy) {
+      for (int dx = -2; dx <= 2; ++dx) {
+        const int x = static_cast<int>(std::floor((wx - c.origin_x_m) / c.resolution_m)) + dx;
+        const int y = static_cast<int>(std::floor((wy - c.origin_y_m) / c.resolution_m)) + dy;
+        if (x >= 0 && y >= 0 && x < c.width && y < c.height && c.at(x, y) >= 65) return true;
+      }
+    }
+    return false;
+  };
+  int samples = 0, covered = 0;
+  for (double s = 0.3; s <= kRoom - 0.3; s += 0.1) {
+    for (const auto& [wx, wy] : {std::pair{s, 0.0}, std::pair{s, kRoom}, std::pair{0.0, s}, std::pair{kRoom, s}}) {
+      ++samples;
+      covered += occupied_near(wx, wy);
+    }
+  }
+  const int mx = static_cast<int>((kRoom / 2 - c.origin_x_m) / c.resolution_m), my = static_cast<int>((kRoom / 2 - c.origin_y_m) / c.resolution_m);
+  std::cout << "laser-slam grid: " << c.width << " x " << c.height << " cells, " << occupied << " occupied (" << on_walls
+            << " within 0.1 m of a wall), walls covered " << covered << " / " << samples << "\n";
+  EXPECT_GT(occupied, 400);
+  EXPECT_GE(on_walls, 0.97 * occupied);
+  EXPECT_GE(covered, 0.95 * samples);
+  EXPECT_GE(c.at(mx, my), 0);
+  EXPECT_LE(c.at(mx, my), 19);
 }
 
 // The shipped config/laser_slam.ini loads and holds libnav's defaults.

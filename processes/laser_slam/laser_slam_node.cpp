@@ -145,6 +145,9 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
   c.options = ReadLaserSlamOptions(ini, "laser_slam");
   c.map_every_n_scans = ini.GetInt("laser_slam", "map_every_n_scans");
+  c.grid = GridConfig::FromIni(ini, channel_prefix);
+  c.localize = LocalizeConfig::FromIni(ini, channel_prefix);
+  c.localize.options.tracking = c.options;
   ini.CheckAllUsed();
   if (c.map_every_n_scans < 0) {
     throw glue::ConfigError(ini.origin() + ": [laser_slam] map_every_n_scans must be >= 0 (0: never publish the map)");
@@ -154,9 +157,14 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
 
 void LaserSlamConfig::Print(std::ostream& out) const {
   out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\npose = " << pose_channel
-      << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\n[laser_slam]\n";
+      << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\ngrid = " << grid.channel
+      << "\ngrid_request = " << grid.request_channel << "\nlocalization_status = " << localize.status_channel
+      << "\n[laser_slam]\n";
   PrintLaserSlamOptions(out, options);
   out << "map_every_n_scans = " << map_every_n_scans << "\n";
+  grid.Print(out);
+  out << "[localize]\n";
+  localize.Print(out);
 }
 
 LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config)
@@ -164,6 +172,7 @@ LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config)
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
   bus_.Subscribe(config_.odometry_channel, &LaserSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.scan_channel, &LaserSlamNode::OnScan, this);
+  if (!config_.grid.channel.empty()) grid_.emplace(bus_, config_.grid, "laser_slam", problems_);
 }
 
 // Nothing leaves a handler: inputs are checked before libnav sees them, and anything else
@@ -231,6 +240,13 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   PublishStatus(msg.utime, update ? &*update : nullptr);  // only what the inputs decide: a replay repeats it
   if (!points.empty() && config_.map_every_n_scans > 0 && updates_ % config_.map_every_n_scans == 0) {
     PublishMap(msg.utime);
+  }
+  if (grid_) {
+    // The scans the point map takes (not a gated or ambiguous match), at the pose they were matched at.
+    if (update && update->outcome != nav::MatchOutcome::kGated && update->outcome != nav::MatchOutcome::kAmbiguous) {
+      grid_->AddScan(msg, slam_->scan_pose());
+    }
+    grid_->AfterScan(msg.utime);
   }
 }
 
@@ -302,6 +318,10 @@ void LaserSlamNode::Report(std::ostream& out) const {
   out << "laser-slam: mean update " << mean_update_ms() << " ms per scan";
   if (slam_) out << ", map " << slam_->map().size() << " points";
   out << "\n";
+  if (grid_) {
+    out << "laser-slam: ";
+    grid_->Report(out);
+  }
   problems_.Report(out);
 }
 

@@ -21,6 +21,8 @@
 #include <optional>
 #include <string>
 
+#include "grid_publisher.hpp"
+#include "localize_config.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -39,6 +41,8 @@ struct LaserSlamConfig {
   std::string status_channel;    // laser_slam_status_t out
   nav::LaserSlamOptions options;
   int map_every_n_scans = 10;  // publish the map after every n-th updating scan; 0: never
+  GridConfig grid;             // the occupancy grid on the bus (grid.channel empty: none)
+  LocalizeConfig localize;     // --mode localize (localize.options.tracking = options)
 
   // Reads [channels] and [laser_slam]; every key is required, unknown keys and invalid values
   // are glue::ConfigError.
@@ -71,6 +75,8 @@ class LaserSlamNode {
   int64_t late_odometry() const { return late_odometry_; }  // older than the last scan, applied anyway
   int64_t poses_published() const { return poses_published_; }
   int64_t maps_published() const { return maps_published_; }
+  // The occupancy grid's publisher; nullptr without a grid channel.
+  const GridPublisher* grid() const { return grid_ ? &*grid_ : nullptr; }
   // Scans and odometry messages skipped, by reason ("no ranges", "no valid points", ...).
   const std::map<std::string, int64_t>& skipped() const { return problems_.skipped(); }
   int64_t skipped(const std::string& reason) const { return problems_.skipped(reason); }
@@ -105,6 +111,7 @@ class LaserSlamNode {
   int64_t poses_published_ = 0, maps_published_ = 0;
   double update_ms_total_ = 0.0;
   glue::HandlerProblems problems_;
+  std::optional<GridPublisher> grid_;
 };
 
 }  // namespace snapnav::processes

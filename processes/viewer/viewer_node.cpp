@@ -8,6 +8,7 @@
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/occupancy_grid_msg.hpp"
 #include "snapnav/pose_t.hpp"
 
 namespace snapnav::processes {
@@ -55,6 +56,7 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.homing_vector_channel = channel_prefix + ini.GetString("channels", "homing_vector");
   c.place_cell_match_channel = channel_prefix + ini.GetString("channels", "place_cell_match");
   c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
+  c.grid_channel = channel_prefix + ini.GetString("channels", "grid");
 
   c.refresh_hz = ini.GetDouble("viewer", "refresh_hz");
   Positive(ini, "refresh_hz", c.refresh_hz);
@@ -103,7 +105,7 @@ void ViewerConfig::Print(std::ostream& out) const {
   out << "[channels]\npoint_map = " << point_map_channel << "\nposes = " << pose_channels
       << "\nground_truth = " << truth_channel << "\npanorama = " << panorama_channel << "\nomni = " << omni_channel
       << "\nlandmarks = " << landmark_channels << "\nhoming_vector = " << homing_vector_channel
-      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\n[viewer]\n"
+      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\ngrid = " << grid_channel << "\n[viewer]\n"
       << "refresh_hz = " << refresh_hz << "\npng_interval_s = " << png_interval_s
       << "\nwidth_px = " << render.size.width << "\nheight_px = " << render.size.height
       << "\nellipse_sigma = " << render.ellipse_sigma << "\nellipse_interval_s = " << render.ellipse_interval_s
@@ -133,6 +135,7 @@ ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
   bus_.Subscribe(config_.homing_vector_channel, &ViewerNode::OnHomingVector, this);
   bus_.Subscribe(config_.place_cell_match_channel, &ViewerNode::OnPlaceCellMatch, this);
   bus_.Subscribe(config_.scan_channel, &ViewerNode::OnScan, this);
+  bus_.Subscribe(config_.grid_channel, &ViewerNode::OnGrid, this);
 }
 
 void ViewerNode::SawUtime(int64_t utime) {
@@ -191,6 +194,47 @@ void ViewerNode::OnPointMap(const point_map_t& msg) {
   }
   scene_.map_estimator = msg.estimator;
   scene_.map_utime = msg.utime;
+}
+
+void ViewerNode::OnGrid(const occupancy_grid_t& msg) {
+  if (const auto problem = glue::CheckOccupancyGrid(msg)) {
+    Reject(problem->reason, bus_.current().channel + ": " + problem->detail);
+    return;
+  }
+  SawUtime(msg.utime);
+  viewer::GridView g;
+  g.utime = msg.utime;
+  g.source = msg.source;
+  g.resolution_m = msg.resolution_m;
+  g.origin_x_m = msg.origin_x_m;
+  g.origin_y_m = msg.origin_y_m;
+  g.origin_theta_rad = msg.origin_theta_rad;
+  g.width = msg.width;
+  g.height = msg.height;
+  g.cells = msg.cells;
+  // The known cells' extent, in the world (the corners of their bounding box, turned by theta).
+  int x0 = msg.width, x1 = -1, y0 = msg.height, y1 = -1;
+  for (int y = 0; y < msg.height; ++y) {
+    const int8_t* row = msg.cells.data() + static_cast<size_t>(y) * static_cast<size_t>(msg.width);
+    for (int x = 0; x < msg.width; ++x) {
+      if (row[x] < 0) continue;
+      x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    }
+  }
+  if (x1 >= 0) {
+    g.any_known = true;
+    const double c = std::cos(g.origin_theta_rad), s = std::sin(g.origin_theta_rad), r = g.resolution_m;
+    bool first = true;
+    for (const int cx : {x0, x1 + 1}) {
+      for (const int cy : {y0, y1 + 1}) {
+        const double wx = g.origin_x_m + c * cx * r - s * cy * r, wy = g.origin_y_m + s * cx * r + c * cy * r;
+        if (first) g.known_x0 = g.known_x1 = wx, g.known_y0 = g.known_y1 = wy, first = false;
+        g.known_x0 = std::min(g.known_x0, wx), g.known_x1 = std::max(g.known_x1, wx);
+        g.known_y0 = std::min(g.known_y0, wy), g.known_y1 = std::max(g.known_y1, wy);
+      }
+    }
+  }
+  scene_.grid = std::move(g);
 }
 
 void ViewerNode::OnPanorama(const omni_frame_t& msg) {
@@ -325,7 +369,8 @@ const viewer::ViewerScene& ViewerNode::Scene() {
 
 void ViewerNode::Report(std::ostream& out) const {
   out << "viewer: " << scene_.tracks.size() << " pose channels, " << scene_.matches.size() << " place-cell matches, "
-      << scene_.map_points.size() << " map points, " << rejected_total() << " refused";
+      << scene_.map_points.size() << " map points, "
+      << (scene_.grid ? std::to_string(scene_.grid->width) + " x " + std::to_string(scene_.grid->height) + " grid cells, " : std::string("no grid, ")) << rejected_total() << " refused";
   for (const auto& [reason, n] : rejected_) out << "; " << reason << ": " << n;
   out << "\n";
 }

@@ -23,6 +23,7 @@
 #include "snapnav/nav/omni_geometry.hpp"
 #include "snapnav/omni_frame_t.hpp"
 #include "snapnav/place_cell_match_t.hpp"
+#include "snapnav/occupancy_grid_t.hpp"
 #include "snapnav/point_map_t.hpp"
 #include "viewer_render.hpp"
 
@@ -33,7 +34,7 @@ struct ViewerConfig {
   // anchored at both ends); the prefix is matched literally.
   std::string channel_prefix;  // the counts panel lists only the channels with this prefix
   std::string point_map_channel, pose_channels, truth_channel, panorama_channel, omni_channel, landmark_channels,
-      homing_vector_channel, place_cell_match_channel, scan_channel;
+      homing_vector_channel, place_cell_match_channel, scan_channel, grid_channel;
   double refresh_hz = 4;              // window refresh [Hz, wall clock]
   double png_interval_s = 5;          // --png: a snapshot per this much message time [s]; 0: at exit only
   // Trajectory thinning: a pose is kept when it is this far from the last kept one, turned this
@@ -79,6 +80,7 @@ class ViewerNode {
   void SawUtime(int64_t utime);
   void OnPose(const void* data, size_t size);
   void OnPointMap(const point_map_t& msg);
+  void OnGrid(const occupancy_grid_t& msg);
   void OnPanorama(const omni_frame_t& msg);
   void OnOmniFrame(const omni_frame_t& msg);
   void OnLandmarks(const void* data, size_t size);

@@ -14,6 +14,7 @@ namespace snapnav::viewer {
 
 const cv::Scalar kHomingColour(200, 0, 200);
 const cv::Scalar kMapColour(70, 70, 70);
+const cv::Scalar kGridOccupiedColour(150, 140, 125);
 const cv::Scalar kScanColour(215, 195, 90);
 const cv::Scalar kPlaceCellColour(44, 160, 44);  // plot::SeriesColour(2), as POSE_PLACE_CELLS
 
@@ -81,8 +82,40 @@ void DrawTrack(cv::Mat& img, const plot::MapView& view, const Track& track, bool
                              options.ellipse_sigma, colour, 2);
 }
 
+// The occupancy grid, pixel by pixel of the plot area: free cells light grey, occupied ones dark,
+// unknown ones left as the background.
+void DrawGrid(cv::Mat& img, const plot::MapView& view, const GridView& g) {
+  if (g.width <= 0 || g.height <= 0 || g.resolution_m <= 0) return;
+  const cv::Rect area = view.area() & cv::Rect(0, 0, img.cols, img.rows);
+  const cv::Point2d p0 = view.ToPixel(0, 0);
+  const double s = view.pixels_per_m();
+  const double c = std::cos(g.origin_theta_rad), sn = std::sin(g.origin_theta_rad), inv = 1.0 / g.resolution_m;
+  for (int py = area.y; py < area.y + area.height; ++py) {
+    cv::Vec3b* row = img.ptr<cv::Vec3b>(py);
+    const double wy = (p0.y - (py + 0.5)) / s - g.origin_y_m;
+    for (int px = area.x; px < area.x + area.width; ++px) {
+      const double wx = ((px + 0.5) - p0.x) / s - g.origin_x_m;
+      const double gx = (c * wx + sn * wy) * inv, gy = (-sn * wx + c * wy) * inv;
+      if (gx < 0 || gy < 0 || gx >= g.width || gy >= g.height) continue;
+      const int8_t v = g.cells[static_cast<size_t>(gy) * static_cast<size_t>(g.width) + static_cast<size_t>(gx)];
+      if (v < 0) continue;
+      if (v >= 65) {
+        row[px] = cv::Vec3b(static_cast<uint8_t>(kGridOccupiedColour[0]), static_cast<uint8_t>(kGridOccupiedColour[1]),
+                            static_cast<uint8_t>(kGridOccupiedColour[2]));
+      } else {
+        const auto grey = static_cast<uint8_t>(std::lround(232 - 1.4 * v));
+        row[px] = cv::Vec3b(grey, grey, grey);
+      }
+    }
+  }
+}
+
 void DrawMapPart(cv::Mat& img, const Layout& layout, const ViewerScene& scene, const RenderOptions& options) {
   plot::WorldBounds bounds;
+  if (scene.grid && scene.grid->any_known) {
+    bounds.Extend(scene.grid->known_x0, scene.grid->known_y0);
+    bounds.Extend(scene.grid->known_x1, scene.grid->known_y1);
+  }
   for (const auto& [_, t] : scene.tracks) {
     for (const auto& p : t.poses) bounds.Extend(p.pose.x_m, p.pose.y_m);
     if (t.received > 0) bounds.Extend(t.latest.pose.x_m, t.latest.pose.y_m);
@@ -104,6 +137,7 @@ void DrawMapPart(cv::Mat& img, const Layout& layout, const ViewerScene& scene, c
   }
   const plot::MapView view(layout.map, bounds, options.min_span_m, 0.04);
   view.DrawAxes(img);
+  if (scene.grid) DrawGrid(img, view, *scene.grid);  // under everything
 
   view.DrawPoints(img, scan_world, kScanColour, 3);  // under the map, so both show where they agree
   view.DrawPoints(img, scene.map_points, kMapColour, 2);
@@ -133,7 +167,7 @@ void DrawMapPart(cv::Mat& img, const Layout& layout, const ViewerScene& scene, c
                    kHomingColour, 3);
   }
   view.DrawScaleBar(img);
-  if (scene.tracks.empty() && scene.map_points.empty()) {
+  if (scene.tracks.empty() && scene.map_points.empty() && !scene.grid) {
     plot::DrawText(img, "waiting for poses and maps ...", {layout.map.x + 20, layout.map.y + 25}, 0.55, kGreyText);
   }
 }
@@ -174,6 +208,12 @@ void DrawPanel(cv::Mat& img, const Layout& layout, const ViewerScene& scene, con
 
   heading("Map, place cells, homing");
   std::vector<plot::LegendEntry> entries;
+  if (scene.grid) {
+    const GridView& g = *scene.grid;
+    entries.push_back({"occupancy grid: " + std::to_string(g.width) + " x " + std::to_string(g.height) + Format(" cells of %.2f m", g.resolution_m) +
+                           " (" + g.source + ")",
+                       kGridOccupiedColour, plot::LegendMark::kDot});
+  }
   if (!scene.map_points.empty()) {
     entries.push_back({"point map: " + std::to_string(scene.map_points.size()) + " points (" + scene.map_estimator + ")",
                        kMapColour, plot::LegendMark::kDot});

@@ -75,12 +75,25 @@ struct ScanView {
   std::vector<cv::Point2f> points;  // returns only (range in [min, max)) [m], sensor frame
 };
 
+// The last occupancy grid (occupancy_grid_t), drawn under everything else.
+struct GridView {
+  int64_t utime = 0;
+  std::string source;
+  double resolution_m = 0, origin_x_m = 0, origin_y_m = 0, origin_theta_rad = 0;
+  int width = 0, height = 0;
+  std::vector<int8_t> cells;  // -1 unknown, 0 free .. 100 occupied, row-major from cell (0, 0)
+  // The world rectangle of its known cells (the view widens to it); empty when none is known.
+  double known_x0 = 0, known_x1 = 0, known_y0 = 0, known_y1 = 0;
+  bool any_known = false;
+};
+
 struct ViewerScene {
   std::map<std::string, Track> tracks;  // by channel, ground truth included
   std::string truth_channel;            // the ground-truth channel's name
   std::vector<cv::Point2f> map_points;  // the last point map [m]
   std::string map_estimator;
   int64_t map_utime = 0;
+  std::optional<GridView> grid;         // the last occupancy grid
   std::vector<PlaceCellMark> matches;   // matched cells (cell_id >= 0), oldest first
   std::vector<cv::Point2f> memory_cells;  // the memory file's cells [m], when given
   std::optional<PanoramaView> panorama;
@@ -123,6 +136,7 @@ cv::Scalar ChannelColour(const std::string& channel);
 cv::Scalar LandmarkColour(const std::string& method);
 extern const cv::Scalar kHomingColour;    // the homing vector
 extern const cv::Scalar kMapColour;       // laser map points
+extern const cv::Scalar kGridOccupiedColour;  // occupied cells of the occupancy grid (free ones are a light grey)
 extern const cv::Scalar kScanColour;      // the scan of the moment
 extern const cv::Scalar kPlaceCellColour; // place cells
 

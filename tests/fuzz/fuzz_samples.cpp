@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "snapnav/glue/codec.hpp"
+#include "snapnav/glue/occupancy_grid_msg.hpp"
 
 namespace snapnav::fuzz {
 
@@ -206,6 +207,47 @@ point_map_t SamplePointMap() {
   return m;
 }
 
+occupancy_grid_t SampleOccupancyGrid() {
+  occupancy_grid_t m{};
+  m.utime = 1700000000000000;
+  m.frame = "map";
+  m.source = "laser_slam";
+  m.resolution_m = 0.05f;
+  m.origin_x_m = -1;
+  m.origin_y_m = -2;
+  m.origin_theta_rad = 0;
+  m.width = 3;
+  m.height = 2;
+  m.ncells = 6;
+  m.cells = {-1, 0, 100, 50, 0, -1};
+  return m;
+}
+
+localization_status_t SampleLocalizationStatus() {
+  localization_status_t m{};
+  m.utime = 1700000000000000;
+  m.state = localization_status_t::LOCALIZED;
+  m.score = 0.9;
+  m.global_score = 0.7;
+  m.global_ambiguity = 0.3;
+  m.global_candidates = 1000;
+  m.global_ms = 12;
+  m.position_sigma_m = 0.02;
+  m.heading_sigma_deg = 0.5;
+  m.scans = 10;
+  m.global_searches = 2;
+  m.relocalizations = 1;
+  m.map = "map.yaml";
+  return m;
+}
+
+map_request_t SampleMapRequest() {
+  map_request_t m{};
+  m.utime = 1700000000000000;
+  m.requester = "map-export";
+  return m;
+}
+
 pose_t SamplePose() {
   pose_t m{};
   m.utime = 1700000000000000;
@@ -264,7 +306,8 @@ std::vector<TypeCase> AllTypes() {
           Case(SampleLaserScan()),    Case(SampleNavigatorStatus()), Case(SampleOdometry()),
           Case(SampleOmniFrame()),    Case(SamplePlaceCellMatch()),  Case(SamplePointMap()),
           Case(SamplePose()),         Case(SampleRoute()),           Case(SampleExperienceMap()),
-          Case(SampleFusedSlamStatus()), Case(SampleLaserSlamStatus())};
+          Case(SampleFusedSlamStatus()), Case(SampleLaserSlamStatus()), Case(SampleOccupancyGrid()),
+          Case(SampleLocalizationStatus()), Case(SampleMapRequest())};
 }
 
 // "" when the published payload decodes and holds only finite numbers; else what is wrong.
@@ -333,6 +376,18 @@ std::string OutputProblem(const std::string& channel, const std::string& payload
     return bad(AllFinite({m->mahalanobis2, m->gate_mahalanobis2, m->ambiguity, m->fit, m->kernel, m->position_sigma_m,
                           m->heading_sigma_deg}),
                "laser_slam_status_t");
+  }
+  if (*fp == static_cast<uint64_t>(occupancy_grid_t::getHash())) {
+    const auto m = glue::Decode<occupancy_grid_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    if (const auto problem = glue::CheckOccupancyGrid(*m)) return channel + ": malformed occupancy_grid_t: " + problem->reason;
+    return "";
+  }
+  if (*fp == static_cast<uint64_t>(localization_status_t::getHash())) {
+    const auto m = glue::Decode<localization_status_t>(payload.data(), payload.size(), &error);
+    if (!m) return channel + ": " + error;
+    return bad(AllFinite({m->score, m->global_score, m->global_ambiguity, m->global_ms, m->position_sigma_m, m->heading_sigma_deg}),
+               "localization_status_t");
   }
   return channel + ": unexpected output type";
 }

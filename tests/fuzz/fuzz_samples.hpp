@@ -18,6 +18,9 @@
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/omni_frame_t.hpp"
 #include "snapnav/place_cell_match_t.hpp"
+#include "snapnav/localization_status_t.hpp"
+#include "snapnav/map_request_t.hpp"
+#include "snapnav/occupancy_grid_t.hpp"
 #include "snapnav/point_map_t.hpp"
 #include "snapnav/pose_t.hpp"
 #include "snapnav/waypoint_route_t.hpp"
@@ -36,6 +39,9 @@ odometry_t SampleOdometry();
 omni_frame_t SampleOmniFrame();
 place_cell_match_t SamplePlaceCellMatch();
 point_map_t SamplePointMap();
+occupancy_grid_t SampleOccupancyGrid();
+localization_status_t SampleLocalizationStatus();
+map_request_t SampleMapRequest();
 pose_t SamplePose();
 waypoint_route_t SampleRoute();
 

@@ -334,6 +334,60 @@ TEST(ViewerNode, MessagesBecomeTheScene) {
   EXPECT_GT(CountColour(img, ChannelColour("V_POSE_GROUND_TRUTH"), layout.map), 20);
 }
 
+// An occupancy grid (laser-slam's LASER_SLAM_GRID): accepted into the scene, drawn under the
+// trajectory (its occupied colour in the plot, the track's colour over it); malformed ones are
+// refused with their reason and counted, the last good one stays.
+TEST(ViewerNode, OccupancyGridIsDrawnUnderTheTrajectory) {
+  glue::Bus bus("memq://");
+  processes::ViewerNode node(bus, Config("G_"));
+  occupancy_grid_t g{};
+  g.utime = 1'000'000;
+  g.frame = "map";
+  g.source = "laser_slam";
+  g.resolution_m = 0.1f;
+  g.origin_x_m = -1;
+  g.origin_y_m = -1;
+  g.width = 60;
+  g.height = 40;
+  g.ncells = g.width * g.height;
+  g.cells.assign(static_cast<size_t>(g.ncells), -1);
+  for (int y = 0; y < g.height; ++y) {
+    for (int x = 0; x < g.width; ++x) {
+      const bool wall = x == 5 || x == 55 || y == 5 || y == 35;
+      const bool inside = x > 5 && x < 55 && y > 5 && y < 35;
+      if (wall && x >= 5 && x <= 55 && y >= 5 && y <= 35) g.cells[static_cast<size_t>(y * g.width + x)] = 100;
+      else if (inside) g.cells[static_cast<size_t>(y * g.width + x)] = 0;
+    }
+  }
+  bus.Publish("G_LASER_SLAM_GRID", g);
+  for (int i = 0; i < 20; ++i) {
+    bus.Publish("G_POSE_LASER_SLAM", glue::ToPoseMsg(1'000'000 + i * 100'000, "laser_slam", "map", {0.5 + 0.15 * i, 1.5, 0},
+                                                     Eigen::Matrix3d::Zero()));
+  }
+  occupancy_grid_t bad = g;
+  bad.ncells = 7;
+  bad.cells.resize(7);
+  bus.Publish("G_LASER_SLAM_GRID", bad);
+  bad = g;
+  bad.resolution_m = NAN;
+  bus.Publish("G_LASER_SLAM_GRID", bad);
+  HandleAll(bus);
+  const ViewerScene& s = node.Scene();
+  ASSERT_TRUE(s.grid);
+  EXPECT_EQ(s.grid->width, 60);
+  EXPECT_EQ(s.grid->source, "laser_slam");
+  EXPECT_TRUE(s.grid->any_known);
+  EXPECT_NEAR(s.grid->known_x0, -0.5, 1e-6);  // cell 5's corner
+  EXPECT_NEAR(s.grid->known_x1, 4.6, 1e-6);   // cell 55's far corner
+  EXPECT_EQ(node.rejected().at("bad grid size"), 1);
+  EXPECT_EQ(node.rejected().at("bad resolution"), 1);
+  const cv::Mat img = node.Render();
+  const viewer::Layout layout = ComputeLayout(img.size());
+  EXPECT_GT(CountColour(img, viewer::kGridOccupiedColour, layout.map), 200);
+  EXPECT_GT(CountColour(img, ChannelColour("G_POSE_LASER_SLAM"), layout.map), 20);  // the track over the grid
+  EXPECT_GT(CountColour(img, cv::Scalar(232, 232, 232), layout.map), 10000);       // free cells
+}
+
 TEST(ViewerNode, BadFramesAreCountedAndTracksStayBounded) {
   glue::Bus bus("memq://");
   processes::ViewerConfig config = Config("");

@@ -2,7 +2,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cmath>
+#include <cstdlib>
 #include <iomanip>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -74,6 +77,88 @@ mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path) {
     throw std::runtime_error(path + ": not an MRPT occupancy grid (.gridmap): " + std::string(e.what()).substr(0, 200));
   }
   return grid;
+}
+
+namespace {
+std::string Trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r\"'");
+  if (a == std::string::npos) return "";
+  const size_t b = s.find_last_not_of(" \t\r\"'");
+  return s.substr(a, b - a + 1);
+}
+double Number(const std::string& path, const std::string& key, const std::string& v) {
+  char* end = nullptr;
+  const double d = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !std::isfinite(d)) throw std::runtime_error(path + ": " + key + ": not a number: '" + v + "'");
+  return d;
+}
+}  // namespace
+
+nav::OccupancyCells ReadMapFile(const std::string& path, const nav::OccupancyGridOptions& options) {
+  const std::filesystem::path p(path);
+  if (p.extension() == ".gridmap") {
+    nav::OccupancyCells cells = nav::ToOccupancyCells(ReadGridmap(path), options);
+    return cells;
+  }
+  if (p.extension() != ".yaml" && p.extension() != ".yml") {
+    throw std::runtime_error(path + ": not a map file (map.yaml of ROS map_server, or MRPT's .gridmap)");
+  }
+  std::ifstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot open");
+  std::map<std::string, std::string> kv;
+  std::string line;
+  while (std::getline(f, line)) {
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line = line.substr(0, hash);
+    const size_t colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    kv[Trim(line.substr(0, colon))] = Trim(line.substr(colon + 1));
+  }
+  for (const char* key : {"image", "resolution", "origin"}) {
+    if (!kv.count(key)) throw std::runtime_error(path + ": no '" + key + "' (not a map_server YAML)");
+  }
+  const double resolution = Number(path, "resolution", kv["resolution"]);
+  if (!(resolution > 0)) throw std::runtime_error(path + ": resolution must be positive");
+  std::string origin = kv["origin"];
+  if (origin.size() < 2 || origin.front() != '[' || origin.back() != ']') throw std::runtime_error(path + ": origin must be [x, y, yaw]");
+  std::vector<double> o;
+  {
+    std::stringstream ss(origin.substr(1, origin.size() - 2));
+    std::string item;
+    while (std::getline(ss, item, ',')) o.push_back(Number(path, "origin", Trim(item)));
+  }
+  if (o.size() != 3) throw std::runtime_error(path + ": origin must be [x, y, yaw]");
+  if (std::abs(o[2]) > 1e-9) throw std::runtime_error(path + ": origin yaw " + std::to_string(o[2]) + ": only 0 is supported");
+  const bool negate = kv.count("negate") && Number(path, "negate", kv["negate"]) != 0;
+  const double occ = kv.count("occupied_thresh") ? Number(path, "occupied_thresh", kv["occupied_thresh"]) : 0.65;
+  const double fre = kv.count("free_thresh") ? Number(path, "free_thresh", kv["free_thresh"]) : 0.196;
+  const std::string mode = kv.count("mode") ? kv["mode"] : "trinary";
+  if (mode != "trinary" && mode != "scale") throw std::runtime_error(path + ": mode " + mode + ": only trinary and scale are supported");
+  std::filesystem::path image(kv["image"]);
+  if (image.is_relative()) image = p.parent_path() / image;
+  const cv::Mat img = cv::imread(image.string(), cv::IMREAD_GRAYSCALE);
+  if (img.empty()) throw std::runtime_error(image.string() + ": cannot read the map image (named by " + path + ")");
+  nav::OccupancyCells cells;
+  cells.resolution_m = resolution;
+  cells.origin_x_m = o[0];
+  cells.origin_y_m = o[1];
+  cells.width = img.cols;
+  cells.height = img.rows;
+  cells.cells.resize(static_cast<size_t>(img.cols) * static_cast<size_t>(img.rows));
+  for (int r = 0; r < img.rows; ++r) {
+    for (int c = 0; c < img.cols; ++c) {
+      const double v = img.at<uint8_t>(r, c);
+      const double occupancy = negate ? v / 255.0 : (255.0 - v) / 255.0;
+      int8_t cell;
+      if (occupancy > occ) cell = 100;
+      else if (occupancy < fre) cell = 0;
+      else if (mode == "scale") cell = static_cast<int8_t>(std::lround(99 * (occupancy - fre) / (occ - fre)));
+      else cell = -1;
+      cells.cells[static_cast<size_t>(img.rows - 1 - r) * static_cast<size_t>(img.cols) + static_cast<size_t>(c)] = cell;
+    }
+  }
+  cells.Count(options.occupied_threshold, options.free_threshold);
+  return cells;
 }
 
 void WriteMapPng(const nav::OccupancyCells& cells, const nav::OccupancyGridOptions& options,

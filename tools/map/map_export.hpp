@@ -22,6 +22,13 @@ void WriteSimplemap(const mrpt::maps::CSimpleMap& map, const std::string& path);
 // Reads a .gridmap back (MRPT's own reader); throws std::runtime_error naming the file.
 mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path);
 
+// A saved map as cells: PATH.yaml (ROS map_server's YAML and the image it names, PGM or PNG:
+// occupancy = (255 - pixel) / 255, or pixel / 255 with negate: 1; trinary mode: above
+// occupied_thresh 100, below free_thresh 0, else unknown; scale mode: in between scaled) or
+// PATH.gridmap (MRPT's, cells counted with `options`' thresholds). The origin's yaw must be 0.
+// Throws std::runtime_error naming the file and what is wrong.
+nav::OccupancyCells ReadMapFile(const std::string& path, const nav::OccupancyGridOptions& options = {});
+
 // A PNG of the trinary map with `trajectory` drawn over it (red), one pixel per cell.
 void WriteMapPng(const nav::OccupancyCells& cells, const nav::OccupancyGridOptions& options,
                  const std::vector<nav::Pose2>& trajectory, const std::string& path);

@@ -2,6 +2,7 @@
 // labs' other tools read: ROS map_server's map.pgm + map.yaml, MRPT's map.gridmap and
 // map.simplemap (pf-localization, the map viewers), and map.png with the trajectory.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +15,10 @@
 #include "slam_log.hpp"
 #include "map_export.hpp"
 #include "snapnav/glue/app.hpp"
+#include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/occupancy_grid_msg.hpp"
+#include "snapnav/map_request_t.hpp"
+#include "snapnav/occupancy_grid_t.hpp"
 #include "snapnav/glue/channels.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/flags.hpp"
@@ -44,12 +49,69 @@ std::map<int64_t, nav::Pose2> ReadPoses(const std::string& path, const std::stri
   return poses;
 }
 
+// --live: the next grid on `channel` (after a request on `request_channel`, repeated every 2 s),
+// written as the same files but the simplemap and the trajectory (a grid holds no scans).
+int ExportLive(const std::string& url, const std::string& channel, const std::string& request_channel, double timeout_s,
+               const std::string& out_dir, const std::string& name, const nav::OccupancyGridOptions& grid_options) {
+  glue::Bus bus(url);
+  std::optional<occupancy_grid_t> grid;
+  std::map<std::string, int64_t> malformed;
+  bus.Subscribe<occupancy_grid_t>(channel, [&](const occupancy_grid_t& msg) {
+    if (grid) return;
+    if (const auto problem = glue::CheckOccupancyGrid(msg)) {
+      if (++malformed[problem->reason] <= 3) std::cerr << "map-export: refused a grid on " << channel << " (" << problem->reason << "): " << problem->detail << "\n";
+      return;
+    }
+    if (msg.origin_theta_rad != 0) {
+      if (++malformed["rotated grid"] <= 3) std::cerr << "map-export: refused a grid on " << channel << ": origin_theta_rad " << msg.origin_theta_rad << " (only 0: map_server's YAML)\n";
+      return;
+    }
+    grid = msg;
+  });
+  std::cerr << "map-export: waiting up to " << timeout_s << " s for an occupancy grid on " << channel
+            << (request_channel.empty() ? std::string() : ", asking on " + request_channel) << " (" << bus.url() << ")\n";
+  const auto start = std::chrono::steady_clock::now();
+  auto last_request = start - std::chrono::hours(1);
+  while (!grid) {
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - start).count() > timeout_s) break;
+    if (!request_channel.empty() && now - last_request >= std::chrono::seconds(2)) {
+      map_request_t r{};
+      r.utime = std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+      r.requester = "map-export";
+      bus.Publish(request_channel, r);
+      last_request = now;
+    }
+    bus.HandleOnce(100);
+  }
+  int64_t refused = 0;
+  for (const auto& [_, n] : malformed) refused += n;
+  if (!grid) {
+    throw std::runtime_error("no occupancy grid on " + channel + " within " + std::to_string(timeout_s) + " s (" +
+                             std::to_string(refused) + " malformed ones refused; is laser-slam running with a grid channel?)");
+  }
+  nav::OccupancyCells cells = glue::FromOccupancyGridMsg(*grid, grid_options.occupied_threshold, grid_options.free_threshold);
+  const std::filesystem::path out(out_dir);
+  map::WriteRosMap(cells, grid_options, out_dir, name);
+  map::WriteGridmap(nav::FromOccupancyCells(cells), (out / (name + ".gridmap")).string());
+  map::WriteMapPng(cells, grid_options, {}, (out / (name + ".png")).string());
+  std::cout << "map-export: the grid of " << grid->source << " on " << channel << " (utime " << grid->utime << "): " << cells.width
+            << " x " << cells.height << " cells of " << cells.resolution_m << " m from (" << cells.origin_x_m << ", "
+            << cells.origin_y_m << "): " << cells.occupied << " occupied, " << cells.free << " free, " << cells.unknown
+            << " unknown; " << refused << " malformed grids refused\nmap-export: wrote " << (out / (name + ".pgm")).string() << ", "
+            << name << ".yaml, " << name << ".gridmap, " << name << ".png\n";
+  return 0;
+}
+
 int Main(int argc, char** argv) {
   std::string log_path, out_dir, pose_channel, name = "map";
   nav::OccupancyGridOptions grid_options;
   eval::LaserSlamConfigChoice config;
   std::vector<std::string> sets;
   double max_dt_s = 0.05;
+  bool live = false;
+  std::string live_channel = "LASER_SLAM_GRID", request_channel = "LASER_SLAM_GRID_REQUEST", lcm_url;
+  double timeout_s = 30;
   glue::Flags flags("map-export",
                     "The occupancy grid of a recorded run (LASER_SCAN and ODOMETRY, as log-import writes them or\n"
                     "lcm-logger records them) as files other tools read: NAME.pgm + NAME.yaml (ROS map_server,\n"
@@ -59,8 +121,16 @@ int Main(int argc, char** argv) {
                     "pose). The poses: the laser SLAM run over the log with --config\n"
                     "(default: the shipped config/laser_slam.ini) and --set, or with --pose-channel the poses a live\n"
                     "run recorded (e.g. POSE_LASER_SLAM), the nearest within --max-dt-s of each scan. The grid is\n"
-                    "MRPT's: each beam clears the cells it crossed and marks its hit.");
+                    "MRPT's: each beam clears the cells it crossed and marks its hit.\n"
+                    "--live (no LOG): from a running laser-slam instead: asks for its grid (a map_request_t on\n"
+                    "--request-channel, every 2 s) and writes the next occupancy_grid_t on --channel as NAME.pgm,\n"
+                    "NAME.yaml, NAME.gridmap and NAME.png (no simplemap, no trajectory: a grid holds no scans).");
   flags.AllowPositional("LOG", "the LCM log");
+  flags.AddBool("live", &live, "take the grid from the bus (a running laser-slam) instead of a LOG");
+  flags.AddString("channel", &live_channel, "--live: the occupancy_grid_t channel");
+  flags.AddString("request-channel", &request_channel, "--live: where to ask for it (map_request_t); empty: just wait");
+  flags.AddDouble("timeout-s", &timeout_s, "--live: give up after this long without a grid [s]");
+  flags.AddString("lcm-url", &lcm_url, "--live: LCM URL (default: LCM_DEFAULT_URL or snapnav's default)");
   flags.AddString("out", &out_dir, "output folder (required)");
   flags.AddString("name", &name, "base name of the files");
   flags.AddDouble("resolution-m", &grid_options.resolution_m, "cell size [m]");
@@ -70,6 +140,12 @@ int Main(int argc, char** argv) {
   flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options the laser SLAM runs");
   flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE");
   if (!flags.Parse(argc, argv)) return 0;
+  if (live) {
+    if (!flags.positional().empty()) throw glue::FlagError("--live takes no LOG");
+    if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
+    if (!(timeout_s > 0)) throw glue::FlagError("--timeout-s must be positive");
+    return ExportLive(lcm_url, live_channel, request_channel, timeout_s, out_dir, name, grid_options);
+  }
   if (flags.positional().size() != 1) throw glue::FlagError("give one LOG (see --help)");
   log_path = flags.positional()[0];
   if (out_dir.empty()) throw glue::FlagError("--out DIR is required");

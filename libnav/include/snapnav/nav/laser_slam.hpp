@@ -282,6 +282,11 @@ class LaserSlam {
   // builds the map, always does). Defaults: true, 0 (every scan maps, as before).
   void SetMapping(bool add_points, double min_fit = 0);
   bool adding_points() const { return add_points_; }
+  // Localization in a saved map (MapLocalizer): these points (with unit normals, or none) join the
+  // map as a scan's would, one per cell; the first scan then matches instead of starting the map.
+  void SeedMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals = {}) {
+    for (size_t i = 0; i < points.size(); ++i) map_.Add(points[i], i < normals.size() ? normals[i] : Eigen::Vector2d::Zero());
+  }
 
  private:
   bool MayAddPoints(const LaserSlamUpdate& u) const;

@@ -10,6 +10,7 @@
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimpleMap.h>
 
+#include "snapnav/nav/occupancy_cells.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
@@ -33,6 +34,9 @@ struct OccupancyGridOptions {
   // measured with 1 of 361 beams returning).
   double occupied_threshold = 0.65;  // exported as occupied at or above this probability (ROS's default)
   double free_threshold = 0.196;     // ... as free at or below it (ROS's default)
+  // OccupancyGridBuilder::Insert skips a scan that would grow the grid beyond this many cells (a
+  // live process's memory bound against absurd poses or ranges; 0: no limit).
+  int64_t max_cells = 0;
   void Validate() const;          // throws std::invalid_argument naming the bad option
 };
 
@@ -52,16 +56,33 @@ mrpt::maps::COccupancyGridMap2D BuildOccupancyGrid(const std::vector<GridScan>& 
 // MRPT's simple map: each scan with its pose (a keyframe), the input of MRPT's map building apps.
 mrpt::maps::CSimpleMap BuildSimpleMap(const std::vector<GridScan>& scans, double max_range_m = 0);
 
-// A cell's occupancy as ROS's nav_msgs/OccupancyGrid and map_server have it: 0 free .. 100
-// occupied, -1 unknown (never observed). Row-major from the grid's (x_min, y_min) corner, x along
-// a row.
-struct OccupancyCells {
-  double resolution_m = 0;
-  double origin_x_m = 0, origin_y_m = 0;  // the corner of cell (0, 0)
-  int width = 0, height = 0;
-  std::vector<int8_t> cells;   // width * height
-  int occupied = 0, free = 0, unknown = 0;  // by options' thresholds
-};
+// The cells of `grid` (ROS's -1 / 0..100), counted by options' thresholds.
 OccupancyCells ToOccupancyCells(const mrpt::maps::COccupancyGridMap2D& grid, const OccupancyGridOptions& options);
+// The MRPT grid of `cells` (each known cell's probability of being free is 1 - occupancy / 100,
+// unknown ones 0.5): a map read from a file or a message, for MRPT's tools (.gridmap).
+mrpt::maps::COccupancyGridMap2D FromOccupancyCells(const OccupancyCells& cells);
+
+// The grid built scan by scan (laser-slam's live map; BuildOccupancyGrid is this over a batch):
+// each scan inserted at its pose as BuildOccupancyGrid does, the grid grown to hold it.
+class OccupancyGridBuilder {
+ public:
+  explicit OccupancyGridBuilder(const OccupancyGridOptions& options);
+  // Throws std::invalid_argument on a scan with fewer than 2 beams. False when the scan was not
+  // inserted: no beam returned, or the grid would grow beyond options' max_cells.
+  bool Insert(const GridScan& scan);
+  // Makes the grid cover [x0, x1] x [y0, y1] (plus a margin) before inserting (one allocation).
+  void Reserve(double x0, double x1, double y0, double y1);
+  const mrpt::maps::COccupancyGridMap2D& grid() const { return grid_; }
+  OccupancyCells Cells() const { return ToOccupancyCells(grid_, options_); }
+  int64_t inserted() const { return inserted_; }
+  int64_t too_large() const { return too_large_; }  // scans skipped for max_cells
+  const OccupancyGridOptions& options() const { return options_; }
+
+ private:
+  OccupancyGridOptions options_;
+  mrpt::maps::COccupancyGridMap2D grid_;
+  bool sized_ = false;
+  int64_t inserted_ = 0, too_large_ = 0;
+};
 
 }  // namespace snapnav::nav

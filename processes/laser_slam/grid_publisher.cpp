@@ -1,0 +1,113 @@
+#include "grid_publisher.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <ostream>
+
+#include "snapnav/glue/occupancy_grid_msg.hpp"
+
+namespace snapnav::processes {
+
+namespace {
+constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+}
+
+GridConfig GridConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
+  GridConfig c;
+  c.channel = channel_prefix + ini.GetString("channels", "grid");
+  c.request_channel = channel_prefix + ini.GetString("channels", "grid_request");
+  c.every_s = ini.GetDouble("grid", "every_s");
+  c.grid.resolution_m = ini.GetDouble("grid", "resolution_m");
+  c.grid.max_range_m = ini.GetDouble("grid", "max_range_m");
+  c.keyframe_m = ini.GetDouble("grid", "keyframe_m");
+  c.keyframe_rad = ini.GetDouble("grid", "keyframe_deg") / kDegPerRad;
+  try {
+    c.grid.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": [grid] " + e.what());
+  }
+  if (!(c.every_s >= 0)) throw glue::ConfigError(ini.origin() + ": [grid] every_s must be >= 0 (0: on request only)");
+  if (!(c.keyframe_m >= 0) || !(c.keyframe_rad >= 0)) throw glue::ConfigError(ini.origin() + ": [grid] keyframe_m and keyframe_deg must be >= 0");
+  return c;
+}
+
+void GridConfig::Print(std::ostream& out) const {
+  out << "[grid]\nevery_s = " << every_s << "\nresolution_m = " << grid.resolution_m << "\nmax_range_m = " << grid.max_range_m
+      << "\nkeyframe_m = " << keyframe_m << "\nkeyframe_deg = " << keyframe_rad * kDegPerRad << "\n";
+}
+
+nav::GridScan GridScanOf(const laser_scan_t& msg, const nav::Pose2& robot_pose) {
+  nav::GridScan g;
+  g.utime = msg.utime;
+  g.robot_pose = robot_pose;
+  g.sensor_on_robot = {msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad};
+  g.angle_min_rad = msg.angle_min_rad;
+  g.angle_increment_rad = msg.angle_increment_rad;
+  g.range_min_m = msg.range_min_m;
+  g.range_max_m = msg.range_max_m;
+  g.ranges_m = msg.ranges_m;
+  return g;
+}
+
+GridPublisher::GridPublisher(glue::Bus& bus, const GridConfig& config, std::string source, glue::HandlerProblems& problems)
+    : bus_(bus), config_(config), source_(std::move(source)), problems_(problems), builder_([&] {
+        nav::OccupancyGridOptions o = config.grid;
+        o.max_cells = GridConfig::kMaxCells;
+        return o;
+      }()) {
+  if (!config_.request_channel.empty()) bus_.Subscribe(config_.request_channel, &GridPublisher::OnRequest, this);
+}
+
+void GridPublisher::AddScan(const laser_scan_t& msg, const nav::Pose2& robot_pose) {
+  if (fixed_ || msg.nranges < 2) return;
+  if (last_inserted_) {
+    const nav::Pose2 d = last_inserted_->Between(robot_pose);
+    if (std::hypot(d.x_m, d.y_m) < config_.keyframe_m && std::abs(d.theta_rad) < config_.keyframe_rad) return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const int64_t too_large = builder_.too_large();
+  if (builder_.Insert(GridScanOf(msg, robot_pose))) last_inserted_ = robot_pose;
+  if (builder_.too_large() > too_large) problems_.Skip("grid too large", "a scan at (" + std::to_string(robot_pose.x_m) + ", " + std::to_string(robot_pose.y_m) + ") would grow the grid beyond " + std::to_string(GridConfig::kMaxCells) + " cells", false);
+  insert_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void GridPublisher::SetFixed(const nav::OccupancyCells& cells) { fixed_ = cells; }
+
+void GridPublisher::AfterScan(int64_t utime) {
+  last_utime_ = std::max(last_utime_, utime);
+  if (first_utime_ == 0) first_utime_ = utime;
+  const bool have = fixed_ || builder_.inserted() > 0;
+  if (!have) return;
+  if (pending_request_) {
+    Publish(utime);
+    return;
+  }
+  // A fixed map goes out at once (a viewer shows it from the start), a growing one after every_s.
+  const int64_t since = published_ > 0 ? last_published_utime_ : (fixed_ ? utime - static_cast<int64_t>(config_.every_s * 1e6) : first_utime_);
+  if (config_.every_s > 0 && utime - since >= static_cast<int64_t>(std::llround(config_.every_s * 1e6))) Publish(utime);
+}
+
+void GridPublisher::OnRequest(const map_request_t& msg) {
+  problems_.Guard("grid request", [&] {
+    (void)msg;
+    ++requests_;
+    pending_request_ = true;
+    if (fixed_ || builder_.inserted() > 0) Publish(last_utime_ > 0 ? last_utime_ : msg.utime);
+  });
+}
+
+void GridPublisher::Publish(int64_t utime) {
+  if (config_.channel.empty()) return;
+  const nav::OccupancyCells cells = fixed_ ? *fixed_ : builder_.Cells();
+  bus_.Publish(config_.channel, glue::ToOccupancyGridMsg(cells, utime, "map", source_));
+  ++published_;
+  last_published_utime_ = utime;
+  pending_request_ = false;
+}
+
+void GridPublisher::Report(std::ostream& out) const {
+  out << source_.substr(0, source_.find(':')) << " grid: " << published_ << " published on " << config_.channel << " ("
+      << requests_ << " requests), " << builder_.inserted() << " scans inserted (mean " << mean_insert_ms() << " ms)\n";
+}
+
+}  // namespace snapnav::processes
