@@ -88,6 +88,9 @@ std::vector<Eigen::Vector2d> CellNormals(const OccupancyCells& map, double occup
 
 MapLocalizer::MapLocalizer(const OccupancyCells& map, const MapLocalizerOptions& options) : options_(options) {
   options_.Validate();
+  // The second pose matters only when it scores at least max_global_ambiguity of the best: the
+  // search need not look lower for it (a tighter bound prunes far more of the tree).
+  options_.global.ambiguity_floor = std::clamp(options_.max_global_ambiguity, 0.05, 0.99);
   global_ = std::make_unique<GlobalLocalizer>(map, options_.global);
   slam_.emplace(options_.tracking, Pose2{});
   slam_->SeedMap(OccupiedCellCentres(map, options_.global.occupied_threshold),

@@ -50,7 +50,14 @@ def localization_status(payload):
     utime = r.get('q')
     state = r.get('b')
     score, gscore, gamb = r.get('ddd')
-    return {'utime': utime, 'state': state, 'score': score, 'global_score': gscore, 'global_ambiguity': gamb}
+    candidates = r.get('i')
+    global_ms = r.get('d')
+    bad_scans = r.get('i')
+    sigma_m, sigma_deg = r.get('dd')
+    scans, searches, relocalizations, losses = r.get('qqqq')
+    return {'utime': utime, 'state': state, 'score': score, 'global_score': gscore, 'global_ambiguity': gamb,
+            'global_candidates': candidates, 'global_ms': global_ms, 'bad_scans': bad_scans, 'scans': scans,
+            'global_searches': searches, 'relocalizations': relocalizations, 'losses': losses, 'map': r.string()}
 
 
 def occupancy_grid(payload):

@@ -101,7 +101,7 @@ TEST(OccupancyGridMsg, RoundTripAndMalformedGridsNamed) {
   EXPECT_DOUBLE_EQ(d.origin_y_m, 2.25);
   EXPECT_EQ(d.occupied, 3);
   EXPECT_EQ(d.unknown, 3);
-  EXPECT_EQ(d.free, 5);  // 0 x 4 and 20 <= 19.6? no: 20 is neither
+  EXPECT_EQ(d.free, 4);  // the four 0s (20 is neither free nor occupied)
   EXPECT_EQ(back->source, "laser_slam");
   EXPECT_EQ(back->utime, 123);
 
@@ -138,7 +138,8 @@ TEST(OccupancyGridMsg, RoundTripAndMalformedGridsNamed) {
 
 TEST(OccupancyGridBuilder, ScanByScanEqualsTheBatch) {
   sim::LaserOptions laser;
-  sim::World world(AsymmetricRoom(), {}, laser, 5);
+  const sim::Scene scene = AsymmetricRoom();  // the world keeps a reference
+  sim::World world(scene, {}, laser, 5);
   std::vector<GridScan> scans;
   for (const Pose2& p : {Pose2{1, 1, 0.2}, Pose2{4, 2, 2.0}, Pose2{6.5, 1.5, 3.0}, Pose2{3, 5, -1}})
     scans.push_back(ScanAt(world, laser, p));
@@ -206,7 +207,8 @@ TEST(GlobalLocalizer, FindsThePoseFromNothingAndPrunes) {
   const nav::GlobalSearchOptions options;
   const nav::GlobalLocalizer global(map, options);
   sim::LaserOptions laser;
-  sim::World world(AsymmetricRoom(), {}, laser, 9);
+  const sim::Scene scene = AsymmetricRoom();
+  sim::World world(scene, {}, laser, 9);
   for (const Pose2& truth : {Pose2{1.3, 1.1, 0.4}, Pose2{6.2, 2.3, 2.9}, Pose2{3.4, 4.6, -1.7}, Pose2{4.0, 2.5, 1.0}}) {
     const nav::GlobalSearchResult r = global.Search(Points(ScanAt(world, laser, truth)));
     ASSERT_TRUE(r.found);
@@ -224,7 +226,8 @@ TEST(GlobalLocalizer, SymmetricRoomIsAmbiguous) {
   const nav::OccupancyCells map = MapOf(SymmetricRoom(), 6, 4);
   const nav::GlobalLocalizer global(map, {});
   sim::LaserOptions laser;
-  sim::World world(SymmetricRoom(), {}, laser, 9);
+  const sim::Scene scene = SymmetricRoom();
+  sim::World world(scene, {}, laser, 9);
   const nav::GlobalSearchResult r = global.Search(Points(ScanAt(world, laser, {1.5, 1.2, 0.3})));
   ASSERT_TRUE(r.found);
   ASSERT_TRUE(r.has_second);
@@ -242,7 +245,8 @@ TEST(MapLocalizer, FindsTracksNoticesAKidnappingAndFindsItAgain) {
   nav::MapLocalizerOptions options;
   nav::MapLocalizer loc(map, options);
   sim::LaserOptions laser;
-  sim::World world(AsymmetricRoom(), {}, laser, 11);
+  const sim::Scene scene = AsymmetricRoom();
+  sim::World world(scene, {}, laser, 11);
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0, 1);
   // A loop around the room's middle at about 0.03 m per scan, odometry with 2 % errors.
@@ -275,7 +279,9 @@ TEST(MapLocalizer, FindsTracksNoticesAKidnappingAndFindsItAgain) {
       EXPECT_EQ(u.state, nav::LocalizationState::kLocalized) << "scan " << i;
       EXPECT_TRUE(right) << "scan " << i << ": " << loc.pose().x_m << ", " << loc.pose().y_m;
     }
-    if (relocalized >= 0 && i > relocalized) EXPECT_TRUE(right) << "scan " << i;
+    if (relocalized >= 0 && i > relocalized) {
+      EXPECT_TRUE(right) << "scan " << i;
+    }
   }
   EXPECT_GE(first_localized, 0);
   EXPECT_LE(first_localized, 3);  // an asymmetric room: the first scans suffice

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "localize_config.hpp"
@@ -58,8 +59,9 @@ int Main(int argc, char** argv) {
                     "made from, or a CSV utime,x,y,theta). The localizer starts knowing nothing at --starts scans spread\n"
                     "over the log (the first at scan 0) and runs from each to the log's end. Per start: the time (message\n"
                     "time), scans and reference path until the pose is within --tol-m and --tol-deg of the reference\n"
-                    "(relocalized), the ATE while localized after that (RMS position error in the map's frame, no\n"
-                    "alignment), global searches (ms), losses, and accepted global poses more than --wrong-m or\n"
+                    "(relocalized: at the accepted global pose that the next reference pose confirms), the ATE while\n"
+                    "localized after that (RMS position error in the map's frame, no alignment), global searches\n"
+                    "(ms), losses, and accepted global poses more than --wrong-m or\n"
                     "--wrong-deg from the reference (wrong). Writes DIR/localize.json and DIR/localize.md.");
   flags.AllowPositional("LOG", "the LCM log to localize");
   flags.AddString("map", &map_path, "the saved map (map.yaml or map.gridmap; required)");
@@ -135,7 +137,12 @@ int Main(int argc, char** argv) {
     double path = 0;
     std::optional<nav::Pose2> last_ref;
     bool reached = false;
-    double compute = 0;
+    double compute = 0, compute_at_accept = 0;
+    // The last accepted global pose not lost since: when the first reference after it confirms the
+    // pose, the robot was relocalized at that scan (a log whose reference covers only some scans,
+    // as CSAIL's keyframes, confirms it later).
+    std::optional<std::pair<int64_t, size_t>> accepted;
+    double path_at_accept = 0;
     for (size_t i = scan_steps[static_cast<size_t>(r.start_scan)]; i < log.steps.size(); ++i) {
       const eval::SlamStep& st = log.steps[i];
       if (!st.is_scan) {
@@ -159,6 +166,12 @@ int Main(int argc, char** argv) {
         if (last_ref && !reached) path += std::hypot(ref[k]->x_m - last_ref->x_m, ref[k]->y_m - last_ref->y_m);
         last_ref = ref[k];
       }
+      if (u.lost_now) accepted.reset();
+      if (u.relocalized && !reached) {
+        accepted = {st.utime, k};
+        path_at_accept = path;
+        compute_at_accept = compute;
+      }
       if (u.relocalized && ref[k]) {
         const nav::Pose2& p = loc.pose();
         if (std::hypot(p.x_m - ref[k]->x_m, p.y_m - ref[k]->y_m) > wrong_m || HeadingError(p.theta_rad, ref[k]->theta_rad) > wrong_deg * kPi / 180)
@@ -172,10 +185,11 @@ int Main(int argc, char** argv) {
       if (!reached && e <= tol_m && h <= tol_deg * kPi / 180) {
         reached = true;
         r.relocalized = true;
-        r.time_s = (st.utime - t0) * 1e-6;
-        r.scans_to = static_cast<int>(k) - r.start_scan;
-        r.path_m = path;
-        r.compute_s = compute;
+        const bool from_accept = accepted.has_value();
+        r.time_s = ((from_accept ? accepted->first : st.utime) - t0) * 1e-6;
+        r.scans_to = static_cast<int>(from_accept ? accepted->second : k) - r.start_scan;
+        r.path_m = from_accept ? path_at_accept : path;
+        r.compute_s = from_accept ? compute_at_accept : compute;
       }
       if (reached) {
         ++r.referenced_localized;

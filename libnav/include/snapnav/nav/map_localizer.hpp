@@ -29,7 +29,7 @@ namespace snapnav::nav {
 
 struct MapLocalizerOptions {
   LaserSlamOptions tracking;     // the tracker (laser_slam.ini's [laser_slam]); its map options are the saved map's
-  GlobalSearchOptions global;    // the global search
+  GlobalSearchOptions global;    // the global search (its ambiguity_floor is set to max_global_ambiguity)
   double min_global_score = 0.5;      // a global search's best is taken only at or above this mean likelihood [0-1]
   double max_global_ambiguity = 0.8;  // ... and when the best distinct other pose scores below this fraction of it [0-1]
   double accept_fit = 0.6;            // ... and when the refined scan's fit (points within match_distance_m / 2 of the map) is at least this [0-1]
