@@ -12,7 +12,8 @@
 #    the recovery on the truth; the live export a map_server map equal to the saved one.
 set -euo pipefail
 BIN="$1"; CONFIG="$2"; HERE="$(cd "$(dirname "$0")" && pwd)"
-OUT="${3:-$(mktemp -d)}"
+OUT="${3:-}"
+if [ -z "$OUT" ]; then OUT="$(mktemp -d)"; KEEP=0; else KEEP=1; fi
 mkdir -p "$OUT"
 pids=()
 cleanup() { for p in "${pids[@]}"; do kill -INT "$p" 2>/dev/null || true; done; }
@@ -142,4 +143,5 @@ same = sum(1 for a, b in zip(ps, pl) if a == b) / len(ps)
 print('localize kidnap test: live export %d x %d, %.4f of its pixels as the saved map' % (wl, hl, same))
 assert same >= 0.999, same
 PY
+[ "$KEEP" = 1 ] || rm -rf "$OUT"
 echo "localize kidnap test: passed"
