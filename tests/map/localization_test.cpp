@@ -275,16 +275,18 @@ TEST(MapLocalizer, FindsTracksNoticesAKidnappingAndFindsItAgain) {
     const bool right = u.state == nav::LocalizationState::kLocalized &&
                        std::hypot(loc.pose().x_m - truth.x_m, loc.pose().y_m - truth.y_m) < 0.1 &&
                        std::abs(nav::WrapAngle(loc.pose().theta_rad - truth.theta_rad)) < 2 * kDeg;
-    if (u.relocalized || u.lost_now || (u.searched && i % 10 == 0)) {
+    if (u.relocalized || u.lost_now || (u.searched && i % 10 == 0) || (i >= kidnap_at && i < kidnap_at + 8)) {
       std::cout << "scan " << i << (u.lost_now ? " lost" : "") << (u.relocalized ? " relocalized" : "")
                 << (u.searched ? " searched" : "") << ": pose (" << loc.pose().x_m << ", " << loc.pose().y_m << ", "
                 << loc.pose().theta_rad << "), truth (" << truth.x_m << ", " << truth.y_m << ", " << truth.theta_rad
                 << "), global score " << u.global.score << " ambiguity " << u.global.ambiguity << " best ("
                 << u.global.best.x_m << ", " << u.global.best.y_m << ", " << u.global.best.theta_rad << "), refined fit "
-                << u.refined_fit << ", window " << u.window_scans << "\n";
+                << u.refined_fit << ", window " << u.window_scans << ", tracking fit " << u.fit << " ("
+                << nav::MatchOutcomeName(u.tracking.outcome) << "), bad scans " << u.bad_scans << "\n";
     }
     if (first_localized < 0 && right) first_localized = i;
-    if (i > kidnap_at && u.state == nav::LocalizationState::kLost) lost_after_kidnap = true;
+    // Lost after the kidnapping (the search may find the pose on the very scan that declared it).
+    if (i >= kidnap_at && u.lost_now) lost_after_kidnap = true;
     if (i >= kidnap_at && relocalized < 0 && lost_after_kidnap && right) relocalized = i;
     if (first_localized >= 0 && i > first_localized && i < kidnap_at) {
       EXPECT_EQ(u.state, nav::LocalizationState::kLocalized) << "scan " << i;
