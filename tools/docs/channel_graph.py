@@ -54,9 +54,12 @@ def _true(section, key):
 # what it publishes (processes/<dir>/<dir>_node.cpp).
 ROLES = {
     "dead-reckoning": {"odometry": (SUB, _always), "pose": (PUB, _always)},
-    "laser-slam": {
-        "odometry": (SUB, _always), "scan": (SUB, _always),
-        "pose": (PUB, _always), "map": (PUB, _always), "status": (PUB, _always),
+    "laser-slam": {  # --mode localize: the pose, its status and the saved map instead of SLAM's map and status
+        "odometry": (SUB, _always), "scan": (SUB, _always), "pose": (PUB, _always),
+        "map": (PUB, lambda cfg: cfg.flags.get("mode") != "localize"),
+        "status": (PUB, lambda cfg: cfg.flags.get("mode") != "localize"),
+        "grid": (PUB, _always), "grid_request": (SUB, _always),
+        "localization_status": (PUB, lambda cfg: cfg.flags.get("mode") == "localize"),
     },
     "fused-slam": {
         "odometry": (SUB, _always), "scan": (SUB, _always), "visual": (SUB, _always),
@@ -104,6 +107,7 @@ ROLES = {
         "point_map": (SUB, _always), "poses": (SUB, _always), "ground_truth": (SUB, _always),
         "panorama": (SUB, _always), "omni": (SUB, _always), "landmarks": (SUB, _always),
         "homing_vector": (SUB, _always), "place_cell_match": (SUB, _always), "scan": (SUB, _always),
+        "grid": (SUB, _always),
     },
     "omni-camera": {"frame": (PUB, _always)},
     "laser-hokuyo": {"scan": (PUB, _always)},
