@@ -6,7 +6,9 @@
 
 #include "dead_reckoning_node.hpp"
 #include "fused_slam_node.hpp"
+#include "laser_slam_node.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "support/config_errors.hpp"
 
 namespace snapnav {
 namespace {
@@ -27,6 +29,39 @@ TEST(ConfigFiles, FusedSlam) {
   const auto c = processes::FusedSlamConfig::FromIni(glue::IniFile::Load(kConfigDir / "fused_slam.ini"), "");
   EXPECT_EQ(c.pose_channel, "POSE_EKF");
   EXPECT_EQ(c.visual_channel, "POSE_PLACE_CELLS");
+}
+
+// A value the options' check refuses names the file, the line, the section and the key (it said
+// "dead reckoning noise parameters must be finite and non-negative", nothing else).
+TEST(ConfigFiles, NegativeNoiseNamesFileLineAndKey) {
+  const std::string path = kConfigDir / "dead_reckoning.ini";
+  glue::IniFile ini = glue::IniFile::Load(path);
+  ini.Set("dead_reckoning", "rotation_noise_rad_per_m", "-0.01", "test");
+  try {
+    processes::DeadReckoningConfig::FromIni(ini, "");
+    FAIL() << "no error";
+  } catch (const glue::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), path + ":" +
+                                         std::to_string(ini.KeyLine("dead_reckoning", "rotation_noise_rad_per_m")) +
+                                         ": [dead_reckoning] rotation_noise_rad_per_m = '-0.01': dead reckoning: "
+                                         "rotation_noise_rad_per_m must be finite and non-negative");
+  }
+}
+
+// Every number of these configs made negative or NaN: each error names its file, line and key.
+TEST(ConfigFiles, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(
+                kConfigDir / "dead_reckoning.ini",
+                [](const glue::IniFile& ini) { processes::DeadReckoningConfig::FromIni(ini, ""); }),
+            0);
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(
+                kConfigDir / "fused_slam.ini",
+                [](const glue::IniFile& ini) { processes::FusedSlamConfig::FromIni(ini, ""); }),
+            0);
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(
+                kConfigDir / "laser_slam.ini",
+                [](const glue::IniFile& ini) { processes::LaserSlamConfig::FromIni(ini, ""); }),
+            0);
 }
 
 // Every .ini under config/ is covered by a test above.

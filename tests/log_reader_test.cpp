@@ -263,5 +263,51 @@ TEST_F(LogReaderTest, RandomByteFlipsLoseAtMostTheEventHit) {
   }
 }
 
+// A file that is not an LCM log at all is an error when it is opened, naming it and what its start
+// holds (it read as one damaged stretch over the whole file: no event, "damage", nothing said).
+TEST_F(LogReaderTest, NotAnLcmLogIsAnErrorNamingTheFile) {
+  std::string random;
+  std::mt19937 rng(7);
+  for (int i = 0; i < 100000; ++i) random.push_back(static_cast<char>(rng() & 0xff));
+  random[0] = '\x42';
+  const std::string gzip = std::string("\x1f\x8b\x08\x00", 4) + std::string(200, '\x01');
+  struct Case {
+    std::string bytes;
+    std::string want;
+  };
+  for (const Case& c : {Case{random, "is not an LCM log: byte 0: no event sync word (it starts with 42 "},
+                        Case{"FLASER 181 1.0 2.0\nODOM 1 2 3\n", "(it is text: 'FLASER 181 1.0 2.0')"},
+                        Case{gzip, "(it is gzip-compressed: gunzip it first)"}}) {
+    const std::string path = WriteDamaged(c.bytes);
+    try {
+      LogReader r(path);
+      FAIL() << "no error for " << c.want;
+    } catch (const LogError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(path + " is not an LCM log: byte 0: ", 0), 0u) << what;
+      EXPECT_NE(what.find(c.want), std::string::npos) << what;
+      EXPECT_NE(what.find("none of its " + std::to_string(c.bytes.size()) + " bytes starts an intact event"),
+                std::string::npos)
+          << what;
+    }
+  }
+}
+
+// A log whose first event is damaged is a damaged log: the rest is read, the damage named.
+TEST_F(LogReaderTest, DamagedFirstEventIsDamageNotAnError) {
+  std::string bytes = bytes_;
+  bytes[0] = 'X';
+  LogReader r(WriteDamaged(bytes));
+  ExpectAllBut(ReadAll(r), {0});
+  ASSERT_EQ(r.damage().size(), 1u);
+  EXPECT_EQ(r.damage()[0].offset, 0u);
+  EXPECT_EQ(r.damage()[0].resumed_at, written_[1].offset);
+  // An empty file is an empty log.
+  LogReader empty(WriteDamaged(""));
+  LogEvent e;
+  EXPECT_FALSE(empty.Next(&e));
+  EXPECT_FALSE(empty.damaged());
+}
+
 }  // namespace
 }  // namespace snapnav::glue

@@ -1,10 +1,13 @@
 #include "snapnav/glue/flags.hpp"
 
+#include <cctype>
 #include <cerrno>
 #include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+
+#include "snapnav/glue/suggest.hpp"
 
 namespace snapnav::glue {
 namespace {
@@ -29,9 +32,30 @@ int ParseInt(const std::string& name, const std::string& text) {
   return static_cast<int>(v);
 }
 
+bool Mentions(const std::string& help, const std::string& word) {
+  std::string lower = help;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower.find(word) != std::string::npos;
+}
+
+// The default --help shows: `given` when given; none when the help says what it is ("default: ...")
+// or that the flag overrides a config key (the config's value is the default), or for a NaN (a
+// sentinel for "not given"); else `value`.
+std::string DefaultText(const std::string& help, const std::string& value, const char* given) {
+  if (given) return given;
+  if (Mentions(help, "default") || Mentions(help, "override") || value == "nan" || value == "-nan") return "";
+  return value;
+}
+
 }  // namespace
 
-Flags::Flags(std::string program, std::string summary) : program_(std::move(program)), summary_(std::move(summary)) {}
+Flags::Flags(std::string program, std::string summary) : program_(std::move(program)), summary_(std::move(summary)) {
+  // "log-report LOG": the binary's name, then its positional arguments.
+  if (const auto space = program_.find(' '); space != std::string::npos) {
+    positional_synopsis_ = program_.substr(space + 1);
+    program_.resize(space);
+  }
+}
 
 void Flags::Add(Flag flag) {
   for (const auto& f : flags_) {
@@ -40,18 +64,20 @@ void Flags::Add(Flag flag) {
   flags_.push_back(std::move(flag));
 }
 
-void Flags::AddString(const std::string& name, std::string* value, const std::string& help) {
-  Add({name, help, *value, false, [value](const std::string& v) { *value = v; }});
+void Flags::AddString(const std::string& name, std::string* value, const std::string& help, const char* default_text) {
+  Add({name, help, DefaultText(help, *value, default_text), false, [value](const std::string& v) { *value = v; }});
 }
 
-void Flags::AddInt(const std::string& name, int* value, const std::string& help) {
-  Add({name, help, std::to_string(*value), false, [value, name](const std::string& v) { *value = ParseInt(name, v); }});
+void Flags::AddInt(const std::string& name, int* value, const std::string& help, const char* default_text) {
+  Add({name, help, DefaultText(help, std::to_string(*value), default_text), false,
+       [value, name](const std::string& v) { *value = ParseInt(name, v); }});
 }
 
-void Flags::AddDouble(const std::string& name, double* value, const std::string& help) {
+void Flags::AddDouble(const std::string& name, double* value, const std::string& help, const char* default_text) {
   std::ostringstream def;
   def << *value;
-  Add({name, help, def.str(), false, [value, name](const std::string& v) { *value = ParseDouble(name, v); }});
+  Add({name, help, DefaultText(help, def.str(), default_text), false,
+       [value, name](const std::string& v) { *value = ParseDouble(name, v); }});
 }
 
 void Flags::AddBool(const std::string& name, bool* value, const std::string& help) {
@@ -59,7 +85,8 @@ void Flags::AddBool(const std::string& name, bool* value, const std::string& hel
 }
 
 void Flags::AddStringList(const std::string& name, std::vector<std::string>* values, const std::string& help) {
-  Add({name, help + " (repeatable)", "", false, [values](const std::string& v) { values->push_back(v); }});
+  Add({name, Mentions(help, "repeatable") ? help : help + " (repeatable)", "", false,
+       [values](const std::string& v) { values->push_back(v); }});
 }
 
 void Flags::AddCommon(CommonFlags* common) {
@@ -70,9 +97,10 @@ void Flags::AddCommon(CommonFlags* common) {
   AddString("channel-prefix", &common->channel_prefix, "prefix prepended to every channel name");
 }
 
-void Flags::AllowPositional(const std::string& name, const std::string& help) {
-  positional_name_ = name;
+void Flags::AllowPositional(const std::string& synopsis, const std::string& help) {
+  positional_synopsis_ = synopsis;
   positional_help_ = help;
+  positional_allowed_ = true;
 }
 
 bool Flags::Parse(int argc, char** argv) { return Parse(argc, argv, std::cout); }
@@ -86,7 +114,7 @@ bool Flags::Parse(int argc, const char* const* argv, std::ostream& out) {
       return false;
     }
     if (arg.rfind("--", 0) != 0 || arg.size() == 2) {
-      if (positional_name_.empty()) throw FlagError("unexpected argument '" + arg + "' (see --help)");
+      if (!positional_allowed_) throw FlagError("unexpected argument '" + arg + "' (see --help)");
       positional_.push_back(arg);
       continue;
     }
@@ -102,7 +130,14 @@ bool Flags::Parse(int argc, const char* const* argv, std::ostream& out) {
     for (const auto& f : flags_) {
       if (f.name == name) flag = &f;
     }
-    if (!flag) throw FlagError("unknown flag --" + name + " (see --help)");
+    if (!flag) {
+      std::vector<std::string> names;
+      for (const auto& f : flags_) names.push_back(f.name);
+      names.push_back("help");
+      const std::string near = NearestName(name, names);
+      throw FlagError("unknown flag --" + name + (near.empty() ? "" : " (did you mean --" + near + "?)") +
+                      " (see --help)");
+    }
     if (flag->is_bool) {
       if (has_value) throw FlagError("--" + name + " takes no value");
     } else if (!has_value) {
@@ -116,7 +151,7 @@ bool Flags::Parse(int argc, const char* const* argv, std::ostream& out) {
 
 void Flags::PrintUsage(std::ostream& out) const {
   out << "usage: " << program_ << " [flags]";
-  if (!positional_name_.empty()) out << " " << positional_name_ << "...";
+  if (!positional_synopsis_.empty()) out << " " << positional_synopsis_;
   out << "\n\n" << summary_ << "\n\nflags:\n";
   for (const auto& f : flags_) {
     std::string left = "  --" + f.name + (f.is_bool ? "" : " VALUE");
@@ -124,7 +159,8 @@ void Flags::PrintUsage(std::ostream& out) const {
     if (!f.is_bool && !f.default_text.empty()) out << " (default: " << f.default_text << ")";
     out << "\n";
   }
-  if (!positional_name_.empty()) out << "  " << std::left << std::setw(27) << positional_name_ << " " << positional_help_ << "\n";
+  if (positional_allowed_)
+    out << "  " << std::left << std::setw(27) << positional_synopsis_ << " " << positional_help_ << "\n";
   out << "  " << std::left << std::setw(27) << "--help" << " print this help\n";
 }
 

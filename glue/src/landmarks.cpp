@@ -136,7 +136,7 @@ nav::LandmarkExtractorConfig ReadLandmarkExtractor(const IniFile& ini) {
     c.surf.Validate();
     c.Validate();
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return c;
 }
@@ -169,7 +169,7 @@ nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMe
     lines.Validate();
     c.Validate();
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return c;
 }

@@ -1,11 +1,20 @@
 #include "snapnav/glue/lcm_url.hpp"
 
 #include <arpa/inet.h>
+#include <net/if.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
+
+#include "snapnav/glue/suggest.hpp"
 
 namespace snapnav::glue {
 namespace {
@@ -20,6 +29,15 @@ std::string UrlParam(const std::string& url, const std::string& key) {
     if (eq != std::string::npos && kv.substr(0, eq) == key) return kv.substr(eq + 1);
   }
   return "";
+}
+
+// A whole non-negative decimal number (no sign, no trailing characters), or nullopt.
+std::optional<long long> WholeNumber(const std::string& text) {
+  if (text.empty() || text.size() > 18) return std::nullopt;
+  for (const char c : text) {
+    if (c < '0' || c > '9') return std::nullopt;
+  }
+  return std::stoll(text);
 }
 
 // Multicast group of a udpm URL in host byte order (0 if unparsable).
@@ -40,7 +58,8 @@ long ReadLong(const std::string& path) {
   return v;
 }
 
-// The interface of the route that carries `group`, empty if none (parses /proc/net/route).
+// The interface of the route that carries `group`, empty if none (parses /proc/net/route, which
+// is this process's network namespace's table).
 std::string RouteFor(uint32_t group) {
   std::ifstream in("/proc/net/route");
   std::string line;
@@ -63,6 +82,20 @@ std::string RouteFor(uint32_t group) {
   return best;
 }
 
+// The flags of interface `name` in this process's network namespace (SIOCGIFFLAGS), nullopt if
+// they cannot be read. /sys/class/net/NAME/flags would show the namespace sysfs was mounted in:
+// the host's, inside `./snapnav bus`.
+std::optional<unsigned> InterfaceFlags(const char* name) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return std::nullopt;
+  ifreq request{};
+  std::strncpy(request.ifr_name, name, IFNAMSIZ - 1);
+  const int rc = ::ioctl(fd, SIOCGIFFLAGS, &request);
+  ::close(fd);
+  if (rc != 0) return std::nullopt;
+  return static_cast<unsigned short>(request.ifr_flags);
+}
+
 }  // namespace
 
 std::string DefaultLcmUrl() {
@@ -70,9 +103,70 @@ std::string DefaultLcmUrl() {
   return (env && *env) ? env : kDefaultLcmUrl;
 }
 
+std::string LcmUrlProblem(const std::string& url) {
+  const auto sep = url.find("://");
+  if (sep == std::string::npos)
+    return "not a URL PROVIDER://NETWORK?OPTIONS (e.g. " + std::string(kDefaultLcmUrl) + ")";
+  const std::string provider = url.substr(0, sep);
+  if (provider == "file" || provider == "memq" || provider == "tcpq") return "";
+  if (provider != "udpm") {
+    return "unknown provider '" + provider + "'" + DidYouMean(provider, {"udpm", "file", "memq", "tcpq"}) +
+           " (snapnav uses udpm://, file://LOG?speed=0 and memq://)";
+  }
+  const std::string rest = url.substr(sep + 3);
+  const std::string network = rest.substr(0, rest.find('?'));
+  const std::string address = network.substr(0, network.find(':'));
+  in_addr a{};
+  if (address.empty()) return "no multicast group in '" + network + "' (udpm://GROUP:PORT, e.g. 239.255.76.67:7667)";
+  if (inet_pton(AF_INET, address.c_str(), &a) != 1) {
+    return "the group '" + address + "' is not an IPv4 address (udpm://GROUP:PORT, e.g. 239.255.76.67:7667)";
+  }
+  if ((ntohl(a.s_addr) >> 28) != 0xE) return "the group " + address + " is not a multicast address (224.0.0.0/4)";
+  if (const auto colon = network.find(':'); colon != std::string::npos) {
+    const std::string port = network.substr(colon + 1);
+    const auto n = WholeNumber(port);
+    if (!n || *n < 1 || *n > 65535) return "the port '" + port + "' is not a port number (1..65535)";
+  }
+  if (const auto q = rest.find('?'); q != std::string::npos) {
+    std::istringstream in(rest.substr(q + 1));
+    std::string kv;
+    while (std::getline(in, kv, '&')) {
+      const auto eq = kv.find('=');
+      const std::string key = kv.substr(0, eq);
+      const std::string value = eq == std::string::npos ? "" : kv.substr(eq + 1);
+      const auto n = WholeNumber(value);
+      if (key == "ttl" && (!n || *n > 255)) return "ttl '" + value + "' is not 0..255";
+      if (key == "recv_buf_size" && (!n || *n < 1))
+        return "recv_buf_size '" + value + "' is not a positive number of bytes";
+    }
+  }
+  return "";
+}
+
+NetworkFacts ReadNetworkFacts(const std::string& url) {
+  NetworkFacts facts;
+  if (const std::optional<unsigned> flags = InterfaceFlags("lo")) {
+    facts.lo_known = true;
+    facts.lo_up = *flags & IFF_UP;
+    facts.lo_multicast = *flags & IFF_MULTICAST;
+  }
+  if (const uint32_t group = UdpmGroup(url)) facts.group_route = RouteFor(group);
+  return facts;
+}
+
 std::string DiagnoseLcmFailure(const std::string& url) {
+  const bool udpm = url.rfind("udpm://", 0) == 0 && LcmUrlProblem(url).empty();
+  return DiagnoseLcmFailure(url, udpm ? ReadNetworkFacts(url) : NetworkFacts{});
+}
+
+std::string DiagnoseLcmFailure(const std::string& url, const NetworkFacts& facts) {
   std::ostringstream out;
   out << "cannot create LCM on '" << url << "'.\n";
+  if (const std::string problem = LcmUrlProblem(url); !problem.empty()) {
+    out << "  The URL is malformed: " << problem << ".\n"
+        << "  snapnav's default: " << kDefaultLcmUrl << " (--lcm-url or LCM_DEFAULT_URL set another).";
+    return out.str();
+  }
   const std::string provider = url.substr(0, url.find("://"));
   if (provider == "file") {
     std::string path = url.substr(7);
@@ -85,24 +179,31 @@ std::string DiagnoseLcmFailure(const std::string& url) {
     out << "  Check the provider and its options (snapnav uses udpm://, file://LOG?speed=0 and memq://).";
     return out.str();
   }
-  const uint32_t group = UdpmGroup(url);
-  std::ifstream flags_file("/sys/class/net/lo/flags");
-  std::string flags_text;
-  flags_file >> flags_text;
-  const unsigned long flags = flags_text.empty() ? 0 : std::stoul(flags_text, nullptr, 16);
-  const bool lo_up = flags & 0x1;
-  const bool lo_multicast = flags & 0x1000;
-  const std::string route = group ? RouteFor(group) : "";
-  out << "  Facts: loopback is " << (lo_up ? "up" : "DOWN") << (lo_multicast ? " with" : " WITHOUT")
-      << " multicast; the multicast group " << (route.empty() ? "has NO route" : "routes via " + route) << ".\n";
-  out << "  LCM's UDP multicast needs a route for 224.0.0.0/4. To keep the bus on this host, either\n"
-      << "  run the command in snapnav's private network namespace:\n"
-      << "      ./snapnav bus -- <command>\n"
-      << "  or give loopback the multicast route (as root):\n"
-      << "      ip link set lo up multicast on\n"
-      << "      ip route add 224.0.0.0/4 dev lo\n"
-      << "  and keep ttl=0 in the URL. A LAN deployment over several machines routes 224.0.0.0/4 through\n"
-      << "  the LAN interface (ip route add 224.0.0.0/4 dev eth0) and uses ttl=1 (see README).";
+  const std::string& route = facts.group_route;
+  out << "  Facts (this network namespace): ";
+  if (facts.lo_known) {
+    out << "loopback is " << (facts.lo_up ? "up" : "DOWN") << (facts.lo_multicast ? " with" : " WITHOUT")
+        << " multicast";
+  } else {
+    out << "loopback's state could not be read";
+  }
+  out << "; the multicast group " << (route.empty() ? "has NO route" : "routes via " + route) << ".\n";
+  const bool lo_unusable = facts.lo_known && (!facts.lo_up || !facts.lo_multicast);
+  if (route.empty() || (route == "lo" && lo_unusable)) {
+    out << "  LCM's UDP multicast needs a route for 224.0.0.0/4. To keep the bus on this host, either\n"
+        << "  run the command in snapnav's private network namespace:\n"
+        << "      ./snapnav bus -- <command>\n"
+        << "  or give loopback the multicast route (as root):\n"
+        << "      ip link set lo up multicast on\n"
+        << "      ip route add 224.0.0.0/4 dev lo\n"
+        << "  and keep ttl=0 in the URL. A LAN deployment over several machines routes 224.0.0.0/4 through\n"
+        << "  the LAN interface (ip route add 224.0.0.0/4 dev eth0) and uses ttl=1 (docs/bus_and_launch.md).";
+  } else {
+    out << "  The URL is well-formed and the group has a route: LCM's own message above says what failed.\n"
+        << "  If it is LCM's self test, multicast sent on " << route << " does not come back (a firewall, a\n"
+        << "  switch): keep the bus on this host with ./snapnav bus -- <command>, or route 224.0.0.0/4\n"
+        << "  through loopback (ip route add 224.0.0.0/4 dev lo, as root) and keep ttl=0.";
+  }
   return out.str();
 }
 

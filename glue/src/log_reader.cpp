@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cctype>
 #include <cstring>
 #include <ostream>
 
@@ -40,6 +41,52 @@ LogReader::LogReader(const std::string& path) : path_(path) {
     throw LogError("cannot read LCM log '" + path + "': not a regular file");
   }
   size_ = static_cast<uint64_t>(ftello(file_));
+  try {
+    CheckIsLog();
+  } catch (...) {
+    std::fclose(file_);
+    file_ = nullptr;
+    throw;
+  }
+}
+
+void LogReader::CheckIsLog() {
+  if (size_ == 0) return;  // an empty log
+  Header h;
+  const std::string problem = CheckHeader(0, &h);
+  if (problem.empty()) return;
+  const uint64_t next = FindNextEvent(1, size_);
+  if (next < size_) {  // a damaged start, intact events after it
+    AddDamage(LogDamage::Kind::kCorrupt, 0, next, problem);
+    pos_ = next;
+    return;
+  }
+  // No intact event anywhere: an LCM log cut off in its first event starts with (a prefix of) the
+  // sync word; anything else is some other file.
+  unsigned char head[64];
+  const size_t n = static_cast<size_t>(std::min<uint64_t>(sizeof head, size_));
+  ReadAt(0, head, n);
+  const unsigned char sync[4] = {0xED, 0xA1, 0xDA, 0x01};
+  if (std::memcmp(head, sync, std::min<size_t>(n, 4)) == 0) return;
+  std::string first_bytes;
+  for (size_t i = 0; i < std::min<size_t>(n, 4); ++i) {
+    static const char hex[] = "0123456789abcdef";
+    first_bytes += std::string(i ? " " : "") + hex[head[i] >> 4] + hex[head[i] & 15];
+  }
+  std::string what = path_ + " is not an LCM log: byte 0: " + problem + " (it starts with " + first_bytes +
+                     "; an LCM log starts with ed a1 da 01), and none of its " + std::to_string(size_) +
+                     " bytes starts an intact event";
+  size_t text = 0;
+  while (text < n && (std::isprint(head[text]) || head[text] == '\t' || head[text] == '\n' || head[text] == '\r'))
+    ++text;
+  if (n >= 2 && head[0] == 0x1f && head[1] == 0x8b) {
+    what += " (it is gzip-compressed: gunzip it first)";
+  } else if (text == n) {
+    std::string line(reinterpret_cast<const char*>(head), n);
+    line = line.substr(0, line.find_first_of("\r\n"));
+    what += " (it is text: '" + line.substr(0, 40) + (line.size() > 40 ? "...'" : "'") + ")";
+  }
+  throw LogError(what);
 }
 
 LogReader::~LogReader() {

@@ -22,21 +22,19 @@ constexpr double kDeg = M_PI / 180.0;
 
 const char* Bool(bool b) { return b ? "true" : "false"; }
 
-// Wraps a libnav validation error as a config error naming the file and the section.
+// Wraps a libnav validation error as a config error naming the file, the section and the key.
 template <class F>
 void Validated(const IniFile& ini, const char* section, F&& validate) {
   try {
     validate();
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(ini.origin() + ": [" + section + "] " + e.what());
+    throw ini.ValidationError("[" + std::string(section) + "] " + e.what());
   }
 }
 
 int ReadNonNegativeInt(const IniFile& ini, const std::string& section, const std::string& key) {
   const int v = ini.GetInt(section, key);
-  if (v < 0) {
-    throw ConfigError(ini.origin() + ": [" + section + "] " + key + " = " + std::to_string(v) + ": must be >= 0");
-  }
+  if (v < 0) ini.FailKey(section, key, "must be >= 0");
   return v;
 }
 
@@ -59,7 +57,14 @@ nav::PlaceViewOptions ReadPlaceViewOptions(const IniFile& ini) {
   o.signature_width_px = ini.GetInt("place_view", "signature_width_px");
   o.signature_height_px = ini.GetInt("place_view", "signature_height_px");
   Validated(ini, "place_view", [&] {
-    o.vline.Validate();
+    // The [vline] options with this section's window: a window the check refuses is vline_window_px.
+    try {
+      o.vline.Validate();
+    } catch (const std::invalid_argument& e) {
+      if (std::string(e.what()).find("window_px") != std::string::npos)
+        ini.FailKey("place_view", "vline_window_px", e.what());
+      throw;
+    }
     o.Validate();
   });
   return o;

@@ -2,13 +2,19 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace snapnav::nav {
 
 void DeadReckoningOptions::Validate() const {
-  if (!(translation_noise_m_per_m >= 0) || !(rotation_noise_rad_per_rad >= 0) || !(rotation_noise_rad_per_m >= 0)) {
-    throw std::invalid_argument("dead reckoning noise parameters must be finite and non-negative");
-  }
+  const auto noise = [](double v, const char* name) {
+    if (!(v >= 0) || !std::isfinite(v)) {
+      throw std::invalid_argument(std::string("dead reckoning: ") + name + " must be finite and non-negative");
+    }
+  };
+  noise(translation_noise_m_per_m, "translation_noise_m_per_m");
+  noise(rotation_noise_rad_per_rad, "rotation_noise_rad_per_rad");
+  noise(rotation_noise_rad_per_m, "rotation_noise_rad_per_m");
 }
 
 DeadReckoning::DeadReckoning(const DeadReckoningOptions& options, const Pose2& start)

@@ -75,13 +75,14 @@ void FusedSlamOptions::Validate() const {
   Require(relocalize_after >= 0, "relocalize_after must be >= 0 (0: never)");
   Require(relocalize_sigma_xy_m >= 0 && relocalize_sigma_theta_rad >= 0 && std::isfinite(relocalize_sigma_xy_m) &&
               std::isfinite(relocalize_sigma_theta_rad),
-          "relocalize sigmas must be >= 0");
+          "relocalize_sigma_xy_m and relocalize_sigma_theta_deg must be >= 0");
   Require(min_fix_sigma_xy_m > 0 && min_fix_sigma_theta_rad > 0 && std::isfinite(min_fix_sigma_xy_m) &&
               std::isfinite(min_fix_sigma_theta_rad),
-          "min_fix sigmas must be positive");
+          "min_fix_sigma_xy_m and min_fix_sigma_theta_deg must be positive");
   Require(max_fix_age_s > 0 && std::isfinite(max_fix_age_s), "max_fix_age_s must be positive");
   Require(relocalize_window_s > 0 && std::isfinite(relocalize_window_s), "relocalize_window_s must be positive");
-  Require(relocalize_min_distance_m >= 0 && relocalize_min_heading_rad >= 0, "relocalize minimum jumps must be >= 0");
+  Require(relocalize_min_distance_m >= 0 && relocalize_min_heading_rad >= 0,
+          "relocalize_min_distance_m and relocalize_min_heading_deg must be >= 0");
   Require(relocalize_max_fit_loss >= 0 && relocalize_max_fit_loss <= 1, "relocalize_max_fit_loss must be in [0, 1]");
   Require(suspect_after >= 0, "suspect_after must be >= 0 (0: never)");
   Require(map_min_fit >= 0 && map_min_fit <= 1, "map_min_fit must be in [0, 1]");
@@ -96,10 +97,10 @@ void FusedSlamOptions::Validate() const {
   Require(map_cell_m > 0 && std::isfinite(map_cell_m), "map_cell_m must be positive");
   Require(start_sigma_xy_m >= 0 && start_sigma_theta_rad >= 0 && std::isfinite(start_sigma_xy_m) &&
               std::isfinite(start_sigma_theta_rad),
-          "start sigmas must be >= 0");
+          "start_sigma_xy_m and start_sigma_theta_deg must be >= 0");
   Require(map_drift_xy_m >= 0 && map_drift_theta_rad >= 0 && std::isfinite(map_drift_xy_m) &&
               std::isfinite(map_drift_theta_rad),
-          "map drift must be >= 0");
+          "map_drift_xy_m and map_drift_theta_deg must be >= 0");
 }
 
 FusedSlam::FusedSlam(const FusedSlamOptions& options, const Pose2& start)

@@ -32,7 +32,8 @@ const char* OrientationRangeName(OrientationRange range) {
 void HogOptions::Validate() const {
   if (cell_size_px < 2) throw std::invalid_argument("hog: cell_size_px must be >= 2");
   if (bins < 2 || bins > 360) throw std::invalid_argument("hog: bins must be in 2..360");
-  if (band_top_px < 0 || band_height_px < 0) throw std::invalid_argument("hog: band must not be negative");
+  if (band_top_px < 0 || band_height_px < 0)
+    throw std::invalid_argument("hog: band_top_px and band_height_px must not be negative");
   if (!(narrow_range_deg > 0 && narrow_range_deg <= 90)) throw std::invalid_argument("hog: narrow_range_deg in (0, 90]");
 }
 

@@ -243,10 +243,10 @@ void LandmarkAlvOptions::Validate() const {
   if (!(max_scale_ratio >= 1)) throw std::invalid_argument("landmark alv: max_scale_ratio must be >= 1");
   if (min_landmarks < 1) throw std::invalid_argument("landmark alv: min_landmarks must be >= 1");
   if (!(consensus_window_rad > 0 && consensus_window_rad <= M_PI)) {
-    throw std::invalid_argument("landmark alv: consensus_window must lie in (0, 180] degrees");
+    throw std::invalid_argument("landmark alv: consensus_window_rad must lie in (0, 180] degrees");
   }
   if (!(rotation_refine_rad >= 0 && rotation_refine_rad < M_PI)) {
-    throw std::invalid_argument("landmark alv: rotation_refine must lie in [0, 180) degrees");
+    throw std::invalid_argument("landmark alv: rotation_refine_rad must lie in [0, 180) degrees");
   }
 }
 
@@ -429,7 +429,7 @@ void LandmarkHomingConfig::Validate() const {
   match.Validate();
   alv.Validate();
   if (!(rotation_window_rad > 0 && rotation_window_rad < M_PI)) {
-    throw std::invalid_argument("landmark homing: rotation_window must lie in (0, 180) degrees");
+    throw std::invalid_argument("landmark homing: rotation_window_rad must lie in (0, 180) degrees");
   }
 }
 

@@ -32,7 +32,8 @@ Pose2 EkfPoseUpdate(const Pose2& pose, Eigen::Matrix3d* covariance, const Pose2&
 
 void LaserSlamOptions::Validate() const {
   motion.Validate();
-  if (!(initial_sigma_xy_m >= 0) || !(initial_sigma_theta_rad >= 0)) throw std::invalid_argument("laser slam: initial sigmas must be >= 0");
+  if (!(initial_sigma_xy_m >= 0) || !(initial_sigma_theta_rad >= 0))
+    throw std::invalid_argument("laser slam: initial_sigma_xy_m and initial_sigma_theta_deg must be >= 0");
   if (!(match_distance_m > 0)) throw std::invalid_argument("laser slam: match_distance_m must be > 0");
   if (!(match_distance_start_m >= match_distance_m)) {
     throw std::invalid_argument("laser slam: match_distance_start_m must be >= match_distance_m");
@@ -41,13 +42,15 @@ void LaserSlamOptions::Validate() const {
   if (!(max_range_m >= 0)) throw std::invalid_argument("laser slam: max_range_m must be >= 0 (0: no limit)");
   if (!(recovery_fit >= 0 && recovery_fit <= 1)) throw std::invalid_argument("laser slam: recovery_fit must be in [0, 1]");
   if (!(search_sigmas >= 0) || !(search_window_max_rad >= 0) || !(search_step_rad > 0)) {
-    throw std::invalid_argument("laser slam: search_sigmas and search_window_max must be >= 0, search_step > 0");
+    throw std::invalid_argument(
+        "laser slam: search_sigmas and search_window_max_deg must be >= 0, search_step_deg > 0");
   }
   if (icp_iterations < 1) throw std::invalid_argument("laser slam: icp_iterations must be >= 1");
   if (!(point_sigma_rad >= 0)) throw std::invalid_argument("laser slam: point_sigma_deg must be >= 0");
   if (!(point_sigma_m > 0)) throw std::invalid_argument("laser slam: point_sigma_m must be > 0");
   if (min_matches < 3) throw std::invalid_argument("laser slam: min_matches must be >= 3");
-  if (!(map_resolution_m > 0) || !(add_distance_m > 0)) throw std::invalid_argument("laser slam: map sizes must be > 0");
+  if (!(map_resolution_m > 0) || !(add_distance_m > 0))
+    throw std::invalid_argument("laser slam: map_resolution_m and add_distance_m must be > 0");
   if (scan_step < 1) throw std::invalid_argument("laser slam: scan_step must be >= 1");
   if (!(update_score_margin >= 0 && update_score_margin < 1)) {
     throw std::invalid_argument("laser slam: update_score_margin must be in [0, 1)");

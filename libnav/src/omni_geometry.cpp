@@ -3,25 +3,34 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
 
 void MirrorModel::Validate() const {
-  for (double v : {center_x_px, center_y_px, inner_radius_px, outer_radius_px, elevation_inner_rad, elevation_outer_rad}) {
-    if (!std::isfinite(v)) throw std::invalid_argument("mirror: calibration values must be finite numbers");
+  // The messages name the calibration's keys (angles in degrees there).
+  const std::pair<double, const char*> values[] = {{center_x_px, "center_x_px"},
+                                                   {center_y_px, "center_y_px"},
+                                                   {inner_radius_px, "inner_radius_px"},
+                                                   {outer_radius_px, "outer_radius_px"},
+                                                   {elevation_inner_rad, "elevation_inner_deg"},
+                                                   {elevation_outer_rad, "elevation_outer_deg"}};
+  for (const auto& [v, name] : values) {
+    if (!std::isfinite(v)) throw std::invalid_argument(std::string("mirror: ") + name + " must be a finite number");
   }
   if (center_x_px < 0 || center_y_px < 0) {
-    throw std::invalid_argument("mirror: centre (" + std::to_string(center_x_px) + ", " + std::to_string(center_y_px) +
-                                ") px must not be negative");
+    throw std::invalid_argument("mirror: the centre center_x_px, center_y_px (" + std::to_string(center_x_px) + ", " +
+                                std::to_string(center_y_px) + ") must not be negative");
   }
   if (!(inner_radius_px >= 0) || !(outer_radius_px > inner_radius_px)) {
     throw std::invalid_argument("mirror: need 0 <= inner_radius_px < outer_radius_px");
   }
   if (!(elevation_outer_rad != elevation_inner_rad) || std::abs(elevation_inner_rad) >= M_PI / 2 ||
       std::abs(elevation_outer_rad) >= M_PI / 2) {
-    throw std::invalid_argument("mirror: elevations must differ and lie within (-90, 90) degrees");
+    throw std::invalid_argument(
+        "mirror: elevation_inner_deg and elevation_outer_deg must differ and lie within (-90, 90)");
   }
 }
 
@@ -29,7 +38,7 @@ void PanoramaModel::Validate() const {
   if (width_px < 8 || height_px < 2) throw std::invalid_argument("panorama: need width_px >= 8 and height_px >= 2");
   if (!(elevation_top_rad > elevation_bottom_rad) || std::abs(elevation_top_rad) >= M_PI / 2 ||
       std::abs(elevation_bottom_rad) >= M_PI / 2) {
-    throw std::invalid_argument("panorama: need -90 < elevation_bottom < elevation_top < 90 degrees");
+    throw std::invalid_argument("panorama: need -90 < elevation_bottom_deg < elevation_top_deg < 90");
   }
 }
 

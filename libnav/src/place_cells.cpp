@@ -120,7 +120,7 @@ void PlaceViewOptions::Validate() const {
   if (window_px < 4 || window_px > 64) throw std::invalid_argument("place cells: window_px must be in [4, 64]");
   if (!(window_scale > 0)) throw std::invalid_argument("place cells: window_scale must be positive");
   if (signature_width_px < 8 || signature_height_px < 1) {
-    throw std::invalid_argument("place cells: the signature must be at least 8 x 1 px");
+    throw std::invalid_argument("place cells: signature_width_px must be >= 8 and signature_height_px >= 1");
   }
 }
 

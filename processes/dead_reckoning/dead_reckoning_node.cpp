@@ -17,7 +17,7 @@ DeadReckoningConfig DeadReckoningConfig::FromIni(const glue::IniFile& ini, const
   c.options.rotation_noise_rad_per_rad = ini.GetDouble("dead_reckoning", "rotation_noise_rad_per_rad");
   c.options.rotation_noise_rad_per_m = ini.GetDouble("dead_reckoning", "rotation_noise_rad_per_m");
   ini.CheckAllUsed();
-  c.options.Validate();
+  ini.Check([&c] { c.options.Validate(); });
   return c;
 }
 

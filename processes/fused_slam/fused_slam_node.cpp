@@ -94,11 +94,10 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
-  if (c.map_every_n_scans < 0 || c.status_every_n_scans < 0) {
-    throw glue::ConfigError(ini.origin() + ": [fused_slam] map_every_n_scans and status_every_n_scans must be >= 0");
-  }
+  if (c.map_every_n_scans < 0) ini.FailKey("fused_slam", "map_every_n_scans", "must be >= 0");
+  if (c.status_every_n_scans < 0) ini.FailKey("fused_slam", "status_every_n_scans", "must be >= 0");
   return c;
 }
 

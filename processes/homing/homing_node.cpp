@@ -26,8 +26,7 @@ using glue::ReadChoice;
 nav::OrientationRange ReadRange(const glue::IniFile& ini, const std::string& section) {
   const std::string value = ini.GetString(section, "range");
   if (const auto r = nav::ParseOrientationRange(value)) return *r;
-  throw glue::ConfigError(ini.origin() + ": [" + section + "] range = '" + value +
-                          "': expected all | vertical | horizontal | narrow_vertical");
+  ini.FailKey(section, "range", "expected all | vertical | horizontal | narrow_vertical");
 }
 
 nav::HogOptions ReadHog(const glue::IniFile& ini, const std::string& section) {
@@ -40,16 +39,15 @@ nav::HogOptions ReadHog(const glue::IniFile& ini, const std::string& section) {
   return o;
 }
 
-void CheckBand(const nav::HogOptions& o, const nav::PanoramaModel& p, const std::string& section,
-               const std::string& origin) {
+void CheckBand(const nav::HogOptions& o, const nav::PanoramaModel& p, const std::string& section) {
   const int band_h = o.band_height_px > 0 ? o.band_height_px : p.height_px - o.band_top_px;
   if (o.band_top_px < 0 || o.band_top_px + band_h > p.height_px || band_h < o.cell_size_px ||
       o.cell_size_px > p.width_px) {
-    throw glue::ConfigError(origin + ": [" + section + "] the band (band_top_px " + std::to_string(o.band_top_px) +
-                            ", band_height_px " + std::to_string(o.band_height_px) +
-                            ") must hold at least one cell of cell_size_px " + std::to_string(o.cell_size_px) +
-                            " inside the " + std::to_string(p.width_px) + "x" + std::to_string(p.height_px) +
-                            " panorama");
+    throw std::invalid_argument("[" + section + "] the band (band_top_px " + std::to_string(o.band_top_px) +
+                                ", band_height_px " + std::to_string(o.band_height_px) +
+                                ") must hold at least one cell of cell_size_px " + std::to_string(o.cell_size_px) +
+                                " inside the " + std::to_string(p.width_px) + "x" + std::to_string(p.height_px) +
+                                " panorama");
   }
 }
 
@@ -141,52 +139,55 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   f.persistence.max_descriptor_distance_frac = ini.GetDouble("view_fusion", "max_descriptor_distance_frac");
 
   ini.CheckAllUsed();
-  c.Validate(ini.origin());
+  ini.Check([&c] { c.Validate(); });
   return c;
 }
 
-void HomingConfig::Validate(const std::string& origin) const {
-  try {
-    panorama.Validate();
-    mirror.Validate();
-    homing.Validate();
-    fusion.persistence.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(origin + ": " + e.what());
+void HomingConfig::Validate() const {
+  panorama.Validate();
+  mirror.Validate();
+  if (homing.warp_compensation && !(homing.warp.height_top_m > homing.warp.height_bottom_m)) {
+    throw std::invalid_argument(
+        "[preprocess] warp_height_top_m must exceed warp_height_bottom_m");  // the config's keys
   }
-  if (fusion.home_frames < 1 || fusion.current_frames < 1 || !(fusion.home_interval_s > 0) ||
-      !(fusion.current_interval_s > 0)) {
-    throw glue::ConfigError(origin + ": [view_fusion] home_frames and current_frames must be >= 1, the intervals > 0");
+  homing.Validate();
+  fusion.persistence.Validate();
+  if (fusion.home_frames < 1 || fusion.current_frames < 1) {
+    throw std::invalid_argument("[view_fusion] home_frames and current_frames must be >= 1");
+  }
+  if (!(fusion.home_interval_s > 0) || !(fusion.current_interval_s > 0)) {
+    throw std::invalid_argument("[view_fusion] home_interval_s and current_interval_s must be > 0");
   }
   if (input == HomingInput::kLandmarks && fusion.mode == nav::ViewFusion::kMedian &&
       (fusion.home_frames > 1 || fusion.current_frames > 1)) {
-    throw glue::ConfigError(origin + ": [view_fusion] fusion = median needs the frames; landmark sets (input = "
-                            "landmarks) are fused by persistence (fusion = persistent)");
+    throw std::invalid_argument(
+        "[view_fusion] fusion = median needs the frames; landmark sets (input = "
+        "landmarks) are fused by persistence (fusion = persistent)");
   }
-  CheckBand(homing.hog, panorama, "hog", origin);
-  if (homing.use_compass) CheckBand(homing.compass_hog, panorama, "compass", origin);
+  CheckBand(homing.hog, panorama, "hog");
+  if (homing.use_compass) CheckBand(homing.compass_hog, panorama, "compass");
   if (input == HomingInput::kLandmarks && home == HomeSource::kImage) {
-    throw glue::ConfigError(origin + ": [homing] input = landmarks takes its home from " + home_landmarks_channel +
-                            " (home = message) or the first set (home = first), not from an image");
+    throw std::invalid_argument("[homing] input = landmarks takes its home from " + home_landmarks_channel +
+                                " (home = message) or the first set (home = first), not from an image");
   }
   if (input == HomingInput::kLandmarks &&
       (home_landmarks_channel == landmarks_channel || homing_vector_channel == landmarks_channel)) {
-    throw glue::ConfigError(origin + ": [channels] landmarks, home_landmarks and homing_vector must differ");
+    throw std::invalid_argument("[channels] landmarks, home_landmarks and homing_vector must differ");
   }
   if (home == HomeSource::kImage && home_image.empty()) {
-    throw glue::ConfigError(origin + ": [homing] home = image needs home_image (or --home-image)");
+    throw std::invalid_argument("[homing] home = image needs home_image (or --home-image)");
   }
   if (home != HomeSource::kImage && !home_image.empty()) {
-    throw glue::ConfigError(origin + ": [homing] home_image '" + home_image +
-                            "' is only read with home = image (home is " + HomeName(home) + "); leave it empty");
+    throw std::invalid_argument("[homing] home_image '" + home_image + "' is only read with home = image (home is " +
+                                HomeName(home) + "); leave it empty");
   }
   if (home_snapshot_channel == input_channel()) {
-    throw glue::ConfigError(origin + ": [channels] home_snapshot and the input channel are both '" +
-                            home_snapshot_channel + "'");
+    throw std::invalid_argument("[channels] home_snapshot and the input channel are both '" + home_snapshot_channel +
+                                "'");
   }
   if (homing_vector_channel == input_channel() || homing_vector_channel == home_snapshot_channel) {
-    throw glue::ConfigError(origin + ": [channels] homing_vector '" + homing_vector_channel +
-                            "' must differ from the input and home_snapshot channels");
+    throw std::invalid_argument("[channels] homing_vector '" + homing_vector_channel +
+                                "' must differ from the input and home_snapshot channels");
   }
 }
 

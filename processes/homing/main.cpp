@@ -29,13 +29,21 @@ int Main(int argc, char** argv) {
   if (!home_image.empty()) {
     config.home = processes::HomeSource::kImage;
     config.home_image = home_image;
-    config.Validate("--home-image");
+    try {
+      config.Validate();
+    } catch (const std::invalid_argument& e) {
+      throw glue::FlagError(std::string("--home-image: ") + e.what());
+    }
   }
   if (home_first_flag) {
     if (!home_image.empty()) throw glue::FlagError("--home-first and --home-image exclude each other");
     config.home = processes::HomeSource::kFirst;
     config.home_image.clear();
-    config.Validate("--home-first");
+    try {
+      config.Validate();
+    } catch (const std::invalid_argument& e) {
+      throw glue::FlagError(std::string("--home-first: ") + e.what());
+    }
   }
   std::cerr << "homing: config " << common.config << "\n";
   config.Print(std::cerr);

@@ -38,11 +38,11 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
     c.mirror.Validate();
     c.extractor.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   if (c.landmarks_channel == c.input_channel()) {
-    throw glue::ConfigError(ini.origin() + ": [channels] landmarks and the input channel are both '" +
-                            c.landmarks_channel + "'");
+    throw ini.ValidationError("[channels] landmarks and " + std::string(c.raw_input ? "omni" : "panorama") +
+                              " are both '" + c.landmarks_channel + "'");
   }
   return c;
 }

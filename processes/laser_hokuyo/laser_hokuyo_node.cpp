@@ -27,7 +27,7 @@ LaserHokuyoConfig LaserHokuyoConfig::FromIni(const glue::IniFile& ini, const std
   try {
     c.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return c;
 }

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <mrpt/core/Clock.h>
@@ -10,8 +12,12 @@ namespace snapnav::processes {
 
 void LaserScanOptions::Validate() const {
   if (sensor_name.empty()) throw std::invalid_argument("sensor_name must not be empty");
-  for (double v : {sensor_x_m, sensor_y_m, sensor_theta_rad}) {
-    if (!std::isfinite(v)) throw std::invalid_argument("sensor pose values must be finite numbers");
+  for (const auto& [v, name] : {std::pair<double, const char*>{sensor_x_m, "sensor_x_m"},
+                                {sensor_y_m, "sensor_y_m"},
+                                {sensor_theta_rad, "sensor_theta_rad"}}) {
+    if (!std::isfinite(v)) {
+      throw std::invalid_argument(std::string("the sensor pose's ") + name + " must be a finite number");
+    }
   }
   if (!std::isfinite(range_min_m) || range_min_m < 0) throw std::invalid_argument("range_min_m must be >= 0");
   if (!std::isfinite(fov_deg) || fov_deg < 0 || fov_deg > 360) {

@@ -36,8 +36,7 @@ nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::
   const std::string metric = ini.GetString(s, "metric");
   const auto parsed = nav::ParseIcpMetric(metric);
   if (!parsed) {
-    throw glue::ConfigError(ini.origin() + ": [" + section + "] metric = " + metric +
-                            ": expected point_to_point or point_to_line");
+    ini.FailKey(section, "metric", "expected point_to_point | point_to_line");
   }
   o.metric = *parsed;
   o.match_distance_m = ini.GetDouble(s, "match_distance_m");
@@ -50,8 +49,7 @@ nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::
   const std::string matcher = ini.GetString(s, "matcher");
   const auto parsed_matcher = nav::ParseScanMatcher(matcher);
   if (!parsed_matcher) {
-    throw glue::ConfigError(ini.origin() + ": [" + section + "] matcher = " + matcher +
-                            ": expected heading or correlative");
+    ini.FailKey(section, "matcher", "expected heading | correlative");
   }
   o.matcher = *parsed_matcher;
   o.search_window_xy_m = ini.GetDouble(s, "search_window_xy_m");
@@ -95,7 +93,7 @@ nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return o;
 }
@@ -149,9 +147,8 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.localize = LocalizeConfig::FromIni(ini, channel_prefix);
   c.localize.options.tracking = c.options;
   ini.CheckAllUsed();
-  if (c.map_every_n_scans < 0) {
-    throw glue::ConfigError(ini.origin() + ": [laser_slam] map_every_n_scans must be >= 0 (0: never publish the map)");
-  }
+  if (c.map_every_n_scans < 0)
+    ini.FailKey("laser_slam", "map_every_n_scans", "must be >= 0 (0: never publish the map)");
   return c;
 }
 

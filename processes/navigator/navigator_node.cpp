@@ -58,6 +58,9 @@ NavigatorConfig NavigatorConfig::FromIni(const glue::IniFile& ini, const std::st
   c.route_source = glue::ReadChoice<std::string>(ini, "route", "route",
                                                  {{"none", "none"}, {"thesis1", "thesis1"}, {"thesis2", "thesis2"}});
   c.route_origin = {ini.GetDouble("route", "origin_x_m"), ini.GetDouble("route", "origin_y_m")};
+  for (const char* key : {"origin_x_m", "origin_y_m"}) {
+    if (!std::isfinite(ini.GetDouble("route", key))) ini.FailKey("route", key, "must be finite");
+  }
   c.route_size_m = ini.GetDouble("route", "size_m");
   c.route_loop = ini.GetBool("route", "loop");
   c.route_laps = ini.GetInt("route", "laps");
@@ -121,13 +124,20 @@ NavigatorConfig NavigatorConfig::FromIni(const glue::IniFile& ini, const std::st
       throw std::invalid_argument("[route] tolerance_m must be positive");
     }
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
-  const std::string* ins[] = {&c.odometry_channel, &c.pose_channel, &c.homing_vector_channel, &c.route_channel};
-  for (const auto* in : ins) {
-    if (*in == c.drive_command_channel || *in == c.status_channel) {
-      throw glue::ConfigError(ini.origin() + ": [channels] the output channels must differ from the inputs ('" + *in +
-                              "')");
+  const std::pair<const char*, const std::string*> ins[] = {{"odometry", &c.odometry_channel},
+                                                            {"pose", &c.pose_channel},
+                                                            {"homing_vector", &c.homing_vector_channel},
+                                                            {"route", &c.route_channel}};
+  for (const auto& [in_key, in] : ins) {
+    for (const auto& [out_key, out] :
+         {std::pair<const char*, const std::string*>{"drive_command", &c.drive_command_channel},
+          std::pair<const char*, const std::string*>{"status", &c.status_channel}}) {
+      if (*in == *out) {
+        throw ini.ValidationError(std::string("[channels] ") + out_key + " and " + in_key + " are both '" + *in +
+                                  "': the output channels must differ from the inputs");
+      }
     }
   }
   return c;

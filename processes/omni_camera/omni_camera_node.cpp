@@ -47,7 +47,7 @@ OmniCameraConfig OmniCameraConfig::FromIni(const glue::IniFile& ini, const std::
     c.frame.encoding = glue::ParseFrameEncoding(encoding);
     c.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return c;
 }

@@ -1,5 +1,6 @@
 // placecells: place-cell memory and localization; explores a memory file or localizes in one.
 #include <iostream>
+#include <stdexcept>
 
 #include "placecells_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -36,7 +37,11 @@ int Main(int argc, char** argv) {
     }
   }
   if (!memory.empty()) config.memory_file = memory;
-  config.Validate("--mode/--memory");
+  try {
+    config.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw glue::FlagError(std::string("--mode/--memory: ") + e.what());
+  }
   std::cerr << "placecells: config " << common.config << "\n";
   config.Print(std::cerr);
   glue::InstallShutdownHandlers();

@@ -121,22 +121,18 @@ PlaceCellsConfig PlaceCellsConfig::FromIni(const glue::IniFile& ini, const std::
   c.localizer = glue::ReadLocalizerOptions(ini);
   c.vocabulary = glue::ReadVocabularyOptions(ini);
   ini.CheckAllUsed();
-  c.Validate(ini.origin());
+  ini.Check([&c] { c.Validate(); });
   return c;
 }
 
-void PlaceCellsConfig::Validate(const std::string& origin) const {
-  try {
-    panorama.Validate();
-    mirror.Validate();
-    view.Validate();
-    localizer.Validate();
-    vocabulary.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(origin + ": " + e.what());
-  }
-  auto check = [&origin](bool ok, const std::string& what) {
-    if (!ok) throw glue::ConfigError(origin + ": " + what);
+void PlaceCellsConfig::Validate() const {
+  panorama.Validate();
+  mirror.Validate();
+  view.Validate();
+  localizer.Validate();
+  vocabulary.Validate();
+  auto check = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument(what);
   };
   check(!memory_file.empty(), "[placecells] memory_file is empty (or give --memory FILE)");
   check(std::isfinite(novelty_threshold) && novelty_threshold >= 0, "[placecells] novelty_threshold must be >= 0");
@@ -146,15 +142,22 @@ void PlaceCellsConfig::Validate(const std::string& origin) const {
   check(std::isfinite(min_interval_s) && min_interval_s >= 0, "[placecells] min_interval_s must be >= 0");
   check(std::isfinite(min_travel_m) && min_travel_m >= 0, "[placecells] min_travel_m must be >= 0");
   check(std::isfinite(stats_interval_s) && stats_interval_s >= 0, "[placecells] stats_interval_s must be >= 0");
-  for (const std::string* out : {&match_channel, &pose_channel}) {
-    for (const std::string* in : {&input_channel(), &odometry_channel, &explore_pose_channel}) {
-      check(*out != *in, "[channels] the output channel '" + *out + "' is also an input channel");
+  const std::string input_key = raw_input ? "omni" : "panorama";
+  const std::vector<std::pair<std::string, const std::string*>> inputs = {
+      {input_key, &input_channel()}, {"odometry", &odometry_channel}, {"explore_pose", &explore_pose_channel}};
+  for (const auto& [out_key, out] : {std::pair<std::string, const std::string*>{"match", &match_channel},
+                                     std::pair<std::string, const std::string*>{"pose", &pose_channel}}) {
+    for (const auto& [in_key, in] : inputs) {
+      check(*out != *in, "[channels] " + out_key + " and " + in_key + " are both '" + *out + "'");
     }
   }
   check(match_channel != pose_channel, "[channels] match and pose are both '" + pose_channel + "'");
-  check(input_channel() != odometry_channel && input_channel() != explore_pose_channel &&
-            odometry_channel != explore_pose_channel,
-        "[channels] the input, odometry and explore_pose channels must differ");
+  for (size_t i = 0; i < inputs.size(); ++i) {
+    for (size_t j = i + 1; j < inputs.size(); ++j) {
+      check(*inputs[i].second != *inputs[j].second,
+            "[channels] " + inputs[i].first + " and " + inputs[j].first + " are both '" + *inputs[i].second + "'");
+    }
+  }
 }
 
 void PlaceCellsConfig::Print(std::ostream& out) const {

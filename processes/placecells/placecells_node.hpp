@@ -59,7 +59,7 @@ struct PlaceCellsConfig {
   // is required, unknown keys and invalid values are glue::ConfigError.
   static PlaceCellsConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
   // Throws glue::ConfigError (naming `origin`) when the options do not fit together.
-  void Validate(const std::string& origin) const;
+  void Validate() const;  // throws std::invalid_argument naming the [section] and key
   // The effective configuration, as an INI file FromIni reads back (channels with their prefix).
   void Print(std::ostream& out) const;
 };

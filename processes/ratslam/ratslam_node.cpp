@@ -63,7 +63,7 @@ nav::RatSlamOptions ReadRatSlamOptions(const glue::IniFile& ini, const std::stri
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": [" + s + "] " + e.what());
+    throw ini.ValidationError("[" + s + "] " + e.what());
   }
   return o;
 }
@@ -156,16 +156,16 @@ RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string
   c.options = ReadRatSlamOptions(ini);
   ini.CheckAllUsed();
   if (!(c.experience_map_interval_s >= 0) || !std::isfinite(c.experience_map_interval_s)) {
-    throw glue::ConfigError(ini.origin() + ": [node] experience_map_interval_s must be >= 0 (0: never publish)");
+    ini.FailKey("node", "experience_map_interval_s", "must be >= 0 (0: never publish)");
   }
   if (!(c.stats_interval_s >= 0) || !std::isfinite(c.stats_interval_s)) {
-    throw glue::ConfigError(ini.origin() + ": [node] stats_interval_s must be >= 0 (0: no stats lines)");
+    ini.FailKey("node", "stats_interval_s", "must be >= 0 (0: no stats lines)");
   }
   try {
     c.panorama.Validate();
     c.mirror.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return c;
 }

@@ -26,7 +26,7 @@ constexpr double kDeg = M_PI / 180.0;
 int EveryNSteps(double physics_hz, double rate_hz, const char* what) {
   const double n = physics_hz / rate_hz;
   if (std::abs(n - std::round(n)) > 1e-6 || n < 1) {
-    throw std::invalid_argument(std::string(what) + " rate must divide the physics rate");
+    throw std::invalid_argument(std::string(what) + " must divide [sim] physics_rate_hz");
   }
   return static_cast<int>(std::round(n));
 }
@@ -38,7 +38,7 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   c.scene = ini.GetString("sim", "scene");
   c.seed = static_cast<uint64_t>(ini.GetInt("sim", "seed"));
   const std::string mode = ini.GetString("sim", "mode");
-  if (mode != "realtime" && mode != "lockstep") throw glue::ConfigError(ini.origin() + ": [sim] mode must be realtime or lockstep");
+  if (mode != "realtime" && mode != "lockstep") ini.FailKey("sim", "mode", "expected realtime | lockstep");
   c.realtime = mode == "realtime";
   c.realtime_factor = ini.GetDouble("sim", "realtime_factor");
   c.duration_s = ini.GetDouble("sim", "duration_s");
@@ -63,7 +63,7 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   try {
     c.encoding = glue::ParseFrameEncoding(ini.GetString("camera", "encoding"));
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": [camera] " + e.what());
+    ini.FailKey("camera", "encoding", e.what());
   }
   c.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
   auto& cam = c.camera;
@@ -102,8 +102,7 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   c.kidnap.at_s = ini.GetDouble("robot", "kidnap_at_s");
   const std::vector<double> to = ini.GetDoubleList("robot", "kidnap_to");
   if (to.size() != 3) {
-    throw glue::ConfigError(ini.origin() + ": [robot] kidnap_to must be x_m,y_m,theta_deg (3 values, got " +
-                            std::to_string(to.size()) + ")");
+    ini.FailKey("robot", "kidnap_to", "expected x_m,y_m,theta_deg (3 values, got " + std::to_string(to.size()) + ")");
   }
   c.kidnap.to = {to[0], to[1], to[2] * kDeg};
 
@@ -117,29 +116,32 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   try {
     c.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": " + e.what());
+    throw ini.ValidationError(e.what());
   }
   return c;
 }
 
 void SimConfig::Validate() const {
   if (drive != "route" && drive != "commands" && drive != "still") throw std::invalid_argument("drive must be route, commands or still");
-  if (!(physics_rate_hz > 0) || !(camera_rate_hz > 0) || !(laser_rate_hz > 0) || !(odometry_rate_hz > 0)) {
-    throw std::invalid_argument("rates must be positive");
-  }
+  if (!(physics_rate_hz > 0)) throw std::invalid_argument("[sim] physics_rate_hz must be positive");
+  if (!(camera_rate_hz > 0)) throw std::invalid_argument("[camera] rate_hz must be positive");
+  if (!(laser_rate_hz > 0)) throw std::invalid_argument("[laser] rate_hz must be positive");
+  if (!(odometry_rate_hz > 0)) throw std::invalid_argument("[robot] odometry_rate_hz must be positive");
   if (std::abs(1e6 / physics_rate_hz - std::round(1e6 / physics_rate_hz)) > 1e-9) {
     throw std::invalid_argument("physics_rate_hz must give a whole number of microseconds per step");
   }
-  EveryNSteps(physics_rate_hz, camera_rate_hz, "camera");
-  EveryNSteps(physics_rate_hz, laser_rate_hz, "laser");
-  EveryNSteps(physics_rate_hz, odometry_rate_hz, "odometry");
+  EveryNSteps(physics_rate_hz, camera_rate_hz, "[camera] rate_hz");
+  EveryNSteps(physics_rate_hz, laser_rate_hz, "[laser] rate_hz");
+  EveryNSteps(physics_rate_hz, odometry_rate_hz, "[robot] odometry_rate_hz");
   if (!(duration_s >= 0)) throw std::invalid_argument("duration_s must be >= 0");
   if (!(realtime_factor >= 0.01 && realtime_factor <= 100)) throw std::invalid_argument("realtime_factor must be in 0.01..100");
   if (!(command_watchdog_s >= 0) || !(command_max_age_s >= 0)) {
     throw std::invalid_argument("command_watchdog_s and command_max_age_s must be >= 0 (0: off)");
   }
   if (std::abs(clock_offset_us) > int64_t{86'400} * 1'000'000) throw std::invalid_argument("clock_offset_s must be within a day");
-  if (!publish_raw && !publish_panorama) throw std::invalid_argument("publish at least raw frames or panoramas");
+  if (!publish_raw && !publish_panorama) {
+    throw std::invalid_argument("[camera] publish_raw and publish_panorama are both false: publish at least one");
+  }
   if (jpeg_quality < 1 || jpeg_quality > 100) throw std::invalid_argument("jpeg_quality must be in 1..100");
   camera.Validate();
   effects.Validate();

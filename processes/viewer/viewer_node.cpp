@@ -28,7 +28,7 @@ std::string MethodName(int8_t method) {
 
 void Positive(const glue::IniFile& ini, const std::string& key, double v, bool allow_zero = false) {
   if (!(allow_zero ? v >= 0 : v > 0) || !std::isfinite(v)) {
-    throw glue::ConfigError(ini.origin() + ": [viewer] " + key + " must be " + (allow_zero ? "at least 0" : "positive"));
+    ini.FailKey("viewer", key, std::string("must be ") + (allow_zero ? "at least 0" : "positive"));
   }
 }
 
@@ -84,21 +84,17 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
   ini.CheckAllUsed();
-  c.Validate(ini.origin());
+  ini.Check([&c] { c.Validate(); });
   return c;
 }
 
-void ViewerConfig::Validate(const std::string& origin) const {
-  try {
-    render.Validate();
-    panorama.Validate();
-    mirror.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(origin + ": " + e.what());
-  }
-  if (max_poses_per_channel < 100) throw glue::ConfigError(origin + ": [viewer] max_poses_per_channel must be >= 100");
-  if (max_place_cell_matches < 1) throw glue::ConfigError(origin + ": [viewer] max_place_cell_matches must be >= 1");
-  if (render.robot_pose_channels.empty()) throw glue::ConfigError(origin + ": [viewer] robot_pose_channels is empty");
+void ViewerConfig::Validate() const {
+  render.Validate();
+  panorama.Validate();
+  mirror.Validate();
+  if (max_poses_per_channel < 100) throw std::invalid_argument("[viewer] max_poses_per_channel must be >= 100");
+  if (max_place_cell_matches < 1) throw std::invalid_argument("[viewer] max_place_cell_matches must be >= 1");
+  if (render.robot_pose_channels.empty()) throw std::invalid_argument("[viewer] robot_pose_channels is empty");
 }
 
 void ViewerConfig::Print(std::ostream& out) const {

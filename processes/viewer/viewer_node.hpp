@@ -49,7 +49,7 @@ struct ViewerConfig {
   // Reads [channels], [viewer], [panorama] and [mirror]; every key is required, unknown keys and
   // bad values are glue::ConfigError naming the file and line.
   static ViewerConfig FromIni(const glue::IniFile& ini, const std::string& channel_prefix);
-  void Validate(const std::string& origin) const;
+  void Validate() const;  // throws std::invalid_argument naming the [section] and key
   // The effective configuration as an INI file FromIni reads back (channels with their prefix).
   void Print(std::ostream& out) const;
 };

@@ -347,7 +347,8 @@ void DrawPanoramaPart(cv::Mat& img, const Layout& layout, const ViewerScene& sce
 }  // namespace
 
 void RenderOptions::Validate() const {
-  if (size.width < 900 || size.height < 700) throw std::invalid_argument("viewer: picture smaller than 900 x 700 px");
+  if (size.width < 900 || size.height < 700)
+    throw std::invalid_argument("viewer: width_px and height_px must be at least 900 and 700");
   if (!(ellipse_sigma > 0)) throw std::invalid_argument("viewer: ellipse_sigma must be positive");
   if (!(ellipse_interval_s > 0)) throw std::invalid_argument("viewer: ellipse_interval_s must be positive");
   if (!(min_span_m > 0)) throw std::invalid_argument("viewer: min_span_m must be positive");

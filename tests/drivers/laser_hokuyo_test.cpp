@@ -13,6 +13,7 @@
 #include <mrpt/core/Clock.h>
 #include <mrpt/core/exceptions.h>
 
+#include "../support/config_errors.hpp"
 #include "driver_test_util.hpp"
 #include "laser_hokuyo_node.hpp"
 #include "snapnav/glue/bus.hpp"
@@ -379,6 +380,14 @@ TEST(LaserHokuyoBinary, ShippedConfigWithoutSensorAndNotASerialPort) {
                           kShippedConfig),
             std::string::npos)
       << r.output;
+}
+
+// Every number of the shipped laser_hokuyo.ini made negative or NaN: each error names the file, the line
+// and the key.
+TEST(LaserHokuyoConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(kShippedConfig,
+                                                [](const glue::IniFile& ini) { LaserHokuyoConfig::FromIni(ini, ""); }),
+            0);
 }
 
 }  // namespace

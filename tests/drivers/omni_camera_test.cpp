@@ -14,6 +14,7 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
 
+#include "../support/config_errors.hpp"
 #include "driver_test_util.hpp"
 #include "omni_camera_node.hpp"
 #include "snapnav/glue/bus.hpp"
@@ -584,6 +585,14 @@ TEST(OmniCameraBinary, SigintStopsCleanly) {
   ASSERT_TRUE(std::regex_search(r.output, m, std::regex("published ([0-9]+) frames on OMNI_FRAME"))) << r.output;
   EXPECT_GE(std::stoi(m[1]), 5) << r.output;  // ~35 at 50 Hz in 0.7 s
   EXPECT_NE(r.output.find("OMNI_FRAME               received 0, published"), std::string::npos) << r.output;
+}
+
+// Every number of the shipped omni_camera.ini made negative or NaN: each error names the file, the line
+// and the key.
+TEST(OmniCameraConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(kShippedConfig,
+                                                [](const glue::IniFile& ini) { OmniCameraConfig::FromIni(ini, ""); }),
+            0);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "../support/config_errors.hpp"
 #include "homing_node.hpp"
 #include "landmarks_node.hpp"
 #include "snapnav/glue/landmarks.hpp"
@@ -675,6 +676,17 @@ TEST(HomingConfig, ViewFusionValuesAreChecked) {
   EXPECT_THROW(Config("", {{"view_fusion", "home_interval_s", "0"}}), glue::ConfigError);
   EXPECT_THROW(Config("", {{"view_fusion", "min_fraction", "1.5"}}), glue::ConfigError);
   EXPECT_THROW(Config("", {{"view_fusion", "fusion", "mean"}}), glue::ConfigError);
+}
+
+// Every number of the shipped homing.ini and landmarks.ini made negative or NaN: each error names the
+// file, the line and the key.
+TEST(HomingConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(kShippedConfig,
+                                                [](const glue::IniFile& ini) { HomingConfig::FromIni(ini, ""); }),
+            0);
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(
+                kLandmarksConfig, [](const glue::IniFile& ini) { LandmarksConfig::FromIni(ini, "", ""); }),
+            0);
 }
 
 }  // namespace

@@ -329,15 +329,54 @@ TEST(CarmenImport, NotACarmenLogIsAnErrorWithoutCrash) {
   VectorSink sink;
   auto report = Import(garbage, sink);
   EXPECT_FALSE(report.ok());
-  EXPECT_TRUE(HasError(report, "nothing to import")) << Errors(report);
+  EXPECT_EQ(report.error_count, 1) << Errors(report);
+  EXPECT_TRUE(HasError(report, "test.log is not a CARMEN log: byte 0 (line 1) is binary data (0x00)"))
+      << Errors(report);
   EXPECT_TRUE(sink.events.empty());
 
   // A 5 MB line without newline is refused, not buffered whole.
   report = Import(std::string(5 << 20, 'A'), sink);
-  EXPECT_TRUE(HasError(report, "test.log:1: line longer than")) << Errors(report);
+  EXPECT_EQ(report.error_count, 1) << Errors(report);
+  EXPECT_TRUE(HasError(report, "test.log is not a CARMEN log: line 1 is longer than")) << Errors(report);
 
   report = Import("", sink);
   EXPECT_TRUE(HasError(report, "empty file")) << Errors(report);
+}
+
+// Binary data or text of another kind before the first CARMEN message: one error naming the file
+// and where it stopped looking like one, not one per line (a binary file of 493 "lines" gave 493).
+TEST(CarmenImport, BinaryOrOtherTextIsNotACarmenLogInOneError) {
+  std::string binary = "# a comment is fine\n";
+  for (int line = 0; line < 493; ++line) {
+    for (int i = 0; i < 40; ++i) binary.push_back(static_cast<char>(0x80 + (line * 31 + i * 7) % 100));
+    binary.push_back(line == 2 ? '\0' : 'x');
+    binary.push_back('\n');
+  }
+  // Lines 2 and 3 are high bytes only (not a CARMEN message); line 4 holds a NUL byte at byte
+  // 20 + 2 * 42 + 40.
+  VectorSink sink;
+  auto report = Import(binary, sink);
+  EXPECT_EQ(report.error_count, 1) << Errors(report);
+  EXPECT_TRUE(HasError(report, "test.log is not a CARMEN log: byte " + std::to_string(20 + 2 * 42 + 40) +
+                                   " (line 4) is binary data (0x00)"))
+      << Errors(report);
+  EXPECT_TRUE(HasError(report, "a CARMEN log is text")) << Errors(report);
+  EXPECT_TRUE(sink.events.empty());
+
+  std::string csv = "x,y,theta\n";
+  for (int i = 0; i < 600; ++i) csv += std::to_string(i) + ",0.5,0.1\n";
+  report = Import(csv, sink);
+  EXPECT_EQ(report.error_count, 1) << Errors(report);
+  EXPECT_TRUE(HasError(report,
+                       "test.log is not a CARMEN log: none of its first 5 lines (besides comments) is a CARMEN "
+                       "message (line 1 starts with 'x,y,theta')"))
+      << Errors(report);
+
+  // A log whose first lines are damaged is still a CARMEN log: those lines are errors, the rest is imported.
+  report = Import("garbage here\n12 34\n" + std::string(kThreeScans), sink);
+  EXPECT_EQ(report.error_count, 2) << Errors(report);
+  EXPECT_TRUE(HasError(report, "test.log:1: not a CARMEN message")) << Errors(report);
+  EXPECT_EQ(report.Count(kLaser), 3);
 }
 
 TEST(CarmenImport, GzipFileImportsLikeThePlainOneAndATruncatedGzipIsNamed) {

@@ -76,5 +76,23 @@ TEST(LogImportTool, NotARawlogExitsNonZeroWithoutALog) {
   EXPECT_FALSE(std::ifstream(dir.File("out.lcmlog")).good());
 }
 
+// A binary file given as a CARMEN log: one error saying it is not one, naming the file and the byte
+// where it stopped looking like text (it printed the first 100 of 493 per-line errors).
+TEST(LogImportTool, BinaryFileIsNotACarmenLogInOneLine) {
+  TempDir dir;
+  std::string bytes;
+  for (int i = 0; i < 20000; ++i) bytes.push_back(static_cast<char>(i % 97 == 5 ? '\n' : (i * 131 + 7) % 256));
+  testing::WriteFile(dir.File("photo.jpg"), bytes);
+  std::string out;
+  EXPECT_EQ(RunTool("carmen '" + dir.File("photo.jpg") + "' --out '" + dir.File("out.lcmlog") + "'", dir, &out), 1)
+      << out;
+  EXPECT_NE(out.find(dir.File("photo.jpg") + " is not a CARMEN log: byte 0 (line 1) is binary data (0x07)"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("errors: 1\n"), std::string::npos) << out;
+  EXPECT_EQ(out.find("... and "), std::string::npos) << out;
+  EXPECT_FALSE(std::ifstream(dir.File("out.lcmlog")).good());
+}
+
 }  // namespace
 }  // namespace snapnav::importers

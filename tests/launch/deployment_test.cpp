@@ -154,12 +154,14 @@ TEST(Deployment, MissingKeyNamesTheSectionLine) {
 TEST(Deployment, UnknownKeysAndSectionsNameTheirLine) {
   const std::string typo = File("[process cam]\ncommand = cam\nrestart_limt = 3\n");
   EXPECT_NE(ErrorOf(typo).find("lab.deploy:" + std::to_string(LineOf(typo, "restart_limt")) +
-                               ": [process cam] restart_limt: unknown key"),
+                               ": [process cam] restart_limt: unknown key (did you mean 'restart_limit'?)"),
             std::string::npos)
       << ErrorOf(typo);
   const std::string in_defaults = File("[process cam]\ncommand = cam\n") + "\n[defaults]\nstop_grace = 2\n";
   // [defaults] is read again where it is repeated: the unknown key is named with its line.
-  EXPECT_NE(ErrorOf(in_defaults).find(":" + std::to_string(LineOf(in_defaults, "stop_grace =")) + ": [defaults] stop_grace: unknown key"),
+  EXPECT_NE(ErrorOf(in_defaults)
+                .find(":" + std::to_string(LineOf(in_defaults, "stop_grace =")) +
+                      ": [defaults] stop_grace: unknown key (did you mean 'stop_grace_s'?)"),
             std::string::npos)
       << ErrorOf(in_defaults);
   const std::string section = File("[process cam]\ncommand = cam\n[proces x]\ncommand = y\n");

@@ -149,6 +149,19 @@ TEST_F(LogTools, LogReportOnADamagedLogReportsTheOffsetsAndTheIntactEvents) {
   EXPECT_TRUE(fs::exists(out / "trajectories.png"));
 }
 
+// Random bytes are not an LCM log: log-report says so, naming the file, and exits 1 (it summarised
+// zero events as a damaged log).
+TEST_F(LogTools, LogReportOnRandomBytesSaysNotAnLcmLog) {
+  const fs::path junk = dir_ / "random.bin", err = dir_ / "err.txt";
+  std::string bytes;
+  for (int i = 0; i < 50000; ++i) bytes.push_back(static_cast<char>((i * 7919 + 13) % 256));
+  std::ofstream(junk, std::ios::binary) << bytes;
+  EXPECT_EQ(Run("log-report " + junk.string() + " --out " + (dir_ / "report").string(), err), 1);
+  const std::string text = ReadFile(err);
+  EXPECT_NE(text.find("log-report: error: " + junk.string() + " is not an LCM log: byte 0"), std::string::npos) << text;
+  EXPECT_FALSE(fs::exists(dir_ / "report" / "report.md"));
+}
+
 TEST_F(LogTools, SlamLogLoaderKeepsTheIntactScansAndNamesTheDamage) {
   const size_t hit = 7;  // an early event
   const fs::path log = Damaged(hit);

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <vector>
 
+#include "../support/config_errors.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/conversions.hpp"
 
@@ -253,6 +254,14 @@ TEST(NavigatorNode, MalformedMessagesAreCountedWithReasons) {
   EXPECT_FALSE(node.follower().has_route());
   EXPECT_EQ(commands, 0);
   EXPECT_EQ(bus.stats().at("N4_ODOMETRY").decode_errors, 2u);  // back in time + junk
+}
+
+// Every number of the shipped navigator.ini made negative or NaN: each error names the file, the line
+// and the key.
+TEST(NavigatorConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(kShippedConfig,
+                                                [](const glue::IniFile& ini) { NavigatorConfig::FromIni(ini, ""); }),
+            0);
 }
 
 }  // namespace

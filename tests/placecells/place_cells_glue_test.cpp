@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "../support/config_errors.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/place_cells.hpp"
 #include "test_lab.hpp"
@@ -142,13 +143,13 @@ TEST(PlaceCellsIni, BadValueIsNamed) {
                         Case{{"distance_filter", "weight", "2"}, "[distance_filter] place cells: filter weight"},
                         Case{{"distance_filter", "enabled", "maybe"}, "enabled = 'maybe': expected true or false"},
                         Case{{"vocabulary", "branching", "1"}, "[vocabulary] vocabulary: branching"},
-                        Case{{"vocabulary", "seed", "-3"}, "[vocabulary] seed = -3"},
+                        Case{{"vocabulary", "seed", "-3"}, "[vocabulary] seed = '-3': must be >= 0"},
                         Case{{"place_view", "window_px", "2"}, "[place_view] place cells: window_px"},
                         Case{{"landmarks", "method", "vline"}, "method = 'vline': expected sift | surf"},
                         Case{{"placecells", "mode", "map"}, "explore | localize"},
                         Case{{"placecells", "novelty_threshold", "-1"}, "novelty_threshold"},
                         Case{{"placecells", "memory_file", ""}, "memory_file"},
-                        Case{{"channels", "match", "OMNI_FRAME"}, "also an input channel"}}) {
+                        Case{{"channels", "match", "OMNI_FRAME"}, "match and omni are both 'OMNI_FRAME'"}}) {
     const std::string e = ConfigError({c.o});
     EXPECT_NE(e.find(c.expect), std::string::npos) << c.o.section << " " << c.o.key << ": " << e;
     EXPECT_NE(e.find("edited.ini"), std::string::npos) << e;
@@ -343,6 +344,14 @@ TEST(PlaceCellMessages, LocalizationToMatchAndPose) {
   EXPECT_EQ(p.covariance[5], 0.004);  // (1, 2): row-major
   EXPECT_EQ(p.covariance[6], 0.003);  // (2, 0)
   EXPECT_EQ(p.covariance[8], 0.05);
+}
+
+// Every number of the shipped placecells.ini made negative or NaN: each error names the file, the line
+// and the key.
+TEST(PlaceCellsConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(SNAPNAV_CONFIG_DIR "/placecells.ini",
+                                                [](const glue::IniFile& ini) { PlaceCellsConfig::FromIni(ini, ""); }),
+            0);
 }
 
 }  // namespace

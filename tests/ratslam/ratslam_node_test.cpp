@@ -14,6 +14,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "../support/config_errors.hpp"
 #include "snapnav/experience_map_t.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -323,6 +324,14 @@ TEST(RatSlamConfig, MissingUnknownAndInvalidKeysAreErrorsNamingThem) {
   EXPECT_THROW(Config("", Edit(text, "panorama", "width_px", "0")), glue::ConfigError);
   const RatSlamConfig prefixed = Config("P_", text);
   EXPECT_EQ(prefixed.odometry_channel, "P_ODOMETRY");
+}
+
+// Every number of the shipped ratslam.ini made negative or NaN: each error names the file, the line and
+// the key.
+TEST(RatSlamConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(
+      test_support::ExpectBadNumbersNamed(kShipped, [](const glue::IniFile& ini) { RatSlamConfig::FromIni(ini, ""); }),
+      0);
 }
 
 }  // namespace

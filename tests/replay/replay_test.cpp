@@ -5,6 +5,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -199,6 +200,34 @@ TEST_F(ReplayTest, SelectionAndOverrideErrorsNameTheProblem) {
   }
   o.sets = {"navigator:route.route=none"};
   EXPECT_THROW(RunReplay(o, text), std::runtime_error);  // navigator is not selected
+  // An override of a key the config lacks is an error also for a process picked by default (it was a
+  // warning, and the process left out), with the nearest key; nothing is written.
+  o.only.clear();
+  o.output = (*dir_ / "override-errors.lcmlog").string();
+  for (const char* set : {"homing:homing.hom=first", "dead-reckoning:dead_reckonin.rotation_noise_rad_per_m=0"}) {
+    o.sets = {set};
+    try {
+      RunReplay(o, text);
+      FAIL() << set;
+    } catch (const glue::ConfigError& e) {
+      EXPECT_NE(
+          std::string(e.what()).find(std::string("--set ") + std::string(set).substr(0, std::string(set).find('='))),
+          std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find("did you mean"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(o.output)) << set;
+  }
+  o.sets = {"homing:homing.home=first"};
+  o.only = {"homming"};
+  try {
+    RunReplay(o, text);
+    FAIL();
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("no process 'homming' (did you mean 'homing'?)"), std::string::npos)
+        << e.what();
+  }
+  o.only = {"homing"};
   EXPECT_THROW(ParseOverride("homing.home=first"), std::invalid_argument);
   const ConfigOverride p = ParseOverride("laser-slam:laser_slam.match_distance_m=0.5");
   EXPECT_EQ(p.process, "laser-slam");
@@ -245,13 +274,48 @@ TEST_F(ReplayTest, DamagedLogIsReplayedUpToAndAfterTheDamage) {
   EXPECT_NE(text.str().find("damaged.lcmlog: byte "), std::string::npos) << text.str();
   EXPECT_NE(text.str().find("truncated"), std::string::npos) << text.str();
 
-  // The binary exits with 3 and says so.
-  const std::string cmd = std::string(SNAPNAV_BIN_DIR) + "/replay --quiet --only dead-reckoning " + damaged.string() +
+  // The binary exits with 3 and says so; the effective configuration is printed only when asked for
+  // (it came first, about 500 lines for every process, before the damage warning).
+  const std::string cmd = std::string(SNAPNAV_BIN_DIR) + "/replay --only dead-reckoning " + damaged.string() +
                           " --out " + (*dir_ / "bin.lcmlog").string() + " 2> " + (*dir_ / "err.txt").string();
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 3);
-  EXPECT_NE(ReadFile(*dir_ / "err.txt").find("is damaged"), std::string::npos);
+  const std::string err = ReadFile(*dir_ / "err.txt");
+  EXPECT_NE(err.find("is damaged"), std::string::npos) << err;
+  EXPECT_EQ(err.find("[dead_reckoning]"), std::string::npos) << err;
+  const int printed = std::system((cmd + " --print-config").c_str());
+  ASSERT_TRUE(WIFEXITED(printed));
+  EXPECT_EQ(WEXITSTATUS(printed), 3);
+  const std::string with_config = ReadFile(*dir_ / "err.txt");
+  EXPECT_NE(with_config.find("[dead_reckoning]\ntranslation_noise_m_per_m = "), std::string::npos) << with_config;
+}
+
+// A file that is not an LCM log at all is an error naming it, before anything runs (it replayed
+// nothing, reported "damage" over the whole file and exited 3).
+TEST_F(ReplayTest, NotAnLcmLogIsAnError) {
+  const fs::path junk = *dir_ / "photo.jpg";
+  std::string bytes = "\xff\xd8\xff\xe0";
+  for (int i = 0; i < 5000; ++i) bytes.push_back(static_cast<char>((i * 37 + 11) % 251));
+  std::ofstream(junk, std::ios::binary) << bytes;
+  ReplayOptions o = Options("junk-out.lcmlog");
+  o.input = junk.string();
+  std::ostringstream text;
+  try {
+    RunReplay(o, text);
+    FAIL() << text.str();
+  } catch (const glue::LogError& e) {
+    EXPECT_NE(std::string(e.what()).find(junk.string() + " is not an LCM log: byte 0"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(o.output));
+  const std::string cmd = std::string(SNAPNAV_BIN_DIR) + "/replay " + junk.string() + " --out " + o.output + " 2> " +
+                          (*dir_ / "junk-err.txt").string();
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  const std::string err = ReadFile(*dir_ / "junk-err.txt");
+  EXPECT_NE(err.find("replay: error: " + junk.string() + " is not an LCM log"), std::string::npos) << err;
+  EXPECT_LE(std::count(err.begin(), err.end(), '\n'), 3) << err;
 }
 
 }  // namespace

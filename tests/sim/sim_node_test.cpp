@@ -6,6 +6,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "../support/config_errors.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/image_msg.hpp"
@@ -397,6 +398,14 @@ TEST(SimConfig, StartTimeNowStampsWithTheWallClockPlusTheOffset) {
   const int64_t after = glue::WallUtime();
   EXPECT_GE(node.start_utime(), before + 2'000'000);
   EXPECT_LE(node.start_utime(), after + 2'000'000);
+}
+
+// Every number of the shipped sim.ini made negative or NaN: each error names the file, the line and the
+// key.
+TEST(SimConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(SNAPNAV_CONFIG_DIR "/sim.ini",
+                                                [](const glue::IniFile& ini) { SimConfig::FromIni(ini, ""); }),
+            0);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "../support/config_errors.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/image_msg.hpp"
@@ -418,6 +419,14 @@ TEST(ViewerNode, BadFramesAreCountedAndTracksStayBounded) {
   EXPECT_NEAR(t.poses.back().pose.x_m, 99.9, 1e-9);
   EXPECT_NEAR(t.latest.pose.x_m, 99.9, 1e-9);
   EXPECT_NO_THROW(node.Render());
+}
+
+// Every number of the shipped viewer.ini made negative or NaN: each error names the file, the line and
+// the key.
+TEST(ViewerConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
+  EXPECT_GT(test_support::ExpectBadNumbersNamed(
+                kShippedConfig, [](const glue::IniFile& ini) { processes::ViewerConfig::FromIni(ini, ""); }),
+            0);
 }
 
 }  // namespace

@@ -120,7 +120,7 @@ int Main(int argc, char** argv) {
   eval::LaserSlamConfigChoice config;
   flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options our laser SLAM runs");
   std::vector<std::string> sets;
-  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE (repeatable)");
+  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE");
   if (!flags.Parse(argc, argv)) return 0;
   config.overrides = sets;
   const nav::LaserSlamOptions slam_options = eval::LoadLaserSlamOptions(config);

@@ -109,24 +109,29 @@ int Main(int argc, char** argv) {
   flags.AddInt("seed", &seed, "seed of exploration, test positions, prediction noise and people");
   flags.AddInt("threads", &threads, "OpenCV threads (SIFT is parallel); 1: one core");
   flags.AddString("save-test-panoramas", &o.save_test_panoramas_dir, "folder for the test positions' panoramas (PNG)");
+  // These override a config key; left at the sentinel (negative), the config's value is used.
   const std::string keep = " (negative: the config's)";
-  flags.AddDouble("ratio", &ov.ratio, "override [matching] ratio" + keep);
-  flags.AddDouble("keep-fraction", &ov.keep_fraction, "override [measure] keep_fraction" + keep);
-  flags.AddDouble("residual-cap-rad", &ov.residual_cap_rad, "override residual_cap_rad (bearing residual cap)" + keep);
-  flags.AddInt("keep-min", &ov.keep_min, "override [measure] keep_min" + keep);
-  flags.AddDouble("ransac-threshold-rad", &ov.ransac_threshold_rad, "override the RANSAC inlier residual [rad]" + keep);
-  flags.AddDouble("window-min-ncc", &ov.window_min_ncc, "override [measure] window_min_ncc (< -1: the config's)");
-  flags.AddInt("min-matches", &ov.min_matches, "override [measure] min_matches" + keep);
-  flags.AddDouble("filter-radius-m", &ov.filter_radius_m, "override [distance_filter] radius_m" + keep);
-  flags.AddDouble("filter-weight", &ov.filter_weight, "override [distance_filter] weight" + keep);
-  flags.AddDouble("filter-gate-m", &ov.filter_gate_m, "override [distance_filter] gate_m" + keep);
-  flags.AddInt("interpolate-k", &ov.interpolate_k, "override [localizer] interpolate_k" + keep);
-  flags.AddDouble("interpolate-power", &ov.interpolate_power, "override [localizer] interpolate_power" + keep);
+  const char* const configs = "the config's";
+  flags.AddDouble("ratio", &ov.ratio, "override [matching] ratio" + keep, configs);
+  flags.AddDouble("keep-fraction", &ov.keep_fraction, "override [measure] keep_fraction" + keep, configs);
+  flags.AddDouble("residual-cap-rad", &ov.residual_cap_rad, "override residual_cap_rad (bearing residual cap)" + keep,
+                  configs);
+  flags.AddInt("keep-min", &ov.keep_min, "override [measure] keep_min" + keep, configs);
+  flags.AddDouble("ransac-threshold-rad", &ov.ransac_threshold_rad, "override the RANSAC inlier residual [rad]" + keep,
+                  configs);
+  flags.AddDouble("window-min-ncc", &ov.window_min_ncc, "override [measure] window_min_ncc (< -1: the config's)",
+                  configs);
+  flags.AddInt("min-matches", &ov.min_matches, "override [measure] min_matches" + keep, configs);
+  flags.AddDouble("filter-radius-m", &ov.filter_radius_m, "override [distance_filter] radius_m" + keep, configs);
+  flags.AddDouble("filter-weight", &ov.filter_weight, "override [distance_filter] weight" + keep, configs);
+  flags.AddDouble("filter-gate-m", &ov.filter_gate_m, "override [distance_filter] gate_m" + keep, configs);
+  flags.AddInt("interpolate-k", &ov.interpolate_k, "override [localizer] interpolate_k" + keep, configs);
+  flags.AddDouble("interpolate-power", &ov.interpolate_power, "override [localizer] interpolate_power" + keep, configs);
   flags.AddDouble("interpolate-radius-m", &ov.interpolate_radius_m,
-                  "override interpolate_radius_m: cells this near the chosen one are interpolated" + keep);
-  flags.AddInt("candidates", &ov.candidates, "override [localizer] candidates" + keep);
-  flags.AddInt("near-candidates", &ov.near_candidates, "override [localizer] near_candidates" + keep);
-  flags.AddInt("exhaustive-below", &ov.exhaustive_below, "override [localizer] exhaustive_below" + keep);
+                  "override interpolate_radius_m: cells this near the chosen one are interpolated" + keep, configs);
+  flags.AddInt("candidates", &ov.candidates, "override [localizer] candidates" + keep, configs);
+  flags.AddInt("near-candidates", &ov.near_candidates, "override [localizer] near_candidates" + keep, configs);
+  flags.AddInt("exhaustive-below", &ov.exhaustive_below, "override [localizer] exhaustive_below" + keep, configs);
   if (!flags.Parse(argc, argv)) return 0;
   if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
   if (!features.empty() && features != "sift" && features != "surf") throw glue::FlagError("--features must be sift or surf");

@@ -64,7 +64,7 @@ int Main(int argc, char** argv) {
   eval::LaserSlamConfigChoice config;
   flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options the laser slam runs");
   std::vector<std::string> sets;
-  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE (repeatable)");
+  flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE");
   std::string match_distance, icp_iterations, map_resolution, add_distance, scan_step;
   flags.AddString("match-distance-m", &match_distance, "laser slam: match distance [m] (= --set match_distance_m=V)");
   flags.AddString("icp-iterations", &icp_iterations, "laser slam: ICP iterations per scan (= --set icp_iterations=V)");
@@ -84,7 +84,7 @@ int Main(int argc, char** argv) {
                   "configuration, icp-slam and dead reckoning on each, against its reference; suite.md,\n"
                   "suite.csv, summary.json and a trajectory PNG per run in --out");
   std::vector<std::string> only;
-  flags.AddStringList("only", &only, "with --suite: run only this entry (repeatable)");
+  flags.AddStringList("only", &only, "with --suite: run only this entry");
   flags.AddString("out", &out_dir, "output folder (required)");
   if (!flags.Parse(argc, argv)) return 0;
   if (!suite_path.empty()) {

@@ -40,6 +40,11 @@ constexpr char kScanSensorFlaser[] = "carmen_front_laser";
 constexpr char kScanSensorRobotLaser[] = "carmen_robot_laser";
 constexpr char kOdometrySensor[] = "carmen_odometry";
 constexpr char kPoseFrame[] = "map";
+// Lines (besides comments) without a CARMEN message before the first one that make a file "not a
+// CARMEN log" instead of one error per line.
+constexpr int64_t kLinesToRecognise = 5;
+constexpr char kCarmenShape[] =
+    " (a CARMEN log is text, one message per line: 'FLASER 181 ...', 'ROBOTLASER1 ...', 'ODOM x y theta ...')";
 
 enum class Kind { kScan, kOdom };
 
@@ -108,6 +113,46 @@ bool IsMessageKind(std::string_view word) {
   return std::all_of(word.begin(), word.end(),
                      [](char c) { return (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_'; });
 }
+
+// Judges the start of a file, line by line until its first CARMEN message: binary data, an
+// endless line or only lines of something else there mean the file is no CARMEN log at all.
+class StartJudge {
+ public:
+  // The reason the file is not a CARMEN log, "" while it may be one. `line_start`: the line's first
+  // byte in the (decompressed) input.
+  std::string Judge(internal::LineReader::Status status, const internal::LineReader& reader, int64_t line_start) {
+    if (recognised_) return "";
+    const std::string at_line = "line " + std::to_string(reader.line_number());
+    if (status == internal::LineReader::Status::kTooLong) {
+      return at_line + " is longer than " + std::to_string(kMaxLineBytes) + " bytes, before any CARMEN message";
+    }
+    const std::string& line = reader.line();
+    for (size_t i = 0; i < line.size(); ++i) {
+      const auto c = static_cast<unsigned char>(line[i]);
+      if ((c < 0x20 && c != '\t' && c != '\r' && c != '\v' && c != '\f') || c == 0x7f) {
+        static const char hex[] = "0123456789abcdef";
+        return "byte " + std::to_string(line_start + static_cast<int64_t>(i)) + " (" + at_line +
+               ") is binary data (0x" + hex[c >> 4] + hex[c & 15] + "), before any CARMEN message";
+      }
+    }
+    internal::Tokenize(line, &tokens_);
+    if (tokens_.empty() || tokens_[0].front() == '#') return "";
+    if (IsMessageKind(tokens_[0])) {
+      recognised_ = true;
+      return "";
+    }
+    if (first_other_.empty()) first_other_ = at_line + " starts with " + Quote(tokens_[0]);
+    if (++other_lines_ < kLinesToRecognise) return "";
+    return "none of its first " + std::to_string(kLinesToRecognise) +
+           " lines (besides comments) is a CARMEN message (" + first_other_ + ")";
+  }
+
+ private:
+  bool recognised_ = false;
+  int64_t other_lines_ = 0;
+  std::string first_other_;
+  std::vector<std::string_view> tokens_;
+};
 
 class Parser {
  public:
@@ -517,12 +562,21 @@ ImportReport ImportCarmen(std::istream& in, const std::string& name, Sink& sink,
   report.input = name;
   Parser parser(name, options, report);
   internal::LineReader reader(in, kMaxLineBytes);
+  StartJudge judge;
   int64_t next_progress = options.progress_every_bytes;
   int64_t lines = 0;
   for (;;) {
+    const int64_t line_start = reader.bytes_read();
     const auto status = reader.Next();
     if (status == internal::LineReader::Status::kEnd) break;
     ++lines;
+    if (const std::string not_carmen = judge.Judge(status, reader, line_start); !not_carmen.empty()) {
+      // One error for the file instead of one per line of it (nothing was imported yet).
+      report.errors.clear();
+      report.error_count = 0;
+      report.AddError(name + " is not a CARMEN log: " + not_carmen + kCarmenShape);
+      return report;
+    }
     if (status == internal::LineReader::Status::kTooLong) {
       parser.Fail(reader.line_number(), "line longer than " + std::to_string(kMaxLineBytes) + " bytes; skipped");
       continue;

@@ -9,12 +9,14 @@
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
+#include <iterator>
 #include <fstream>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
 
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/suggest.hpp"
 
 namespace snapnav::launch {
 namespace {
@@ -329,6 +331,13 @@ std::string KnownProcessKeys() {
   return keys;
 }
 
+// "unknown key (did you mean 'X'?) (process keys: ...)".
+std::string UnknownProcessKey(const std::string& key) {
+  return "unknown key" +
+         glue::DidYouMean(key, std::vector<std::string>(std::begin(kProcessKeys), std::end(kProcessKeys))) +
+         " (process keys: " + KnownProcessKeys() + ")";
+}
+
 // The processes of one [include NAME] section: the other file, once or once per for_each value,
 // with the section's other keys as its variables; appended to `d` under their qualified names.
 void ReadInclude(const glue::IniFile& ini, const std::string& section, const std::string& name, Variables* vars,
@@ -578,7 +587,7 @@ Deployment ParseDeployment(const std::string& text, const std::string& origin, c
   for (const auto& key : ini.Keys("defaults")) {
     const std::string at = origin + ":" + std::to_string(ini.KeyLine("defaults", key));
     if (key == "command") throw ConfigError(at + ": [defaults] command: every process sets its own command");
-    if (!IsProcessKey(key)) throw ConfigError(at + ": [defaults] " + key + ": unknown key (process keys: " + KnownProcessKeys() + ")");
+    if (!IsProcessKey(key)) throw ConfigError(at + ": [defaults] " + key + ": " + UnknownProcessKey(key));
     ini.GetString("defaults", key);  // used; read again per process
   }
   Variables vars(ini, options, &d);
@@ -599,7 +608,7 @@ Deployment ParseDeployment(const std::string& text, const std::string& origin, c
       for (const auto& key : ini.Keys(section)) {
         if (!IsProcessKey(key)) {
           throw ConfigError(origin + ":" + std::to_string(ini.KeyLine(section, key)) + ": [" + section + "] " + key +
-                            ": unknown key (process keys: " + KnownProcessKeys() + ")");
+                            ": " + UnknownProcessKey(key));
         }
       }
       d.processes.push_back(ReadProcess(ini, section, name, &vars));

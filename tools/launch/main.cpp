@@ -49,10 +49,11 @@ int Main(int argc, char** argv) {
       "SIGTERM stops them in reverse order (stop signal, grace time, then SIGKILL). Exits non-zero if a\n"
       "required process failed. NAME=VALUE sets a variable of the file's [variables]. Processes for other\n"
       "hosts are started by a launcher on that host with the same file (--host).");
-  flags.AddString("host", &host, "this machine's name in the file's host keys (* and localhost match any)");
+  flags.AddString("host", &host, "this machine's name in the file's host keys (* and localhost match any)",
+                  "this machine's hostname");
   flags.AddString("group", &groups, "only the processes of these groups (comma-separated; default: all)");
   flags.AddString("out", &out, "${out}: the run's output folder (default: logs/<deployment>-<UTC time>)");
-  flags.AddString("bin", &bin, "${bin}: folder of the snapnav binaries");
+  flags.AddString("bin", &bin, "${bin}: folder of the snapnav binaries", "the launcher's own folder");
   flags.AddString("lcm-url", &lcm_url, "${lcm_url} and every process's LCM_DEFAULT_URL (default: $LCM_DEFAULT_URL or the host-local bus)");
   flags.AddDouble("status-every-s", &status_every_s, "print every process's state this often; 0: on SIGUSR1 and at the end only");
   flags.AddString("status-file", &status_file, "rewrite this file on every change: name, state, pid, runs, restarts, last exit (tab-separated)");

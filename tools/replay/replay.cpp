@@ -10,6 +10,7 @@
 
 #include "snapnav/glue/log_reader.hpp"
 #include "snapnav/glue/log_writer.hpp"
+#include "snapnav/glue/suggest.hpp"
 #include "snapnav/glue/time.hpp"
 
 namespace snapnav::replay {
@@ -35,6 +36,13 @@ const NodeEntry* FindEntry(const std::string& name) {
   return nullptr;
 }
 
+// " (did you mean 'X'?)" among the registered processes.
+std::string NearestProcess(const std::string& name) {
+  std::vector<std::string> names;
+  for (const auto& e : ReplayRegistry()) names.push_back(e.name);
+  return glue::DidYouMean(name, names);
+}
+
 }  // namespace
 
 ConfigOverride ParseOverride(const std::string& text) {
@@ -56,7 +64,10 @@ ReplayResult RunReplay(const ReplayOptions& options, std::ostream& log) {
   std::vector<const NodeEntry*> selected;
   for (const auto& name : options.only) {
     const NodeEntry* e = FindEntry(name);
-    if (!e) throw std::runtime_error("--only: no process '" + name + "' (replay runs: " + JoinNames() + ")");
+    if (!e) {
+      throw std::runtime_error("--only: no process '" + name + "'" + NearestProcess(name) +
+                               " (replay runs: " + JoinNames() + ")");
+    }
     if (std::find(selected.begin(), selected.end(), e) == selected.end()) selected.push_back(e);
   }
   const bool explicit_selection = !selected.empty();
@@ -69,13 +80,26 @@ ReplayResult RunReplay(const ReplayOptions& options, std::ostream& log) {
   for (const auto& text : options.sets) {
     ConfigOverride o = ParseOverride(text);
     if (!FindEntry(o.process)) {
-      throw std::runtime_error("--set '" + text + "': no process '" + o.process + "' (replay runs: " + JoinNames() + ")");
+      throw std::runtime_error("--set '" + text + "': no process '" + o.process + "'" + NearestProcess(o.process) +
+                               " (replay runs: " + JoinNames() + ")");
     }
     if (std::find_if(selected.begin(), selected.end(), [&](const NodeEntry* e) { return e->name == o.process; }) ==
         selected.end()) {
       throw std::runtime_error("--set '" + text + "': process '" + o.process + "' is not selected by --only");
     }
     overrides[o.process].push_back(std::move(o));
+  }
+  // Every override applied to its process's config file now, before anything runs: a section or
+  // key the file lacks is an error whether or not the process was named by --only.
+  std::map<std::string, glue::IniFile> configs;
+  for (const NodeEntry* e : selected) {
+    const auto o = overrides.find(e->name);
+    if (o == overrides.end()) continue;
+    const std::string path = (fs::path(options.config_dir) / e->config_file).string();
+    glue::IniFile ini = glue::IniFile::Load(path);
+    for (const auto& k : o->second)
+      ini.Set(k.section, k.key, k.value, "--set " + k.process + ":" + k.section + "." + k.key);
+    configs.emplace(e->name, std::move(ini));
   }
 
   glue::LogReader reader(options.input);  // throws naming the file
@@ -109,10 +133,8 @@ ReplayResult RunReplay(const ReplayOptions& options, std::ostream& log) {
   for (const NodeEntry* e : selected) {
     const std::string path = (fs::path(options.config_dir) / e->config_file).string();
     try {
-      glue::IniFile ini = glue::IniFile::Load(path);
-      for (const auto& o : overrides[e->name]) {
-        ini.Set(o.section, o.key, o.value, "--set " + o.process + ":" + o.section + "." + o.key);
-      }
+      const auto overridden = configs.find(e->name);
+      const glue::IniFile ini = overridden != configs.end() ? overridden->second : glue::IniFile::Load(path);
       log << "replay: " << e->name << ": config " << path << "\n";
       std::ostringstream unprinted;
       NodeContext context{bus, ini, options.channel_prefix, log,
@@ -122,7 +144,8 @@ ReplayResult RunReplay(const ReplayOptions& options, std::ostream& log) {
       nodes.push_back({e->name, std::move(node)});
       result.nodes.push_back(e->name);
     } catch (const std::exception& ex) {
-      // Asked for by name: an error. Picked by default: left out, said why.
+      // Asked for by name: an error. Picked by default: left out, said why (its overrides were
+      // checked above).
       if (explicit_selection) throw std::runtime_error(e->name + ": " + ex.what());
       result.skipped.push_back(e->name + ": " + ex.what());
       log << "replay: warning: " << e->name << " not run: " << ex.what() << "\n";

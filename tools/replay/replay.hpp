@@ -68,7 +68,7 @@ struct ReplayOptions {
   std::vector<std::string> sets;      // overrides "PROCESS:SECTION.KEY=VALUE"
   std::string channel_prefix;         // prepended to every channel of every node
   bool with_inputs = false;           // also write the input events that were fed
-  bool print_config = true;           // print each node's effective configuration
+  bool print_config = false;          // print each node's effective configuration (--print-config)
   double progress_interval_s = 2;     // wall time between progress lines; 0: none
   int64_t max_messages_per_event = 100000;  // more means the nodes feed each other forever
 };

@@ -65,7 +65,9 @@ inline cv::Vec3b SamplePlane(const Scene& scene, int texture, const cv::Vec3b& p
 
 void OmniCameraOptions::Validate() const {
   if (!(height_m > 0)) throw std::invalid_argument("camera: height_m must be positive");
-  if (omni_width_px < 16 || omni_height_px < 16) throw std::invalid_argument("camera: raw image too small");
+  if (omni_width_px < 16 || omni_height_px < 16) {
+    throw std::invalid_argument("camera: the raw image's omni_width_px and omni_height_px must be at least 16");
+  }
   mirror.Validate();
   panorama.Validate();
   if (mirror.center_x_px - mirror.outer_radius_px < -0.5 || mirror.center_x_px + mirror.outer_radius_px > omni_width_px - 0.5 ||
@@ -75,10 +77,15 @@ void OmniCameraOptions::Validate() const {
 }
 
 void ImageEffectsOptions::Validate() const {
-  if (!(blur_sigma_px >= 0) || !(noise_sigma >= 0) || !(salt_pepper_fraction >= 0 && salt_pepper_fraction <= 1) ||
-      !(gain >= 0) || !std::isfinite(offset)) {
-    throw std::invalid_argument("image effects: need blur >= 0, noise >= 0, salt_pepper in [0, 1], gain >= 0");
+  if (!(blur_sigma_px >= 0) || !std::isfinite(blur_sigma_px))
+    throw std::invalid_argument("image effects: blur_sigma_px must be >= 0");
+  if (!(noise_sigma >= 0) || !std::isfinite(noise_sigma))
+    throw std::invalid_argument("image effects: noise_sigma must be >= 0");
+  if (!(salt_pepper_fraction >= 0 && salt_pepper_fraction <= 1)) {
+    throw std::invalid_argument("image effects: salt_pepper_fraction must be in [0, 1]");
   }
+  if (!(gain >= 0) || !std::isfinite(gain)) throw std::invalid_argument("image effects: gain must be >= 0");
+  if (!std::isfinite(offset)) throw std::invalid_argument("image effects: offset must be finite");
 }
 
 void ApplyImageEffects(const ImageEffectsOptions& o, std::mt19937_64& rng, cv::Mat* image) {

@@ -8,20 +8,34 @@
 namespace snapnav::nav::sim {
 
 void DriveOptions::Validate() const {
-  if (!(max_linear_mps > 0) || !(max_angular_radps > 0) || !(robot_radius_m > 0)) {
-    throw std::invalid_argument("drive: speeds and robot radius must be positive");
-  }
-  if (!(linear_noise_frac >= 0) || !(angular_noise_radps >= 0) || !(odometry_linear_noise_frac >= 0) ||
-      !(odometry_angular_noise_frac >= 0) || !std::isfinite(heading_drift_deg_per_m)) {
-    throw std::invalid_argument("drive: noise parameters must be finite and non-negative");
-  }
+  // Each message names its option (and the sim config's key: the robot's radius_m).
+  const auto positive = [](double v, const char* name) {
+    if (!(v > 0) || !std::isfinite(v)) throw std::invalid_argument(std::string("drive: ") + name + " must be positive");
+  };
+  positive(max_linear_mps, "max_linear_mps");
+  positive(max_angular_radps, "max_angular_radps");
+  positive(robot_radius_m, "the robot's radius_m");
+  const auto noise = [](double v, const char* name) {
+    if (!(v >= 0) || !std::isfinite(v)) {
+      throw std::invalid_argument(std::string("drive: ") + name + " must be finite and non-negative");
+    }
+  };
+  noise(linear_noise_frac, "linear_noise_frac");
+  noise(angular_noise_radps, "angular_noise_radps");
+  noise(odometry_linear_noise_frac, "odometry_linear_noise_frac");
+  noise(odometry_angular_noise_frac, "odometry_angular_noise_frac");
+  if (!std::isfinite(heading_drift_deg_per_m))
+    throw std::invalid_argument("drive: heading_drift_deg_per_m must be finite");
 }
 
 void LaserOptions::Validate() const {
-  if (beams < 2 || !(angle_max_rad > angle_min_rad) || !(range_min_m >= 0) || !(range_max_m > range_min_m) ||
-      !(range_noise_m >= 0) || !(mount_height_m >= 0)) {
-    throw std::invalid_argument("laser: need beams >= 2, angle_max > angle_min, 0 <= range_min < range_max, noise >= 0");
+  if (beams < 2) throw std::invalid_argument("laser: beams must be >= 2");
+  if (!(angle_max_rad > angle_min_rad)) throw std::invalid_argument("laser: angle_max_deg must exceed angle_min_deg");
+  if (!(range_min_m >= 0) || !(range_max_m > range_min_m)) {
+    throw std::invalid_argument("laser: need 0 <= range_min_m < range_max_m");
   }
+  if (!(range_noise_m >= 0)) throw std::invalid_argument("laser: range_noise_m must be >= 0");
+  if (!(mount_height_m >= 0)) throw std::invalid_argument("laser: mount_height_m must be >= 0");
 }
 
 World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& laser, uint64_t seed)
@@ -52,8 +66,9 @@ World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& 
 }
 
 void KidnapOptions::Validate() const {
-  if (!std::isfinite(at_s) || !std::isfinite(to.x_m) || !std::isfinite(to.y_m) || !std::isfinite(to.theta_rad)) {
-    throw std::invalid_argument("kidnap: time and pose must be finite");
+  if (!std::isfinite(at_s)) throw std::invalid_argument("kidnap: at_s must be finite");
+  if (!std::isfinite(to.x_m) || !std::isfinite(to.y_m) || !std::isfinite(to.theta_rad)) {
+    throw std::invalid_argument("kidnap: the pose `to` must be finite");
   }
 }
 

@@ -1,6 +1,13 @@
 #pragma once
 // Command-line flags: `--name value` or `--name=value`, `--help` prints usage.
-// Unknown flags, missing values and malformed numbers are errors.
+// Unknown flags (with the nearest known one), missing values and malformed numbers are errors.
+//
+// --help: "usage: PROGRAM [flags] POSITIONAL", the summary, then one line per flag with its
+// default: the variable's value when the flag was added, unless the help text already says what
+// the default is (it contains "default"), or that the flag overrides a config key ("override":
+// the config's value is the default), or the value is NaN (a sentinel), or `default_text` is
+// given (printed instead; "": none, for a sentinel such as -1 meaning "the config's"). A list
+// flag's help ends in "(repeatable)" once.
 
 #include <functional>
 #include <iosfwd>
@@ -24,17 +31,21 @@ struct CommonFlags {
 
 class Flags {
  public:
+  // `program` is the binary's name; words after it are taken as the positional arguments' synopsis
+  // when AllowPositional does not give one.
   Flags(std::string program, std::string summary);
 
-  void AddString(const std::string& name, std::string* value, const std::string& help);
-  void AddInt(const std::string& name, int* value, const std::string& help);
-  void AddDouble(const std::string& name, double* value, const std::string& help);
+  void AddString(const std::string& name, std::string* value, const std::string& help,
+                 const char* default_text = nullptr);
+  void AddInt(const std::string& name, int* value, const std::string& help, const char* default_text = nullptr);
+  void AddDouble(const std::string& name, double* value, const std::string& help, const char* default_text = nullptr);
   void AddBool(const std::string& name, bool* value, const std::string& help);  // presence sets true
   // May be given several times; each value is appended.
   void AddStringList(const std::string& name, std::vector<std::string>* values, const std::string& help);
   void AddCommon(CommonFlags* common);
-  // Positional arguments are accepted only if a name for them is given.
-  void AllowPositional(const std::string& name, const std::string& help);
+  // Positional arguments are accepted only if they are named: `synopsis` as the usage line shows
+  // them ("LOG", "DEPLOYMENT [NAME=VALUE...]"), `help` what they are.
+  void AllowPositional(const std::string& synopsis, const std::string& help);
 
   // Returns false if --help was given (usage was printed to `out`).
   // Throws FlagError on bad input.
@@ -57,8 +68,9 @@ class Flags {
   std::string program_;
   std::string summary_;
   std::vector<Flag> flags_;
-  std::string positional_name_;
+  std::string positional_synopsis_;  // from AllowPositional, else the words after the program's name
   std::string positional_help_;
+  bool positional_allowed_ = false;
   std::vector<std::string> positional_;
 };
 

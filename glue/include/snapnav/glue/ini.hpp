@@ -1,7 +1,9 @@
 #pragma once
 // INI configuration: one section per concern, `key = value`, `#` or `;` comments.
-// A missing key, a malformed value and a key nobody asked for are errors that
-// name the file and line.
+// Every error names the file, the line, the section and the key: a missing key (with the
+// section's line, and the file's nearest key when it looks like a typo of it), a malformed
+// value, a key nobody asked for (with the nearest known key: "did you mean X?") and a value
+// the options' own check rejects (ValidationError, Check).
 
 #include <initializer_list>
 #include <iosfwd>
@@ -45,8 +47,33 @@ class IniFile {
   std::vector<double> GetDoubleList(const std::string& section, const std::string& key) const;
 
   // Throws ConfigError listing every key that was never read (a typo, or an option this
-  // version does not have).
+  // version does not have), each with its line and the nearest key that was read ("did you
+  // mean X?").
   void CheckAllUsed() const;
+
+  // Throws "ORIGIN:LINE: [section] key = 'value': why" (the section's line when the file lacks
+  // the key). For a value that reads but is not acceptable (out of range, inconsistent).
+  [[noreturn]] void FailKey(const std::string& section, const std::string& key, const std::string& why) const;
+
+  // The error for `what`, a complaint about options read from this file (an options struct's
+  // Validate() message): it names the file, and the line, section and value of each key that
+  // was read from it and that `what` names as a word ("laser slam: icp_iterations must be >= 1"
+  // -> "laser_slam.ini:31: [laser_slam] icp_iterations = '0': laser slam: icp_iterations must be
+  // >= 1"), or else whose name ends with a word of it or is the end of one at a '_' (the option
+  // `gain` of the key `illumination_gain`). A message naming no key read from the file gets the
+  // file only.
+  ConfigError ValidationError(const std::string& what) const;
+
+  // Runs `check` (e.g. [&] { options.Validate(); }) and turns the std::invalid_argument it
+  // throws into ValidationError.
+  template <class F>
+  void Check(F&& check) const {
+    try {
+      check();
+    } catch (const std::invalid_argument& e) {
+      throw ValidationError(e.what());
+    }
+  }
 
  private:
   struct Entry {
@@ -74,7 +101,7 @@ E ReadChoice(const IniFile& ini, const std::string& section, const std::string& 
     if (value == name) return e;
     names += names.empty() ? name : std::string(" | ") + name;
   }
-  throw ConfigError(ini.origin() + ": [" + section + "] " + key + " = '" + value + "': expected " + names);
+  ini.FailKey(section, key, "expected " + names);
 }
 
 }  // namespace snapnav::glue

@@ -53,7 +53,10 @@ inline constexpr int32_t kMaxLogChannelLength = 999;
 
 class LogReader {
  public:
-  // Opens `path`; throws LogError naming it when it cannot be opened.
+  // Opens `path`; throws LogError naming it when it cannot be opened, or when it is not an LCM
+  // log at all: it does not start with an event (nor with the start of one, cut off) and holds
+  // no intact event anywhere ("PATH is not an LCM log: byte 0: ..."). A log whose first event is
+  // damaged but which holds intact events is a damaged log, read as such.
   explicit LogReader(const std::string& path);
   LogReader(const LogReader&) = delete;
   LogReader& operator=(const LogReader&) = delete;
@@ -91,6 +94,8 @@ class LogReader {
   uint64_t FindEventInData(const std::string& data, uint64_t data_start);
   void ReadAt(uint64_t at, void* buffer, size_t size);
   void AddDamage(LogDamage::Kind kind, uint64_t offset, uint64_t resumed_at, const std::string& what);
+  // At opening: throws LogError when the file is not an LCM log; a damaged start is recorded.
+  void CheckIsLog();
 
   std::string path_;
   std::FILE* file_ = nullptr;
