@@ -24,10 +24,11 @@ GridConfig GridConfig::FromIni(const glue::IniFile& ini, const std::string& chan
   try {
     c.grid.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": [grid] " + e.what());
+    throw ini.ValidationError(e.what());
   }
-  if (!(c.every_s >= 0)) throw glue::ConfigError(ini.origin() + ": [grid] every_s must be >= 0 (0: on request only)");
-  if (!(c.keyframe_m >= 0) || !(c.keyframe_rad >= 0)) throw glue::ConfigError(ini.origin() + ": [grid] keyframe_m and keyframe_deg must be >= 0");
+  if (!(c.every_s >= 0)) ini.FailKey("grid", "every_s", "must be >= 0 (0: on request only)");
+  if (!(c.keyframe_m >= 0)) ini.FailKey("grid", "keyframe_m", "must be >= 0");
+  if (!(c.keyframe_rad >= 0)) ini.FailKey("grid", "keyframe_deg", "must be >= 0");
   return c;
 }
 

@@ -39,7 +39,14 @@ LocalizeConfig LocalizeConfig::FromIni(const glue::IniFile& ini, const std::stri
     check.tracking = nav::LaserSlamOptions{};
     check.Validate();
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": [localize] " + e.what());
+    // The library's messages name its fields; name the [localize] key that sets each.
+    const std::string what = e.what();
+    if (what.find("heading_step") != std::string::npos) ini.FailKey(s, "global_heading_step_deg", what);
+    if (what.find("global search: resolution_m") != std::string::npos) ini.FailKey(s, "global_resolution_m", what);
+    if (what.find("global search: max_range_m") != std::string::npos) ini.FailKey(s, "global_max_range_m", what);
+    if (what.find("reset_sigma") != std::string::npos && !(o.reset_sigma_xy_m > 0)) ini.FailKey(s, "reset_sigma_xy_m", what);
+    if (what.find("reset_sigma") != std::string::npos) ini.FailKey(s, "reset_sigma_deg", what);
+    throw ini.ValidationError(what);
   }
   return c;
 }
