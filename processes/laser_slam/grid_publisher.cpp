@@ -4,6 +4,7 @@
 #include <cmath>
 #include <ostream>
 
+#include "snapnav/glue/grid_scan_msg.hpp"
 #include "snapnav/glue/occupancy_grid_msg.hpp"
 
 namespace snapnav::processes {
@@ -37,19 +38,6 @@ void GridConfig::Print(std::ostream& out) const {
       << "\nkeyframe_m = " << keyframe_m << "\nkeyframe_deg = " << keyframe_rad * kDegPerRad << "\n";
 }
 
-nav::GridScan GridScanOf(const laser_scan_t& msg, const nav::Pose2& robot_pose) {
-  nav::GridScan g;
-  g.utime = msg.utime;
-  g.robot_pose = robot_pose;
-  g.sensor_on_robot = {msg.sensor_x_m, msg.sensor_y_m, msg.sensor_theta_rad};
-  g.angle_min_rad = msg.angle_min_rad;
-  g.angle_increment_rad = msg.angle_increment_rad;
-  g.range_min_m = msg.range_min_m;
-  g.range_max_m = msg.range_max_m;
-  g.ranges_m = msg.ranges_m;
-  return g;
-}
-
 GridPublisher::GridPublisher(glue::Bus& bus, const GridConfig& config, std::string source, glue::HandlerProblems& problems)
     : bus_(bus), config_(config), source_(std::move(source)), problems_(problems), builder_([&] {
         nav::OccupancyGridOptions o = config.grid;
@@ -67,7 +55,7 @@ void GridPublisher::AddScan(const laser_scan_t& msg, const nav::Pose2& robot_pos
   }
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t too_large = builder_.too_large();
-  if (builder_.Insert(GridScanOf(msg, robot_pose))) last_inserted_ = robot_pose;
+  if (builder_.Insert(glue::GridScanOf(msg, robot_pose))) last_inserted_ = robot_pose;
   if (builder_.too_large() > too_large) problems_.Skip("grid too large", "a scan at (" + std::to_string(robot_pose.x_m) + ", " + std::to_string(robot_pose.y_m) + ") would grow the grid beyond " + std::to_string(GridConfig::kMaxCells) + " cells", false);
   insert_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }

@@ -35,9 +35,6 @@ struct GridConfig {
   void Print(std::ostream& out) const;
 };
 
-// The scan as the grid takes it (laser_scan_t's geometry), at `robot_pose`.
-nav::GridScan GridScanOf(const laser_scan_t& msg, const nav::Pose2& robot_pose);
-
 class GridPublisher {
  public:
   // `source` names the maker in the message ("laser_slam", "map_file:PATH").

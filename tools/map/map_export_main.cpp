@@ -16,6 +16,7 @@
 #include "map_export.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/grid_scan_msg.hpp"
 #include "snapnav/glue/occupancy_grid_msg.hpp"
 #include "snapnav/map_request_t.hpp"
 #include "snapnav/occupancy_grid_t.hpp"
@@ -169,15 +170,7 @@ int Main(int argc, char** argv) {
         ++rejected_scans;
         continue;
       }
-      nav::GridScan g;
-      g.utime = s->utime;
-      g.sensor_on_robot = {s->sensor_x_m, s->sensor_y_m, s->sensor_theta_rad};
-      g.angle_min_rad = s->angle_min_rad;
-      g.angle_increment_rad = s->angle_increment_rad;
-      g.range_min_m = s->range_min_m;
-      g.range_max_m = s->range_max_m;
-      g.ranges_m = s->ranges_m;
-      scans.push_back(std::move(g));
+      scans.push_back(glue::GridScanOf(*s));
     }
     file.ReportDamage(std::cerr, "map-export");
   }

@@ -10,21 +10,11 @@
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimpleMap.h>
 
+#include "snapnav/nav/grid_scan.hpp"
 #include "snapnav/nav/occupancy_cells.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
-
-// One scan as the laser measured it, and the robot's pose when it did.
-struct GridScan {
-  int64_t utime = 0;
-  Pose2 robot_pose;            // in the map frame
-  Pose2 sensor_on_robot;       // the laser's mount on the robot
-  float angle_min_rad = 0;     // bearing of the first beam in the sensor frame
-  float angle_increment_rad = 0;
-  float range_min_m = 0, range_max_m = 0;  // readings outside [min, max) are no return
-  std::vector<float> ranges_m;
-};
 
 struct OccupancyGridOptions {
   double resolution_m = 0.05;    // cell size [m]
