@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <random>
 
+#include "../support/grid_scans.hpp"
 #include "map_export.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/occupancy_grid_msg.hpp"
@@ -51,16 +52,7 @@ sim::Scene SymmetricRoom() {  // 6 x 4 m, nothing in it: a half turn maps it ont
 }
 
 GridScan ScanAt(sim::World& world, const sim::LaserOptions& laser, const Pose2& pose) {
-  world.SetTruePose(pose);
-  GridScan g;
-  g.robot_pose = pose;
-  g.sensor_on_robot = {laser.mount_x_m, 0, 0};
-  g.angle_min_rad = static_cast<float>(laser.angle_min_rad);
-  g.angle_increment_rad = static_cast<float>(laser.AngleIncrement());
-  g.range_min_m = static_cast<float>(laser.range_min_m);
-  g.range_max_m = static_cast<float>(laser.range_max_m);
-  g.ranges_m = world.Scan();
-  return g;
+  return test_support::SimGridScan(world, laser, pose);
 }
 
 std::vector<Eigen::Vector2d> Points(const GridScan& g) {

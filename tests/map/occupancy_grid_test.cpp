@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "../support/grid_scans.hpp"
 #include "map_export.hpp"
 #include "snapnav/nav/occupancy_grid.hpp"
 #include "snapnav/nav/sim/scene.hpp"
@@ -40,16 +41,7 @@ std::vector<GridScan> RoomScans() {
   sim::World world(scene, {}, laser, 3);
   std::vector<GridScan> scans;
   for (const Pose2& pose : {Pose2{1.0, 1.0, 0.3}, Pose2{5.0, 1.0, 2.0}, Pose2{5.0, 4.0, -2.5}, Pose2{1.0, 4.0, -0.8}}) {
-    world.SetTruePose(pose);
-    GridScan g;
-    g.robot_pose = pose;
-    g.sensor_on_robot = {laser.mount_x_m, 0, 0};
-    g.angle_min_rad = static_cast<float>(laser.angle_min_rad);
-    g.angle_increment_rad = static_cast<float>(laser.AngleIncrement());
-    g.range_min_m = static_cast<float>(laser.range_min_m);
-    g.range_max_m = static_cast<float>(laser.range_max_m);
-    g.ranges_m = world.Scan();
-    scans.push_back(std::move(g));
+    scans.push_back(test_support::SimGridScan(world, laser, pose));
   }
   return scans;
 }
