@@ -68,6 +68,11 @@ TEST(Ini, ReadsTypedValuesWithComments) {
   EXPECT_EQ(ini.GetDoubleList("a", "list"), (std::vector<double>{1, 2, 3}));
   EXPECT_EQ(ini.GetString("b", "name"), "HELLO");
   EXPECT_NO_THROW(ini.CheckAllUsed());
+  // An empty value with a comment after it.
+  const auto empty = IniFile::Parse("[a]\nmask =            ; none\nother = # none either\nbare =\n", "e.ini");
+  EXPECT_EQ(empty.GetString("a", "mask"), "");
+  EXPECT_EQ(empty.GetString("a", "other"), "");
+  EXPECT_EQ(empty.GetString("a", "bare"), "");
 }
 
 TEST(Ini, MissingKeyNamesSectionAndKey) {

@@ -27,9 +27,17 @@ std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_st
 
 }  // namespace
 
+void FramePanoramas::SetMask(const cv::Mat& raw_mask) {
+  if (!raw_mask.empty() && raw_mask.type() != CV_8UC1) throw std::invalid_argument("frames: the mask must be 8-bit grey");
+  raw_mask_ = raw_mask;
+  unwrapper_.reset();  // rebuilt with the mask
+  mask_.release();
+}
+
 std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
   reason_.clear();
   detail_.clear();
+  mask_.release();
   if (f.kind != omni_frame_t::RAW_OMNI && f.kind != omni_frame_t::PANORAMA) {
     Fail("unknown kind", "kind " + std::to_string(f.kind) + " (RAW_OMNI 0 or PANORAMA 1)");
     return std::nullopt;
@@ -79,6 +87,11 @@ std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
   // rebuilt only when the calibration or the image size changes.
   const nav::MirrorModel mirror = IsZeroMirror(f) ? default_mirror_ : MirrorOf(f);
   const cv::Size size = image.size();
+  if (!raw_mask_.empty() && raw_mask_.size() != size) {
+    Fail("wrong mask size", "frame is " + SizeText(size.width, size.height) + ", the mask " +
+                                SizeText(raw_mask_.cols, raw_mask_.rows));
+    return std::nullopt;
+  }
   if (!unwrapper_ || !SameMirror(unwrapper_->mirror(), mirror) || unwrapper_size_ != size) {
     if (refused_calibration_ && SameMirror(refused_calibration_->first, mirror) &&
         refused_calibration_->second == size) {
@@ -87,6 +100,7 @@ std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
     }
     try {
       unwrapper_ = nav::Unwrapper(mirror, p, size);
+      if (!raw_mask_.empty()) unwrapper_->SetMask(raw_mask_);
       unwrapper_size_ = size;
       ++unwrapper_builds_;
     } catch (const std::exception& e) {
@@ -97,7 +111,8 @@ std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
     }
   }
   cv::Mat panorama;
-  unwrapper_->Unwrap(image, &panorama);
+  unwrapper_->Unwrap(image, &panorama);  // masked pixels filled
+  mask_ = unwrapper_->panorama_mask();
   return panorama;
 }
 

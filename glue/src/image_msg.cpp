@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -230,6 +231,33 @@ void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& m, const std::
       << "\ninner_radius_px = " << m.inner_radius_px << "\nouter_radius_px = " << m.outer_radius_px
       << "\nelevation_inner_deg = " << m.elevation_inner_rad / kDeg
       << "\nelevation_outer_deg = " << m.elevation_outer_rad / kDeg << "\n";
+}
+
+void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& m, const std::string& mask_path,
+                       const std::string& section) {
+  PrintMirrorConfig(out, m, section);
+  out << "mask = " << mask_path << "\n";
+}
+
+std::string ReadMirrorMaskPath(const IniFile& ini, const std::string& section) {
+  const std::string value = ini.GetString(section, "mask");
+  if (value.empty() || value[0] == '/') return value;
+  // Relative to the config file's folder (a calibration writes the mask beside its ini).
+  const std::filesystem::path origin(ini.origin());
+  if (std::filesystem::exists(origin)) return (origin.parent_path() / value).lexically_normal().string();
+  return value;
+}
+
+cv::Mat LoadMask(const std::string& path, cv::Size expected) {
+  if (!std::filesystem::exists(path)) throw std::runtime_error("mask " + path + ": no such file");
+  cv::Mat m = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  if (m.empty()) throw std::runtime_error("mask " + path + ": not an image OpenCV can read");
+  if (expected.width > 0 && m.size() != expected) {
+    throw std::runtime_error("mask " + path + ": " + std::to_string(m.cols) + "x" + std::to_string(m.rows) +
+                             ", the camera's images are " + std::to_string(expected.width) + "x" +
+                             std::to_string(expected.height));
+  }
+  return m;
 }
 
 void PrintPanoramaConfig(std::ostream& out, const nav::PanoramaModel& p, const std::string& section) {

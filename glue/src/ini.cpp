@@ -84,7 +84,8 @@ IniFile IniFile::Parse(const std::string& text, const std::string& origin) {
     if (section.empty()) throw ConfigError(where + ": key outside of any [section]");
     const std::string key = Trim(t.substr(0, eq));
     std::string value = Trim(t.substr(eq + 1));
-    // Trailing comments start with " #" or " ;".
+    // Trailing comments start with " #" or " ;"; an empty value may be followed by one (`key = ; note`).
+    if (!value.empty() && (value[0] == '#' || value[0] == ';')) value.clear();
     for (const char* c : {" #", " ;", "\t#", "\t;"}) {
       if (const auto p = value.find(c); p != std::string::npos) value = Trim(value.substr(0, p));
     }

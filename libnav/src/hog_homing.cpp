@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <Eigen/Geometry>
 #include <opencv2/imgproc.hpp>
 
+#include "snapnav/nav/image_mask.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
@@ -71,14 +73,16 @@ cv::Mat ToGray(const cv::Mat& panorama) {
 
 }  // namespace
 
-ColumnHistograms::ColumnHistograms(const Gradients& gradients, const HogOptions& options) { Build(gradients, options); }
+ColumnHistograms::ColumnHistograms(const Gradients& gradients, const HogOptions& options, const cv::Mat& mask) {
+  Build(gradients, options, mask);
+}
 
 ColumnHistograms::ColumnHistograms(const cv::Mat& panorama, const HogOptions& options) {
   options.Validate();
-  Build(ComputeGradients(ToGray(panorama)), options);
+  Build(ComputeGradients(ToGray(panorama)), options, cv::Mat());
 }
 
-void ColumnHistograms::Build(const Gradients& g, const HogOptions& o) {
+void ColumnHistograms::Build(const Gradients& g, const HogOptions& o, const cv::Mat& mask) {
   o.Validate();
   if (g.magnitude.empty()) throw std::invalid_argument("hog: empty gradients");
   const int rows = g.magnitude.rows;
@@ -88,10 +92,26 @@ void ColumnHistograms::Build(const Gradients& g, const HogOptions& o) {
                                 " do not fit a panorama of " + std::to_string(rows) + " rows with cells of " +
                                 std::to_string(o.cell_size_px));
   }
+  CheckMask(mask, g.magnitude.size(), "hog");
+  const bool use_mask = HasMaskedPixels(mask);
   width_ = g.magnitude.cols;
   cell_rows_ = band_h / o.cell_size_px;
   bins_ = o.bins;
+  cell_size_ = o.cell_size_px;
   prefix_.assign(static_cast<size_t>(cell_rows_) * (width_ + 1) * bins_, 0.0);
+  if (use_mask) {
+    masked_prefix_.assign(static_cast<size_t>(cell_rows_) * (width_ + 1), 0);
+    for (int r = 0; r < cell_rows_; ++r) {
+      int* mp = &masked_prefix_[static_cast<size_t>(r) * (width_ + 1)];
+      for (int x = 0; x < width_; ++x) {
+        int masked = 0;
+        for (int y = o.band_top_px + r * o.cell_size_px; y < o.band_top_px + (r + 1) * o.cell_size_px; ++y) {
+          masked += mask.at<uint8_t>(y, x) == 0;
+        }
+        mp[x + 1] = mp[x] + masked;
+      }
+    }
+  }
   // Column histograms first (one pass over the pixels), then prefix sums over columns.
   std::vector<double> columns(static_cast<size_t>(width_) * bins_);
   const float bin_scale = static_cast<float>(bins_ / (2 * M_PI));
@@ -102,9 +122,10 @@ void ColumnHistograms::Build(const Gradients& g, const HogOptions& o) {
     for (int y = o.band_top_px + r * o.cell_size_px; y < o.band_top_px + (r + 1) * o.cell_size_px; ++y) {
       const float* mag = g.magnitude.ptr<float>(y);
       const float* ang = g.angle_rad.ptr<float>(y);
+      const uint8_t* usable = use_mask ? mask.ptr<uint8_t>(y) : nullptr;
       for (int x = 0; x < width_; ++x) {
         const float m = mag[x];
-        if (m == 0) continue;
+        if (m == 0 || (usable && !usable[x])) continue;
         const float a = ang[x];
         if (o.range != OrientationRange::kAll) {
           // Distance of the gradient direction from horizontal (a vertical edge): 0..pi/2.
@@ -136,16 +157,52 @@ void ColumnHistograms::AddRun(int row, int x0, int n, double* out) const {
   }
 }
 
+double ColumnHistograms::MaskedShare(int row, int x0, int n) const {
+  if (masked_prefix_.empty() || n <= 0) return 0.0;
+  const int* mp = &masked_prefix_[static_cast<size_t>(row) * (width_ + 1)];
+  x0 %= width_;
+  if (x0 < 0) x0 += width_;
+  int masked = 0;
+  const int total = n;
+  while (n > 0) {
+    const int take = std::min(n, width_ - x0);
+    masked += mp[x0 + take] - mp[x0];
+    n -= take;
+    x0 = 0;
+  }
+  return static_cast<double>(masked) / (static_cast<double>(total) * cell_size_);
+}
+
+namespace {
+
+// A cell's usability and the scale of its histogram (the usable share's inverse).
+inline bool CellUsable(double masked_share, double* scale) {
+  if (masked_share > ColumnHistograms::kMaxMaskedShare) return false;
+  *scale = masked_share > 0 ? 1.0 / (1.0 - masked_share) : 1.0;
+  return true;
+}
+
+}  // namespace
+
 HogCells CellsAtShift(const ColumnHistograms& h, int cell_size_px, int shift_px) {
   HogCells c;
   c.cell_rows = h.cell_rows();
   c.cell_cols = h.width() / cell_size_px;
   c.bins = h.bins();
   c.values.assign(static_cast<size_t>(c.cell_rows) * c.cell_cols * c.bins, 0.0);
+  if (h.masked()) c.valid.assign(static_cast<size_t>(c.cell_rows) * c.cell_cols, 1);
   for (int r = 0; r < c.cell_rows; ++r) {
     for (int p = 0; p < c.cell_cols; ++p) {
-      h.AddRun(r, shift_px + p * cell_size_px, cell_size_px,
-               &c.values[(static_cast<size_t>(r) * c.cell_cols + p) * c.bins]);
+      double* out = &c.values[(static_cast<size_t>(r) * c.cell_cols + p) * c.bins];
+      h.AddRun(r, shift_px + p * cell_size_px, cell_size_px, out);
+      if (!h.masked()) continue;
+      double scale = 1.0;
+      if (!CellUsable(h.MaskedShare(r, shift_px + p * cell_size_px, cell_size_px), &scale)) {
+        c.valid[static_cast<size_t>(r) * c.cell_cols + p] = 0;
+        std::fill(out, out + c.bins, 0.0);
+      } else if (scale != 1.0) {
+        for (int q = 0; q < c.bins; ++q) out[q] *= scale;
+      }
     }
   }
   return c;
@@ -179,14 +236,32 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
   // The current view's cell histogram starting at every column, per cell row: each shift
   // then reads contiguous memory instead of summing runs.
   std::vector<double> starts(static_cast<size_t>(w) * bins);
+  // With masks: only cells usable in both views count, and D(s) is scaled to all the cells.
+  const bool masked = home.masked() || current.masked();
+  std::vector<uint8_t> start_usable(static_cast<size_t>(w), 1);
+  std::vector<int> pairs(masked ? static_cast<size_t>(w) : 0, 0);
   for (int r = 0; r < h.cell_rows; ++r) {
     std::fill(starts.begin(), starts.end(), 0.0);
-    for (int x = 0; x < w; ++x) current.AddRun(r, x, cell_size_px, &starts[static_cast<size_t>(x) * bins]);
+    for (int x = 0; x < w; ++x) {
+      double* out = &starts[static_cast<size_t>(x) * bins];
+      current.AddRun(r, x, cell_size_px, out);
+      if (!current.masked()) continue;
+      double scale = 1.0;
+      start_usable[x] = CellUsable(current.MaskedShare(r, x, cell_size_px), &scale);
+      if (scale != 1.0) {
+        for (int q = 0; q < bins; ++q) out[q] *= scale;
+      }
+    }
     for (int p = 0; p < h.cell_cols; ++p) {
       const double* ref = &h.values[(static_cast<size_t>(r) * h.cell_cols + p) * bins];
+      if (!h.usable(r, p)) continue;
       for (int s = 0; s < w; ++s) {
         int x = s + p * cell_size_px;
         if (x >= w) x -= w * (x / w);
+        if (masked) {
+          if (!start_usable[x]) continue;
+          ++pairs[s];
+        }
         const double* cur = &starts[static_cast<size_t>(x) * bins];
         double d2 = 0;
         for (int q = 0; q < bins; ++q) {
@@ -195,6 +270,13 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
         }
         result.distance_by_shift[s] += std::sqrt(d2);  // Euclidean distance per cell (3.1.2), summed
       }
+    }
+  }
+  if (masked) {
+    const double all = static_cast<double>(h.cell_rows) * h.cell_cols;
+    for (int s = 0; s < w; ++s) {
+      result.distance_by_shift[s] = pairs[s] > 0 ? result.distance_by_shift[s] * all / pairs[s]
+                                                 : std::numeric_limits<double>::max() / 4;
     }
   }
   int best = 0;
@@ -214,7 +296,7 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
 }
 
 std::vector<Eigen::Vector2d> BinAlvs(const HogCells& cells, int cell_size_px, const PanoramaModel& panorama,
-                                     const HogAlvOptions& options) {
+                                     const HogAlvOptions& options, const std::vector<uint8_t>* use) {
   std::vector<Eigen::Vector2d> alv(static_cast<size_t>(cells.bins), Eigen::Vector2d::Zero());
   const bool log_weight = options.weight == CellWeight::kLog;
   for (int p = 0; p < cells.cell_cols; ++p) {
@@ -223,6 +305,7 @@ std::vector<Eigen::Vector2d> BinAlvs(const HogCells& cells, int cell_size_px, co
     const double phi = panorama.BearingOfColumn(p * cell_size_px + cell_size_px / 2.0);
     const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
     for (int r = 0; r < cells.cell_rows; ++r) {
+      if (use && !(*use)[static_cast<size_t>(r) * cells.cell_cols + p]) continue;
       for (int q = 0; q < cells.bins; ++q) {
         const double m = std::abs(cells.at(r, p, q));
         alv[q] += (log_weight ? std::log1p(m / options.log_scale) : m) * dir;
@@ -242,8 +325,21 @@ std::optional<HomingEstimate> HogHoming(const ColumnHistograms& home, const Colu
   const double shift_px = compass.rotation_rad * home.width() / (2 * M_PI);
   const int shift = static_cast<int>(std::lround(shift_px));
   // Current cells sampled at the compass shift look at the same world bearings as the home cells.
-  const auto home_alv = BinAlvs(CellsAtShift(home, hog.cell_size_px, 0), hog.cell_size_px, panorama, alv_options);
-  auto cur_alv = BinAlvs(CellsAtShift(current, hog.cell_size_px, shift), hog.cell_size_px, panorama, alv_options);
+  const HogCells home_cells = CellsAtShift(home, hog.cell_size_px, 0);
+  const HogCells cur_cells = CellsAtShift(current, hog.cell_size_px, shift);
+  // With masks, a cell counts in both ALVs only when it is usable in both views.
+  std::vector<uint8_t> both;
+  if (!home_cells.valid.empty() || !cur_cells.valid.empty()) {
+    both.assign(static_cast<size_t>(home_cells.cell_rows) * home_cells.cell_cols, 1);
+    for (int r = 0; r < home_cells.cell_rows; ++r) {
+      for (int p = 0; p < home_cells.cell_cols; ++p) {
+        both[static_cast<size_t>(r) * home_cells.cell_cols + p] = home_cells.usable(r, p) && cur_cells.usable(r, p);
+      }
+    }
+  }
+  const std::vector<uint8_t>* use = both.empty() ? nullptr : &both;
+  const auto home_alv = BinAlvs(home_cells, hog.cell_size_px, panorama, alv_options, use);
+  auto cur_alv = BinAlvs(cur_cells, hog.cell_size_px, panorama, alv_options, use);
   // The sub-column rest of the shift rotates the current cells' bearings in the home frame.
   const double residual = (shift_px - shift) * 2 * M_PI / home.width();
   if (residual != 0) {
@@ -349,6 +445,24 @@ HogHomer::HogHomer(const HogHomingConfig& config, const PanoramaModel& panorama)
   panorama_.Validate();
 }
 
+void HogHomer::SetMask(const cv::Mat& panorama_mask) {
+  CheckMask(panorama_mask, cv::Size(panorama_.width_px, panorama_.height_px), "hog homing");
+  if (!HasMaskedPixels(panorama_mask)) {
+    mask_.release();
+    cell_mask_.release();
+    return;
+  }
+  mask_ = panorama_mask.clone();
+  // The centred differences at a pixel next to a masked one read it: grown by a pixel.
+  cell_mask_ = GrowMasked(mask_, 1);
+  if (config_.warp_compensation) {
+    // The warping moves pixels within their column: a column with a masked pixel is masked.
+    cv::Mat columns;
+    cv::reduce(cell_mask_, columns, 0, cv::REDUCE_MIN);
+    cell_mask_ = cv::repeat(columns, cell_mask_.rows, 1);
+  }
+}
+
 HogHomer::Views HogHomer::Describe(const cv::Mat& image) const {
   if (image.empty()) throw std::invalid_argument("hog homing: empty panorama");
   if (image.cols != panorama_.width_px || image.rows != panorama_.height_px) {
@@ -357,6 +471,10 @@ HogHomer::Views HogHomer::Describe(const cv::Mat& image) const {
                                 "x" + std::to_string(panorama_.height_px));
   }
   cv::Mat gray = ToGray(image);
+  if (!mask_.empty()) {
+    gray = gray.clone();
+    FillMasked(mask_, &gray);  // no edge of the robot's parts (a no-op on a panorama unwrapped with the mask)
+  }
   if (config_.equalize_histogram) {
     cv::Mat eq;
     cv::equalizeHist(gray, eq);
@@ -364,7 +482,7 @@ HogHomer::Views HogHomer::Describe(const cv::Mat& image) const {
   }
   if (config_.warp_compensation) gray = CompensateWarping(gray, panorama_, config_.warp);
   const Gradients g = ComputeGradients(gray);
-  return Views{ColumnHistograms(g, config_.hog), ColumnHistograms(g, config_.compass_hog)};
+  return Views{ColumnHistograms(g, config_.hog, cell_mask_), ColumnHistograms(g, config_.compass_hog, cell_mask_)};
 }
 
 void HogHomer::SetHome(const cv::Mat& panorama) { home_.emplace(Describe(panorama)); }

@@ -1,5 +1,6 @@
 #include "snapnav/nav/omni_geometry.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -59,6 +60,36 @@ double PanoramaModel::ElevationOfRow(double row) const {
 
 double PanoramaModel::RowOfElevation(double elevation_rad) const {
   return (elevation_rad - elevation_top_rad) * (height_px - 1) / (elevation_bottom_rad - elevation_top_rad);
+}
+
+void MirrorProfile::Validate() const {
+  if (!std::isfinite(elevation_rim_rad) || !std::isfinite(elevation_centre_rad) ||
+      std::abs(elevation_rim_rad) >= M_PI / 2 || std::abs(elevation_centre_rad) >= M_PI / 2 ||
+      elevation_rim_rad == elevation_centre_rad) {
+    throw std::invalid_argument("mirror profile: elevations at the rim and the centre must differ and lie within (-90, 90) deg");
+  }
+}
+
+MirrorProfile MirrorProfile::FromMirror(const MirrorModel& m) {
+  m.Validate();
+  MirrorProfile p;
+  const double rho = m.inner_radius_px / m.outer_radius_px;
+  p.elevation_rim_rad = m.elevation_outer_rad;
+  p.elevation_centre_rad = m.elevation_outer_rad - (m.elevation_outer_rad - m.elevation_inner_rad) / (1.0 - rho);
+  // Kept inside (-90, 90) for the model's validity: a steep profile extrapolated to the centre.
+  p.elevation_centre_rad = std::clamp(p.elevation_centre_rad, -89.9 * M_PI / 180, 89.9 * M_PI / 180);
+  return p;
+}
+
+MirrorModel MirrorWithRadii(double cx, double cy, double inner, double outer, const MirrorProfile& profile) {
+  MirrorModel m;
+  m.center_x_px = cx;
+  m.center_y_px = cy;
+  m.inner_radius_px = inner;
+  m.outer_radius_px = outer;
+  m.elevation_inner_rad = profile.ElevationAt(outer > 0 ? inner / outer : 0);
+  m.elevation_outer_rad = profile.ElevationAt(1.0);
+  return m;
 }
 
 std::optional<Eigen::Vector2d> MirrorPixel(const MirrorModel& m, double bearing_rad, double elevation_rad) {

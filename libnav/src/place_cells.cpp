@@ -12,6 +12,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "snapnav/nav/image_mask.hpp"
+
 namespace snapnav::nav {
 
 namespace {
@@ -217,7 +219,7 @@ double WindowNcc(const cv::Mat& a, int ra, const cv::Mat& b, int rb) {
 }
 }  // namespace
 
-PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options) {
+PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options, const cv::Mat& mask) {
   options.Validate();
   if (panorama.empty()) throw std::invalid_argument("place cells: empty panorama");
   cv::Mat gray;
@@ -228,12 +230,36 @@ PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options
   } else {
     throw std::invalid_argument("place cells: the panorama must be 8-bit grey or BGR");
   }
+  CheckMask(mask, gray.size(), "place cells");
+  const bool masked = HasMaskedPixels(mask);
+  if (masked) {
+    gray = gray.clone();
+    FillMasked(mask, &gray);
+  }
   PlaceView view;
-  view.landmarks = ExtractLandmarks(gray, options.features);
+  view.landmarks = ExtractLandmarks(gray, options.features, masked ? mask : cv::Mat());
   view.windows = MakeWindows(gray, view.landmarks, options);
-  if (options.keep_vlines) view.vlines = DetectVlineLandmarks(gray, options.vline);
-  cv::resize(gray, view.signature, cv::Size(options.signature_width_px, options.signature_height_px), 0, 0,
-             cv::INTER_AREA);
+  if (options.keep_vlines) {
+    view.vlines = DetectVlineLandmarks(gray, options.vline);
+    if (masked) view.vlines = DropMaskedLandmarks(view.vlines, mask, options.features);
+  }
+  const cv::Size signature(options.signature_width_px, options.signature_height_px);
+  if (!masked) {
+    cv::resize(gray, view.signature, signature, 0, 0, cv::INTER_AREA);
+  } else {
+    // The mean of the usable pixels under each signature pixel; one without any is filled from
+    // its row's neighbours.
+    cv::Mat usable, weighted, weight, g;
+    mask.convertTo(usable, CV_32F, 1.0 / 255);
+    cv::threshold(usable, usable, 0, 1, cv::THRESH_BINARY);
+    gray.convertTo(g, CV_32F);
+    cv::resize(g.mul(usable), weighted, signature, 0, 0, cv::INTER_AREA);
+    cv::resize(usable, weight, signature, 0, 0, cv::INTER_AREA);
+    cv::Mat mean = weighted / cv::max(weight, 1e-6);
+    mean.convertTo(view.signature, CV_8U);
+    const cv::Mat none = weight > 1e-6;
+    FillMasked(none, &view.signature);
+  }
   return view;
 }
 

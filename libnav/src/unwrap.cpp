@@ -8,6 +8,8 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "snapnav/nav/image_mask.hpp"
+
 namespace snapnav::nav {
 
 Unwrapper::Unwrapper(const MirrorModel& mirror, const PanoramaModel& panorama, cv::Size raw_size)
@@ -46,61 +48,21 @@ void Unwrapper::Unwrap(const cv::Mat& raw, cv::Mat* panorama) const {
                                 std::to_string(raw_size_.height));
   }
   cv::remap(raw, *panorama, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT);
+  if (!panorama_mask_.empty() && (panorama->channels() == 1 || panorama->channels() == 3)) {
+    FillMasked(panorama_mask_, panorama);
+  }
 }
 
-std::optional<MirrorModel> CalibrateMirror(const cv::Mat& raw, const MirrorModel& prior,
-                                           const MirrorSearchOptions& o) {
-  if (raw.empty()) return std::nullopt;
-  cv::Mat gray;
-  if (raw.channels() == 3) cv::cvtColor(raw, gray, cv::COLOR_BGR2GRAY); else gray = raw;
-  // The mirror is the large bright disc: threshold between border and content, then the
-  // largest contour's enclosing circle gives the outer radius and centre.
-  cv::Mat mask;
-  cv::threshold(gray, mask, 0, 255, cv::THRESH_BINARY | cv::THRESH_OTSU);
-  cv::morphologyEx(mask, mask, cv::MORPH_CLOSE, cv::getStructuringElement(cv::MORPH_ELLIPSE, {9, 9}));
-  std::vector<std::vector<cv::Point>> contours;
-  cv::findContours(mask, contours, cv::RETR_CCOMP, cv::CHAIN_APPROX_NONE);
-  const double side = std::min(raw.cols, raw.rows);
-  double best_area = 0;
-  std::optional<MirrorModel> best;
-  for (const auto& contour : contours) {
-    const double area = cv::contourArea(contour);
-    if (area <= best_area) continue;
-    cv::Point2f centre;
-    float radius = 0;
-    cv::minEnclosingCircle(contour, centre, radius);
-    if (radius < o.min_radius_frac * side || radius > o.max_radius_frac * side) continue;
-    // A disc fills most of its enclosing circle.
-    if (area < 0.6 * M_PI * radius * radius) continue;
-    MirrorModel m = prior;
-    m.center_x_px = centre.x;
-    m.center_y_px = centre.y;
-    m.outer_radius_px = radius - 1.0;
-    m.inner_radius_px = o.inner_radius_frac * m.outer_radius_px;
-    best_area = area;
-    best = m;
+void Unwrapper::SetMask(const cv::Mat& raw_mask) {
+  CheckMask(raw_mask, raw_size_, "unwrap");
+  if (raw_mask.empty()) {
+    panorama_mask_.release();
+    return;
   }
-  if (!best) return std::nullopt;
-  // The inner radius: the dark disc of the camera at the centre, measured along rays.
-  std::vector<double> edges;
-  for (int k = 0; k < 32; ++k) {
-    const double a = 2 * M_PI * k / 32;
-    for (double r = 2; r < 0.6 * best->outer_radius_px; r += 0.5) {
-      const int x = static_cast<int>(std::lround(best->center_x_px + r * std::cos(a)));
-      const int y = static_cast<int>(std::lround(best->center_y_px + r * std::sin(a)));
-      if (x < 0 || y < 0 || x >= mask.cols || y >= mask.rows) break;
-      if (mask.at<uint8_t>(y, x)) {
-        edges.push_back(r);
-        break;
-      }
-    }
-  }
-  if (edges.size() >= 16) {
-    std::nth_element(edges.begin(), edges.begin() + edges.size() / 2, edges.end());
-    const double inner = edges[edges.size() / 2];
-    if (inner > 3 && inner < 0.6 * best->outer_radius_px) best->inner_radius_px = inner + 1.0;
-  }
-  return best;
+  cv::Mat usable = raw_mask != 0, sampled;
+  // Bilinear: 255 only where every raw pixel with a weight is usable.
+  cv::remap(usable, sampled, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
+  panorama_mask_ = sampled == 255;
 }
 
 }  // namespace snapnav::nav

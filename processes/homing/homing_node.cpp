@@ -100,6 +100,7 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
+  c.mask_path = glue::ReadMirrorMaskPath(ini);
 
   auto& h = c.homing;
   h.hog = ReadHog(ini, "hog");
@@ -140,6 +141,13 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
 
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
+  if (!c.mask_path.empty()) {
+    try {
+      c.mask = glue::LoadMask(c.mask_path);
+    } catch (const std::exception& e) {
+      ini.FailKey("mirror", "mask", e.what());
+    }
+  }
   return c;
 }
 
@@ -204,7 +212,7 @@ void HomingConfig::Print(std::ostream& out) const {
       << "[homing]\ninput = " << InputName(input) << "\nhome = " << HomeName(home) << "\nhome_image = " << home_image
       << "\nhome_image_kind = " << (home_image_raw ? "raw" : "panorama") << "\n";
   glue::PrintPanoramaConfig(out, panorama);
-  glue::PrintMirrorConfig(out, mirror);
+  glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
   out << "[hog]\n";
   print_hog(h.hog);
   out << "narrow_range_deg = " << h.hog.narrow_range_deg
@@ -259,7 +267,8 @@ cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& con
     return image;
   }
   try {
-    const nav::Unwrapper unwrapper(config.mirror, p, image.size());
+    nav::Unwrapper unwrapper(config.mirror, p, image.size());
+    if (!config.mask.empty()) unwrapper.SetMask(config.mask);
     cv::Mat panorama;
     unwrapper.Unwrap(image, &panorama);
     return panorama;
@@ -278,6 +287,14 @@ HomingNode::HomingNode(glue::Bus& bus, const HomingConfig& config)
       current_frames_(config.fusion.current_frames, config.fusion.current_interval_s),
       home_sets_(config.fusion.home_frames, config.fusion.home_interval_s),
       current_sets_(config.fusion.current_frames, config.fusion.current_interval_s) {
+  frames_to_panoramas_.SetMask(config_.mask);
+  if (config_.input == HomingInput::kRaw && !config_.mask.empty() && config_.home == HomeSource::kImage &&
+      config_.home_image_raw) {
+    // The home image's panorama mask, before the home is described.
+    nav::Unwrapper u(config_.mirror, config_.panorama, config_.mask.size());
+    u.SetMask(config_.mask);
+    homer_.SetMask(u.panorama_mask());
+  }
   if (config_.input == HomingInput::kLandmarks) {
     bus_.Subscribe(config_.landmarks_channel, &HomingNode::OnLandmarks, this);
     bus_.Subscribe(config_.home_landmarks_channel, &HomingNode::OnHomeLandmarks, this);
@@ -315,7 +332,17 @@ void HomingNode::SetHome(const cv::Mat& panorama) {
 
 std::optional<cv::Mat> HomingNode::ToPanorama(const omni_frame_t& f) {
   auto panorama = frames_to_panoramas_.Convert(f);
-  if (!panorama) Reject(frames_to_panoramas_.reason(), frames_to_panoramas_.detail());
+  if (!panorama) {
+    Reject(frames_to_panoramas_.reason(), frames_to_panoramas_.detail());
+    return panorama;
+  }
+  // The panorama's mask follows the frames' calibration (a new one when it changes). A home
+  // described before keeps the mask it was described with.
+  const cv::Mat& mask = frames_to_panoramas_.mask();
+  if (mask.data != mask_data_) {
+    homer_.SetMask(mask);
+    mask_data_ = mask.data;
+  }
   return panorama;
 }
 

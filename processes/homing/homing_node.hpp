@@ -61,6 +61,8 @@ struct HomingConfig {
   bool home_image_raw = true;   // home_image holds a raw catadioptric image (else a panorama)
   nav::PanoramaModel panorama;  // every frame is turned into this panorama
   nav::MirrorModel mirror;      // of home_image, and of raw frames without a calibration
+  std::string mask_path;        // [mirror] mask: the robot's own parts in raw frames ("": none)
+  cv::Mat mask;                 // that mask (image_mask.hpp): left out of the HOG cells
   nav::HogHomingConfig homing;
   // Landmark homing ([matching] for SIFT and SURF, [vline_matching] for vertical lines, [landmark_alv]).
   nav::LandmarkHomingConfig keypoint_homing, vline_homing;
@@ -168,6 +170,7 @@ class HomingNode {
   nav::HogHomer homer_;
   std::optional<nav::LandmarkHomer> landmark_homer_;  // made for the home set's method
   glue::FramePanoramas frames_to_panoramas_;
+  const uint8_t* mask_data_ = nullptr;  // the panorama mask the HOG homer has
   int64_t frames_ = 0, before_home_ = 0, homes_set_ = 0;
   int64_t published_valid_ = 0, published_invalid_ = 0, between_fused_frames_ = 0;
   // [view_fusion]: the frames of the home and current views (HOG: median panorama; landmark

@@ -20,6 +20,7 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
   c.raw_input = glue::ReadChoice<bool>(ini, "landmarks", "input", {{"raw", true}, {"panorama", false}});
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
+  c.mask_path = glue::ReadMirrorMaskPath(ini);
   c.extractor = glue::ReadLandmarkExtractor(ini);
   if (!method.empty()) {
     const auto m = nav::ParseLandmarkMethod(method);
@@ -40,6 +41,13 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
   } catch (const std::invalid_argument& e) {
     throw ini.ValidationError(e.what());
   }
+  if (!c.mask_path.empty()) {
+    try {
+      c.mask = glue::LoadMask(c.mask_path);
+    } catch (const std::exception& e) {
+      throw glue::ConfigError(ini.origin() + ": [mirror] " + e.what());
+    }
+  }
   if (c.landmarks_channel == c.input_channel()) {
     throw ini.ValidationError("[channels] landmarks and " + std::string(c.raw_input ? "omni" : "panorama") +
                               " are both '" + c.landmarks_channel + "'");
@@ -53,12 +61,13 @@ void LandmarksConfig::Print(std::ostream& out) const {
       << "\nmethod = " << nav::LandmarkMethodName(extractor.method)
       << "\nequalize_histogram = " << (extractor.equalize_histogram ? "true" : "false") << "\n";
   glue::PrintPanoramaConfig(out, panorama);
-  glue::PrintMirrorConfig(out, mirror);
+  glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
   glue::PrintLandmarkExtractorSections(out, extractor);
 }
 
 LandmarksNode::LandmarksNode(glue::Bus& bus, const LandmarksConfig& config)
     : bus_(bus), config_(config), frames_to_panoramas_(config.panorama, config.mirror) {
+  frames_to_panoramas_.SetMask(config_.mask);
   bus_.Subscribe(config_.input_channel(), &LandmarksNode::OnFrame, this);
 }
 
@@ -90,7 +99,7 @@ void LandmarksNode::OnFrame(const omni_frame_t& frame) {
   const auto t0 = std::chrono::steady_clock::now();
   nav::LandmarkSet set;
   try {
-    set = nav::ExtractLandmarks(*panorama, config_.extractor);
+    set = nav::ExtractLandmarks(*panorama, config_.extractor, frames_to_panoramas_.mask());
   } catch (const std::exception& e) {
     ++rejected_["extraction error"];
     throw std::runtime_error(std::string("landmarks: ") + e.what());  // the bus counts it as a handler error

@@ -24,6 +24,8 @@ struct LandmarksConfig {
   bool raw_input = true;
   nav::PanoramaModel panorama;
   nav::MirrorModel mirror;        // of raw frames without a calibration
+  std::string mask_path;          // [mirror] mask: the robot's own parts in raw frames ("": none)
+  cv::Mat mask;                   // that mask (image_mask.hpp); no landmark on it
   nav::LandmarkExtractorConfig extractor;
 
   const std::string& input_channel() const { return raw_input ? omni_channel : panorama_channel; }

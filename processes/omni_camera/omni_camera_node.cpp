@@ -41,7 +41,17 @@ OmniCameraConfig OmniCameraConfig::FromIni(const glue::IniFile& ini, const std::
   const std::string encoding = ini.GetString("camera", "encoding");
   c.frame.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
   c.frame.mirror = glue::ReadMirrorConfig(ini);
+  // The mask is for the processes that read the frames; the camera checks that it fits.
+  c.mask_path = glue::ReadMirrorMaskPath(ini);
   ini.CheckAllUsed();
+  if (!c.mask_path.empty()) {
+    try {
+      const cv::Size expected = c.capture.width_px > 0 ? cv::Size(c.capture.width_px, c.capture.height_px) : cv::Size();
+      (void)glue::LoadMask(c.mask_path, expected);
+    } catch (const std::exception& e) {
+      throw glue::ConfigError(ini.origin() + ": [mirror] " + e.what());
+    }
+  }
   try {
     c.capture.source = FrameSourceSpec::Parse(source);
     c.frame.encoding = glue::ParseFrameEncoding(encoding);
@@ -65,7 +75,7 @@ void OmniCameraConfig::Print(std::ostream& out) const {
       << "\nwidth_px = " << capture.width_px << "\nheight_px = " << capture.height_px
       << "\nrate_hz = " << capture.rate_hz << "\nloop = " << (capture.loop ? "true" : "false")
       << "\nencoding = " << glue::FrameEncodingName(frame.encoding) << "\njpeg_quality = " << frame.jpeg_quality << "\n";
-  glue::PrintMirrorConfig(out, frame.mirror);
+  glue::PrintMirrorConfig(out, frame.mirror, mask_path, "mirror");
 }
 
 OmniCameraNode::OmniCameraNode(glue::Bus& bus, const OmniCameraConfig& config, std::ostream* log)

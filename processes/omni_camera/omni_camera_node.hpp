@@ -23,6 +23,7 @@ struct OmniCameraConfig {
   std::string frame_channel;
   FrameSourceOptions capture;
   OmniFrameOptions frame;
+  std::string mask_path;  // [mirror] mask ("": none): read by the processes that take the frames; checked here
 
   // Reads [channels], [camera] and [mirror]; every key is required, unknown keys and
   // invalid values are glue::ConfigError naming the file.

@@ -117,11 +117,19 @@ PlaceCellsConfig PlaceCellsConfig::FromIni(const glue::IniFile& ini, const std::
 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
+  c.mask_path = glue::ReadMirrorMaskPath(ini);
   c.view = glue::ReadPlaceViewOptions(ini);
   c.localizer = glue::ReadLocalizerOptions(ini);
   c.vocabulary = glue::ReadVocabularyOptions(ini);
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
+  if (!c.mask_path.empty()) {
+    try {
+      c.mask = glue::LoadMask(c.mask_path);
+    } catch (const std::exception& e) {
+      ini.FailKey("mirror", "mask", e.what());
+    }
+  }
   return c;
 }
 
@@ -170,7 +178,7 @@ void PlaceCellsConfig::Print(std::ostream& out) const {
       << "\nmin_interval_s = " << min_interval_s << "\nmin_travel_m = " << min_travel_m
       << "\nstats_interval_s = " << stats_interval_s << "\n";
   glue::PrintPanoramaConfig(out, panorama);
-  glue::PrintMirrorConfig(out, mirror);
+  glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
   glue::PrintPlaceViewOptions(out, view);
   glue::PrintLocalizerOptions(out, localizer);
   glue::PrintVocabularyOptions(out, vocabulary);
@@ -182,6 +190,7 @@ PlaceCellsNode::PlaceCellsNode(glue::Bus& bus, const PlaceCellsConfig& config, s
       log_(log),
       memory_(InitialMemory(config, log)),
       frames_to_panoramas_(config.panorama, config.mirror) {
+  frames_to_panoramas_.SetMask(config_.mask);
   if (config_.mode == PlaceCellsMode::kLocalize && memory_.size() == 0) {
     log_ << "placecells: warning: " << config_.memory_file << " holds no cells: nothing will be localized\n";
   }
@@ -318,7 +327,7 @@ void PlaceCellsNode::Explore(const cv::Mat& panorama, int64_t utime, const nav::
   place_cell_match_t match{};
   int added = -1;
   try {
-    nav::PlaceView view = nav::MakePlaceView(panorama, config_.view);
+    nav::PlaceView view = nav::MakePlaceView(panorama, config_.view, frames_to_panoramas_.mask());
     const int before = memory_.size();
     std::optional<nav::CellComparison> best;
     if (before > 0) best = memory_.MostSimilar(view, config_.localizer);
@@ -354,7 +363,7 @@ void PlaceCellsNode::Localize(const cv::Mat& panorama, int64_t utime) {
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<nav::Localization> loc;
   try {
-    const nav::PlaceView view = nav::MakePlaceView(panorama, config_.view);
+    const nav::PlaceView view = nav::MakePlaceView(panorama, config_.view, frames_to_panoramas_.mask());
     loc = memory_.Localize(view, Prediction(), config_.localizer);
   } catch (const std::exception& e) {
     ++rejected_["place cell error"];

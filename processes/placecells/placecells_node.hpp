@@ -49,6 +49,8 @@ struct PlaceCellsConfig {
   double stats_interval_s = 10;      // a stats line every this much message time [s]; 0: none
   nav::PanoramaModel panorama;
   nav::MirrorModel mirror;           // of raw frames without a calibration
+  std::string mask_path;             // [mirror] mask: the robot's own parts in raw frames ("": none)
+  cv::Mat mask;                      // that mask (image_mask.hpp): no landmark on it
   nav::PlaceViewOptions view;        // of a new memory (a loaded memory keeps its own)
   nav::LocalizerOptions localizer;
   nav::VocabularyOptions vocabulary;

@@ -153,6 +153,7 @@ RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string
   c.stats_interval_s = ini.GetDouble("node", "stats_interval_s");
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
+  c.mask_path = glue::ReadMirrorMaskPath(ini);
   c.options = ReadRatSlamOptions(ini);
   ini.CheckAllUsed();
   if (!(c.experience_map_interval_s >= 0) || !std::isfinite(c.experience_map_interval_s)) {
@@ -167,6 +168,13 @@ RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string
   } catch (const std::invalid_argument& e) {
     throw ini.ValidationError(e.what());
   }
+  if (!c.mask_path.empty()) {
+    try {
+      c.mask = glue::LoadMask(c.mask_path);
+    } catch (const std::exception& e) {
+      throw glue::ConfigError(ini.origin() + ": [mirror] " + e.what());
+    }
+  }
   return c;
 }
 
@@ -177,7 +185,7 @@ void RatSlamConfig::Print(std::ostream& out) const {
       << "\npose_on = " << RatSlamPoseOnName(pose_on) << "\nexperience_map_interval_s = " << experience_map_interval_s
       << "\nstats_interval_s = " << stats_interval_s << "\n";
   glue::PrintPanoramaConfig(out, panorama);
-  glue::PrintMirrorConfig(out, mirror);
+  glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
   PrintRatSlamOptions(out, options);
 }
 
@@ -188,6 +196,7 @@ RatSlamNode::RatSlamNode(glue::Bus& bus, const RatSlamConfig& config, std::ostre
       frames_to_panoramas_(config.panorama, config.mirror),
       problems_(bus, "ratslam") {
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
+  frames_to_panoramas_.SetMask(config_.mask);
   bus_.Subscribe(config_.input_channel(), &RatSlamNode::OnFrame, this);
   bus_.Subscribe(config_.odometry_channel, &RatSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
 }
@@ -273,7 +282,7 @@ void RatSlamNode::HandleFrame(const omni_frame_t& frame) {
   }
   if (!slam_) slam_.emplace(config_.options, nav::Pose2{});  // no odometry yet: start at the origin
   const auto t0 = std::chrono::steady_clock::now();
-  slam_->OnImage(gray_);
+  slam_->OnImage(gray_, frames_to_panoramas_.mask());
   image_ms_ += Ms(t0);
   ++processed_;
   if (config_.pose_on != RatSlamPoseOn::kOdometry) PublishPose(frame.utime);

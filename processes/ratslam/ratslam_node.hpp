@@ -55,6 +55,8 @@ struct RatSlamConfig {
   double stats_interval_s = 10;            // a stats line every this much message time [s]; 0: none
   nav::PanoramaModel panorama;             // every frame becomes a panorama of this model
   nav::MirrorModel mirror;                 // of raw frames without a calibration
+  std::string mask_path;                   // [mirror] mask: the robot's own parts in raw frames ("": none)
+  cv::Mat mask;                            // that mask (image_mask.hpp): left out of the view templates
   nav::RatSlamOptions options;
 
   const std::string& input_channel() const { return raw_input ? omni_channel : panorama_channel; }

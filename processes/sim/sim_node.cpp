@@ -73,6 +73,13 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   cam.omni_height_px = ini.GetInt("camera", "height_px");
   cam.mirror = glue::ReadMirrorConfig(ini);
   cam.panorama = glue::ReadPanoramaConfig(ini);
+  c.camera_preset = ini.GetString("camera", "preset");
+  try {
+    cam.optics = nav::sim::CameraOpticsPreset(c.camera_preset);
+  } catch (const std::invalid_argument& e) {
+    throw glue::ConfigError(ini.origin() + ": [camera] " + e.what());
+  }
+  cam.optics.seed = c.seed ^ 0x0b71c5ULL;  // the sensor noise follows the seed
   c.effects.blur_sigma_px = ini.GetDouble("effects", "blur_sigma_px");
   c.effects.noise_sigma = ini.GetDouble("effects", "noise_sigma");
   c.effects.salt_pepper_fraction = ini.GetDouble("effects", "salt_pepper_fraction");
@@ -161,6 +168,7 @@ void SimConfig::Print(std::ostream& o) const {
     << camera.omni_height_px << " panorama=" << publish_panorama << " " << camera.panorama.width_px << "x"
     << camera.panorama.height_px << " encoding=" << static_cast<int>(encoding) << " height_m=" << camera.height_m
     << " (" << glue::FrameEncodingName(encoding) << (encoding == omni_frame_t::JPEG ? " quality " + std::to_string(jpeg_quality) : std::string()) << ")"
+    << " preset=" << camera_preset
     << " mirror=(" << camera.mirror.center_x_px << "," << camera.mirror.center_y_px << ") r="
     << camera.mirror.inner_radius_px << ".." << camera.mirror.outer_radius_px << "\n"
     << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
@@ -186,6 +194,7 @@ SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene&
       renderer_(scene, config.camera),
       effects_rng_(config.seed ^ 0x9e3779b97f4a7c15ULL) {
   config_.Validate();
+  reported_mirror_ = config_.camera.ReportedMirror();
   start_utime_ = (config_.start_at_wall_clock ? glue::WallUtime() : config_.start_utime) + config_.clock_offset_us;
   dt_us_ = static_cast<int64_t>(std::llround(1e6 / config_.physics_rate_hz));
   camera_every_ = EveryNSteps(config_.physics_rate_hz, config_.camera_rate_hz, "camera");
@@ -256,7 +265,7 @@ void SimNode::PublishFrames() {
     f.sensor_name = "sim_omni";
     f.kind = raw ? omni_frame_t::RAW_OMNI : omni_frame_t::PANORAMA;
     if (raw) {
-      glue::SetMirror(config_.camera.mirror, &f);
+      glue::SetMirror(reported_mirror_, &f);  // off by a few pixels with the realistic optics
     } else {
       glue::SetPanorama(config_.camera.panorama, &f);
     }

@@ -41,7 +41,8 @@ struct SimConfig {
   bool publish_panorama = false;
   int8_t encoding = 1;                // omni_frame_t::RGB8
   int jpeg_quality = 90;
-  nav::sim::OmniCameraOptions camera;
+  nav::sim::OmniCameraOptions camera;  // camera.optics: the [camera] preset's (clean: none)
+  std::string camera_preset = "clean";  // clean | realistic (docs/simulator.md)
   nav::sim::ImageEffectsOptions effects;
 
   double laser_rate_hz = 10;
@@ -106,6 +107,7 @@ class SimNode {
   int64_t last_command_arrival_utime_ = -1;  // robot time when it arrived
   int64_t frames_ = 0, scans_ = 0, odometry_ = 0, commands_ = 0, stale_commands_ = 0, watchdog_stops_ = 0;
   std::mt19937_64 effects_rng_;
+  nav::MirrorModel reported_mirror_;  // the calibration the raw frames carry
   cv::Mat image_;
   bool route_restarted_ = false;  // the route driver went on after the kidnapping
 };

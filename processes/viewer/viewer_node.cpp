@@ -83,8 +83,16 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.max_place_cell_matches = ini.GetInt("viewer", "max_place_cell_matches");
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
+  c.mask_path = glue::ReadMirrorMaskPath(ini);
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
+  if (!c.mask_path.empty()) {
+    try {
+      c.mask = glue::LoadMask(c.mask_path);
+    } catch (const std::exception& e) {
+      ini.FailKey("mirror", "mask", e.what());
+    }
+  }
   return c;
 }
 
@@ -113,11 +121,12 @@ void ViewerConfig::Print(std::ostream& out) const {
       << "\ntrajectory_max_gap_s = " << trajectory_max_gap_s << "\nmax_poses_per_channel = " << max_poses_per_channel
       << "\nmax_place_cell_matches = " << max_place_cell_matches << "\n";
   glue::PrintPanoramaConfig(out, panorama);
-  glue::PrintMirrorConfig(out, mirror);
+  glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
 }
 
 ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
     : bus_(bus), config_(config), frames_to_panoramas_(config.panorama, config.mirror) {
+  frames_to_panoramas_.SetMask(config_.mask);  // the panorama as the extractors see it
   scene_.truth_channel = config_.truth_channel;
   scene_.source = bus_.url();
   // Every pose channel in one subscription: ground truth and dead reckoning at 50 Hz each, the others

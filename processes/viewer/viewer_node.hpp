@@ -45,6 +45,8 @@ struct ViewerConfig {
   viewer::RenderOptions render;
   nav::PanoramaModel panorama;  // raw frames are unwrapped into this panorama
   nav::MirrorModel mirror;      // the mirror of raw frames without a calibration
+  std::string mask_path;        // [mirror] mask ("": none): masked pixels are filled in the panorama shown
+  cv::Mat mask;
 
   // Reads [channels], [viewer], [panorama] and [mirror]; every key is required, unknown keys and
   // bad values are glue::ConfigError naming the file and line.

@@ -36,7 +36,7 @@ std::string ConfigText(const std::string& source, const std::string& encoding, b
     << "\nheight_px = " << height_px << "\nrate_hz = " << rate_hz << "\nloop = " << (loop ? "true" : "false")
     << "\nencoding = " << encoding << "\njpeg_quality = 90\n"
     << "[mirror]\ncenter_x_px = 31.5\ncenter_y_px = 23.25\ninner_radius_px = 5\nouter_radius_px = 22.5\n"
-    << "elevation_inner_deg = -30\nelevation_outer_deg = 15\n";
+    << "elevation_inner_deg = -30\nelevation_outer_deg = 15\nmask =\n";
   return s.str();
 }
 

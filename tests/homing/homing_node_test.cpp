@@ -429,7 +429,7 @@ TEST(HomingConfig, EveryShippedKeyIsRequired) {
       ++keys;
     }
   }
-  EXPECT_EQ(keys, 72);
+  EXPECT_EQ(keys, 73);
 }
 
 TEST(HomingConfig, BadValuesAndUnknownKeysAreErrors) {

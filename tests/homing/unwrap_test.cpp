@@ -99,14 +99,16 @@ TEST(CalibrateMirror, FindsTheMirrorCircleOfARenderedImage) {
   sim::OmniRenderer r(scene, o);
   cv::Mat raw;
   r.RenderOmni({0, 0, 0}, {}, &raw);
-  MirrorModel prior;  // wrong centre and radii
-  const auto found = CalibrateMirror(raw, prior);
+  const MirrorProfile profile = MirrorProfile::FromMirror(o.mirror);
+  const auto found = CalibrateMirror(raw, profile);
   ASSERT_TRUE(found.has_value());
-  EXPECT_NEAR(found->center_x_px, 330, 2.0);
-  EXPECT_NEAR(found->center_y_px, 235, 2.0);
-  EXPECT_NEAR(found->outer_radius_px, 220, 3.0);
-  EXPECT_NEAR(found->inner_radius_px, 45, 3.0);
-  EXPECT_FALSE(CalibrateMirror(cv::Mat(480, 640, CV_8UC1, cv::Scalar(0)), prior).has_value());
+  EXPECT_NEAR(found->mirror.center_x_px, 330, 1.0);
+  EXPECT_NEAR(found->mirror.center_y_px, 235, 1.0);
+  EXPECT_NEAR(found->mirror.outer_radius_px, 220, 2.0);
+  EXPECT_NEAR(found->mirror.inner_radius_px, 45, 3.0);
+  std::string why;
+  EXPECT_FALSE(CalibrateMirror(cv::Mat(480, 640, CV_8UC1, cv::Scalar(0)), profile, {}, &why).has_value());
+  EXPECT_NE(why.find("no edges"), std::string::npos) << why;
 }
 
 }  // namespace

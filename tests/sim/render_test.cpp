@@ -213,5 +213,82 @@ TEST(Scene, BadElementsAreRejected) {
   EXPECT_THROW(MakeTexture("x", cv::Mat(), 1, 1), std::invalid_argument);
 }
 
+TEST(RealisticCamera, HousingReflectionVignettingPartsAndNoise) {
+  const Scene scene = RoomWithPost({2.0, 0.5});
+  OmniCameraOptions clean;
+  OmniCameraOptions real = clean;
+  real.optics = CameraOpticsPreset("realistic");
+  EXPECT_FALSE(CameraOpticsPreset("clean").enabled);
+  EXPECT_THROW(CameraOpticsPreset("fancy"), std::invalid_argument);
+  OmniRenderer rc(scene, clean), rr(scene, real);
+  cv::Mat a, b, b2;
+  rc.RenderOmni({0, 0, 0}, {}, &a);
+  rr.RenderOmni({0, 0, 0}, {}, &b);
+  rr.RenderOmni({0, 0, 0}, {}, &b2);
+  const MirrorModel& m = real.mirror;
+  auto grey = [](const cv::Mat& img, int x, int y) {
+    const cv::Vec3b p = img.at<cv::Vec3b>(y, x);
+    return (p[0] + p[1] + p[2]) / 3.0;
+  };
+  // The housing outside the rim (corner), darkened by the vignetting beyond the rim.
+  EXPECT_NEAR(grey(b, 5, 5), real.optics.housing_grey * 0.2, 6.0);
+  // The camera's reflection: dark in the middle.
+  EXPECT_LT(grey(b, static_cast<int>(m.center_x_px), static_cast<int>(m.center_y_px)), 30);
+  // A warm cast: red over blue on the grey walls.
+  const cv::Vec3b wall = b.at<cv::Vec3b>(static_cast<int>(m.center_y_px - 0.9 * m.outer_radius_px), static_cast<int>(m.center_x_px) + 20);
+  EXPECT_GT(wall[2], wall[0] + 10);
+  // Vignetting: the clean image is brighter near the rim than the realistic one (apart from the cast).
+  // (Forward, away from the window at 200 deg.)
+  const int yr = static_cast<int>(m.center_y_px - 0.95 * m.outer_radius_px), xr = static_cast<int>(m.center_x_px) + 15;
+  EXPECT_LT(b.at<cv::Vec3b>(yr, xr)[1], 0.8 * a.at<cv::Vec3b>(yr, xr)[1]);
+  // Noise: two frames of the same pose differ, by about the read and shot noise.
+  cv::Mat diff;
+  cv::absdiff(b, b2, diff);
+  const double mean_diff = cv::mean(diff)[1];
+  EXPECT_GT(mean_diff, 1.0);
+  EXPECT_LT(mean_diff, 8.0);
+  // The struts: the parts' mask covers bearing 60 deg at 70 % of the radius, dark in the image.
+  const cv::Mat parts = rr.PartsMask();
+  const auto strut = MirrorPixel(m, 60 * M_PI / 180, m.elevation_inner_rad + 0.64 * (m.elevation_outer_rad - m.elevation_inner_rad));
+  ASSERT_TRUE(strut.has_value());
+  EXPECT_EQ(parts.at<uint8_t>(static_cast<int>(std::lround(strut->y())), static_cast<int>(std::lround(strut->x()))), 0);
+  EXPECT_LT(grey(b, static_cast<int>(std::lround(strut->x())), static_cast<int>(std::lround(strut->y()))), 55);
+  EXPECT_EQ(cv::countNonZero(rc.PartsMask()), static_cast<int>(rc.PartsMask().total()));
+  // The calibration the frames carry is off by a few pixels; its ring starts at the reflection.
+  const MirrorModel reported = real.ReportedMirror();
+  EXPECT_NEAR(reported.center_x_px - m.center_x_px, real.optics.calibration_error_x_px, 1e-9);
+  EXPECT_NEAR(reported.center_y_px - m.center_y_px, real.optics.calibration_error_y_px, 1e-9);
+  EXPECT_NEAR(reported.outer_radius_px - m.outer_radius_px, real.optics.calibration_error_radius_px, 1e-9);
+  EXPECT_GT(reported.inner_radius_px, real.optics.lens_radius_frac * m.outer_radius_px);
+  EXPECT_EQ(clean.ReportedMirror().center_x_px, m.center_x_px);
+  // The same seed, the same frames.
+  OmniRenderer again(scene, real);
+  cv::Mat c;
+  again.RenderOmni({0, 0, 0}, {}, &c);
+  EXPECT_EQ(cv::norm(b, c, cv::NORM_INF), 0);
+}
+
+TEST(RealisticCamera, TheWindowMovesWithTheRobotsHeading) {
+  const Scene scene = RoomWithPost({2.0, 0.5});
+  OmniCameraOptions real;
+  real.optics = CameraOpticsPreset("realistic");
+  real.optics.read_noise_grey = 0;
+  real.optics.shot_noise = 0;
+  real.optics.parts.clear();
+  OmniRenderer r(scene, real);
+  const MirrorModel& m = real.mirror;
+  // The window at world bearing 200 deg, elevation 10 deg: seen at robot bearing 200 - heading.
+  auto brightness_at = [&](double heading, double bearing_deg) {
+    cv::Mat img;
+    r.RenderOmni({0, 0, heading}, {}, &img);
+    const auto px = MirrorPixel(m, bearing_deg * M_PI / 180, 10 * M_PI / 180);
+    return cv::mean(img(cv::Rect(static_cast<int>(px->x()) - 2, static_cast<int>(px->y()) - 2, 5, 5)))[1];
+  };
+  const double heading = 0.5;
+  const double inside = brightness_at(heading, real.optics.window_bearing_rad * 180 / M_PI - heading * 180 / M_PI);
+  const double outside = brightness_at(heading, real.optics.window_bearing_rad * 180 / M_PI - heading * 180 / M_PI + 90);
+  EXPECT_GT(inside, 1.5 * outside);
+}
+
 }  // namespace
 }  // namespace snapnav::nav::sim

@@ -21,6 +21,7 @@
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/nav/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace {
@@ -105,8 +106,9 @@ void Progress(const std::string& what, int done, int total) {
 }
 
 double Aae(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos, const nav::HogHomingConfig& c,
-           const nav::PanoramaModel& pm, eval::GridResult* out = nullptr) {
+           const nav::PanoramaModel& pm, const cv::Mat& mask, eval::GridResult* out = nullptr) {
   eval::HogMethod m(c, pm);
+  m.SetMask(mask);
   auto r = eval::EvaluatePanoramas(db, panos, m);
   if (out) *out = r;
   return r.aae_deg;
@@ -137,7 +139,7 @@ int Main(int argc, char** argv) {
   bool people_diagnosis = false, return_best_only = false;
   int home_frames = -1, current_frames = -1, return_stride = 1;
   double home_interval_s = -1, current_interval_s = -1;
-  std::string fusion;
+  std::string fusion, camera, mask_source = "none";
   double min_fraction = -1;
   eval::FrameProtocol fused{9, 1.0, 3, 0.5};
   int seed = 1;
@@ -180,6 +182,9 @@ int Main(int argc, char** argv) {
   flags.AddString("config", &config_path, "homing config (its [hog], [compass], [alv], [preprocess])");
   flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama)");
   flags.AddString("input", &input, "raw (render catadioptric images and unwrap) or panorama (render panoramas)");
+  flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
+  flags.AddString("mask", &mask_source,
+                  "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE (black = masked)");
   flags.AddBool("random-headings", &random_headings, "grid images at random headings (exercises the compass)");
   flags.AddInt("seed", &seed, "seed for headings, people and noise");
   flags.AddInt("cell", &o.cell, "override: cell size [px]");
@@ -209,7 +214,17 @@ int Main(int argc, char** argv) {
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
 
-  const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  if (!camera.empty()) {
+    try {
+      sim.camera.optics = nav::sim::CameraOpticsPreset(camera);
+    } catch (const std::invalid_argument& e) {
+      throw glue::FlagError(std::string("--camera: ") + e.what());
+    }
+    sim.camera.optics.seed = static_cast<uint64_t>(seed) ^ 0x0b71c5ULL;
+    sim.camera_preset = camera;
+  }
+  if (mask_source != "none" && input != "raw") throw glue::FlagError("--mask needs --input raw (the mask is of raw images)");
   const auto homing_ini = glue::IniFile::Load(config_path);
   const auto homing = processes::HomingConfig::FromIni(homing_ini, "");
   const nav::PanoramaModel& pm = sim.camera.panorama;
@@ -230,6 +245,10 @@ int Main(int argc, char** argv) {
     setup.ret = ret;
     setup.ret.start_stride = return_stride;
     setup.seed = static_cast<uint64_t>(seed);
+    setup.mask = mask_source;
+    if (mask_source != "none" && (compare || people_diagnosis)) {
+      throw glue::FlagError("--mask is for a single method's evaluation (not --compare or --people-diagnosis)");
+    }
     setup.fusion.mode = homing.fusion.mode;
     setup.fusion.persistence = homing.fusion.persistence;
     setup.frames.home_frames = home_frames >= 0 ? home_frames : homing.fusion.home_frames;
@@ -249,7 +268,10 @@ int Main(int argc, char** argv) {
       throw glue::FlagError(std::string("--home-frames, --current-frames, --fusion-*: ") + e.what());
     }
     if (return_stride < 1) throw glue::FlagError("--return-stride must be >= 1");
-    if (random_headings) throw glue::FlagError("--random-headings is for the HOG evaluation only");
+    if (random_headings && (compare || people_diagnosis)) {
+      throw glue::FlagError("--random-headings is for a single method's evaluation (not --compare or --people-diagnosis)");
+    }
+    setup.random_headings = random_headings;
     if (people_diagnosis) return eval::RunPeopleDiagnosis(setup, scene_name, fused, out_dir);
     if (compare) {
       eval::CompareOptions c;
@@ -282,12 +304,15 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, input "
             << input << ", " << Describe(config) << "\n";
   eval::ViewRenderer renderer(scene, sim.camera, static_cast<uint64_t>(seed));
+  const cv::Mat mask = eval::UseMask(mask_source, renderer, cv::Size(sim.camera.omni_width_px, sim.camera.omni_height_px));
+  std::cerr << "eval-homing: camera " << sim.camera_preset << ", mask " << mask_source << " ("
+            << Fixed(100 * nav::MaskedFraction(mask), 1) << " % of the panorama)\n";
   const auto db = eval::RenderGrid(scene, renderer, grid, [](int d, int t) { Progress("rendering grid", d, t); });
   std::vector<cv::Mat> panos;
   for (const auto& s : db.sensor) panos.push_back(renderer.ToPanorama(s, pipeline));
 
   eval::GridResult result;
-  Aae(db, panos, config, pm, &result);
+  Aae(db, panos, config, pm, mask, &result);
   const double fps = result.seconds_in_method > 0 ? result.method_calls / result.seconds_in_method : 0;
   std::cerr << "eval-homing: AAE " << Fixed(result.aae_deg) << " deg (median " << Fixed(result.median_deg) << ", max "
             << Fixed(result.max_deg) << ", " << result.failures << " without an answer), compass error "
@@ -298,6 +323,7 @@ int Main(int argc, char** argv) {
     nav::HogHomingConfig with_compass = config;
     with_compass.use_compass = true;
     nav::HogHomer compass(with_compass, pm);
+    compass.SetMask(mask);
     compass.SetHome(panos[db.home_index]);
     for (int k = 0; k < 36; ++k) {
       const double heading = nav::WrapAngle(0.1 + k * 2 * M_PI / 36 + 0.0123 * k);
@@ -312,16 +338,17 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-homing: visual compass on pure rotations at home: median error " << Fixed(rotation_median)
             << " deg, max " << Fixed(rotation_errors.back()) << " deg\n";
   eval::GridResult thesis_result;
-  const double thesis_aae = Aae(db, panos, ThesisConfig(config), pm, &thesis_result);
+  const double thesis_aae = Aae(db, panos, ThesisConfig(config), pm, mask, &thesis_result);
   nav::HogHomingConfig thesis_lambrinos = ThesisConfig(config);
   thesis_lambrinos.alv.difference = nav::AlvDifference::kCurrentMinusHome;
-  const double thesis_lambrinos_aae = Aae(db, panos, thesis_lambrinos, pm);
+  const double thesis_lambrinos_aae = Aae(db, panos, thesis_lambrinos, pm, mask);
   std::cerr << "eval-homing: thesis configuration AAE " << Fixed(thesis_aae) << " deg (with current - home: "
             << Fixed(thesis_lambrinos_aae) << " deg)\n";
 
   eval::ReturnResult returns;
   if (!no_return) {
     eval::HogMethod m(config, pm);
+    m.SetMask(mask);
     returns = eval::EvaluateReturn(db, m, renderer, pipeline, ret, [](int d, int t) { Progress("return runs", d, t); });
     std::cerr << "eval-homing: return ratio " << Fixed(returns.ratio, 3) << " (" << returns.successes << "/"
               << returns.starts << "), mean path / straight line " << Fixed(returns.mean_path_ratio) << "\n";
@@ -341,7 +368,8 @@ int Main(int argc, char** argv) {
 
   std::ostringstream report;
   report << "# Homing evaluation: " << scene.name << "\n\n"
-         << "- configuration: " << Describe(config) << "\n- input: " << input << ", headings "
+         << "- configuration: " << Describe(config) << "\n- camera: " << sim.camera_preset << ", mask " << mask_source
+         << "\n- input: " << input << ", headings "
          << (random_headings ? "random" : "all 0") << ", home (" << db.home.x_m << ", " << db.home.y_m << ")\n\n"
          << "| | AAE [deg] | median | max | return ratio |\n|---|---|---|---|---|\n"
          << "| this configuration | " << Fixed(result.aae_deg) << " | " << Fixed(result.median_deg) << " | "
@@ -378,7 +406,7 @@ int Main(int argc, char** argv) {
         plot::BarGroup g{std::to_string(c) + " px", {}};
         report << "| " << thr << " | " << c << " |";
         for (auto r : ranges) {
-          g.values.push_back(Aae(db, panos, with(c, r, thr), pm));
+          g.values.push_back(Aae(db, panos, with(c, r, thr), pm, mask));
           report << " " << Fixed(g.values.back(), 1) << " |";
         }
         report << "\n";
@@ -412,7 +440,7 @@ int Main(int argc, char** argv) {
         std::vector<cv::Mat> noisy;
         for (const auto& img : db.sensor) noisy.push_back(renderer.ToPanorama(img, p));
         s.x.push_back(level);
-        s.y.push_back(Aae(db, noisy, config, pm));
+        s.y.push_back(Aae(db, noisy, config, pm, mask));
         report << "| " << noises[k].name << " | " << level << " | " << Fixed(s.y.back(), 1) << " |\n";
       }
       plot::Axes axes = MakeAxes(noises[k].name, noises[k].unit, "AAE [deg]");
@@ -442,7 +470,7 @@ int Main(int argc, char** argv) {
         c.equalize_histogram = k == 1 || k == 3;
         c.warp_compensation = k >= 2;
         const std::string name = k == 0 ? "none" : k == 1 ? "equalised" : k == 2 ? "warp-compensated" : "both";
-        groups.push_back({name, {Aae(db, panos, c, pm), Aae(db, changed, c, pm)}});
+        groups.push_back({name, {Aae(db, panos, c, pm, mask), Aae(db, changed, c, pm, mask)}});
         report << "| " << name << " | " << Fixed(groups.back().values[0], 1) << " | " << Fixed(groups.back().values[1], 1)
                << " |\n";
       }
@@ -512,7 +540,7 @@ int Main(int argc, char** argv) {
               cfg.hog.bins = b;
               cfg.alv.weight = w;
               eval::GridResult gr;
-              Aae(db, panos, cfg, pm, &gr);
+              Aae(db, panos, cfg, pm, mask, &gr);
               csv << c << "," << b << "," << thr << "," << nav::OrientationRangeName(r) << "," << WeightName(w) << ","
                   << Fixed(gr.aae_deg, 3) << "," << Fixed(gr.median_deg, 3) << "," << gr.failures << "\n";
               const std::string row = "| " + std::to_string(c) + " | " + std::to_string(b) + " | " + Fixed(thr, 1) +
@@ -540,7 +568,8 @@ int Main(int argc, char** argv) {
 
   std::ofstream json(out / "summary.json");
   json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"method\": \"" << method
-       << "\",\n  \"input\": \"" << input << "\",\n  \"random_headings\": " << (random_headings ? "true" : "false")
+       << "\",\n  \"input\": \"" << input << "\",\n  \"camera\": \"" << sim.camera_preset << "\",\n  \"mask\": \""
+       << mask_source << "\",\n  \"masked_fraction\": " << nav::MaskedFraction(mask) << ",\n  \"random_headings\": " << (random_headings ? "true" : "false")
        << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
        << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
        << ",\n  \"average_angular_error_deg\": " << result.aae_deg

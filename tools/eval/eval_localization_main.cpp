@@ -72,6 +72,7 @@ int Main(int argc, char** argv) {
   std::string features, memories = "grid,route,random", measures = "bearing-smallest,bearing-ransac,count,vline";
   std::string filters = "on,off", pose_source = "truth", thresholds = "0.08,0.05,0.03", explore_measure = "bearing-smallest";
   int threads = 1, seed = 1;
+  std::string camera;
   eval::LocalizationEvalOptions o;
   Overrides ov;
   glue::Flags flags("eval-localization",
@@ -91,6 +92,8 @@ int Main(int argc, char** argv) {
   flags.AddString("config", &config_path, "place-cell config: [landmarks] [place_view] [vline] [sift] [surf] [matching] "
                                           "[measure] [distance_filter] [localizer] [vocabulary]");
   flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama, effects, robot noise)");
+  flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
+  flags.AddString("mask", &o.mask, "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE");
   flags.AddString("features", &features, "override [landmarks] method: sift | surf");
   flags.AddString("memories", &memories, "memories: grid, route, random (comma-separated)");
   flags.AddString("measures", &measures, "distance measures: bearing-smallest, bearing-ransac, count, vline");
@@ -152,6 +155,14 @@ int Main(int argc, char** argv) {
 
   const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
   o.camera = sim.camera;
+  if (!camera.empty()) {
+    try {
+      o.camera.optics = nav::sim::CameraOpticsPreset(camera);
+    } catch (const std::invalid_argument& e) {
+      throw glue::FlagError(std::string("--camera: ") + e.what());
+    }
+    o.camera.optics.seed = o.seed ^ 0x0b71c5ULL;
+  }
   o.effects = sim.effects;
   o.drive = sim.drive_options;
   const auto ini = glue::IniFile::Load(config_path);

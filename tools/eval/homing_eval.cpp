@@ -5,7 +5,10 @@
 #include <cmath>
 #include <limits>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "snapnav/nav/image_mask.hpp"
 
 #include "snapnav/nav/sim/world.hpp"
 #include "snapnav/nav/view_fusion.hpp"
@@ -40,7 +43,7 @@ ViewRenderer::ViewRenderer(const nav::sim::Scene& scene, const nav::sim::OmniCam
     : scene_(&scene),
       camera_(camera),
       renderer_(scene, camera),
-      unwrapper_(camera.mirror, camera.panorama, cv::Size(camera.omni_width_px, camera.omni_height_px)),
+      unwrapper_(camera.ReportedMirror(), camera.panorama, cv::Size(camera.omni_width_px, camera.omni_height_px)),
       rng_(seed) {}
 
 cv::Mat ViewRenderer::Sensor(const nav::Pose2& pose, CameraPipeline::Input input,
@@ -63,6 +66,31 @@ cv::Mat ViewRenderer::ToPanorama(const cv::Mat& sensor, const CameraPipeline& pi
   cv::Mat pano;
   unwrapper_.Unwrap(image, &pano);
   return pano;
+}
+
+void HomingMethod::SetMask(const cv::Mat& panorama_mask) {
+  if (!panorama_mask.empty()) throw std::logic_error(name() + " does not take a mask");
+}
+
+cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size) {
+  cv::Mat raw;
+  if (source == "none" || source.empty()) {
+    renderer.SetMask(cv::Mat());
+    return {};
+  }
+  if (source == "truth") {
+    raw = nav::GrowMasked(renderer.PartsMask(), 2, false);
+  } else {
+    raw = cv::imread(source, cv::IMREAD_GRAYSCALE);
+    if (raw.empty()) throw std::runtime_error("mask " + source + ": missing or not an image");
+    if (raw.size() != raw_size) {
+      throw std::runtime_error("mask " + source + " is " + std::to_string(raw.cols) + "x" + std::to_string(raw.rows) +
+                               ", the camera's images " + std::to_string(raw_size.width) + "x" +
+                               std::to_string(raw_size.height));
+    }
+  }
+  renderer.SetMask(raw);
+  return renderer.panorama_mask();
 }
 
 GridDatabase RenderGrid(const nav::sim::Scene& scene, ViewRenderer& renderer, const GridOptions& options,

@@ -35,6 +35,9 @@ class HomingMethod {
   virtual std::optional<nav::HomingEstimate> HomeFrames(const std::vector<cv::Mat>& frames) {
     return Home(frames.front());
   }
+  // The panoramas' self-occlusion mask (image_mask.hpp; empty: none), before the home. A method
+  // that cannot use one throws std::logic_error for a non-empty mask.
+  virtual void SetMask(const cv::Mat& panorama_mask);
 };
 
 class HogMethod : public HomingMethod {
@@ -47,6 +50,7 @@ class HogMethod : public HomingMethod {
   std::optional<nav::HomingEstimate> Home(const cv::Mat& panorama) override { return homer_.Home(panorama); }
   void SetHomeFrames(const std::vector<cv::Mat>& frames) override;
   std::optional<nav::HomingEstimate> HomeFrames(const std::vector<cv::Mat>& frames) override;
+  void SetMask(const cv::Mat& panorama_mask) override { homer_.SetMask(panorama_mask); }
 
  private:
   nav::HogHomer homer_;
@@ -61,15 +65,23 @@ struct CameraPipeline {
   double low_resolution_scale = 1.0;  // < 1: downsample (nearest) and back (thesis fig. 3.12 b)
 };
 
+// Raw images are unwrapped with the calibration a frame would carry (the camera's
+// ReportedMirror: off by a few pixels with the realistic optics), as the processes do.
 class ViewRenderer {
  public:
   ViewRenderer(const nav::sim::Scene& scene, const nav::sim::OmniCameraOptions& camera, uint64_t seed);
   const nav::sim::Scene& scene() const { return *scene_; }
   // The sensor image (raw or panorama) seen from `pose`, before effects.
   cv::Mat Sensor(const nav::Pose2& pose, CameraPipeline::Input input, const std::vector<nav::sim::Cylinder>& people);
-  // Effects and unwrap: sensor image -> panorama given to the method.
+  // Effects and unwrap: sensor image -> panorama given to the method (masked pixels filled).
   cv::Mat ToPanorama(const cv::Mat& sensor, const CameraPipeline& pipeline);
   const nav::PanoramaModel& panorama_model() const { return camera_.panorama; }
+  // The raw images' self-occlusion mask for the unwrap (empty: none).
+  void SetMask(const cv::Mat& raw_mask) { unwrapper_.SetMask(raw_mask); }
+  // The unwrapped panoramas' mask (empty without one): what the methods ignore.
+  const cv::Mat& panorama_mask() const { return unwrapper_.panorama_mask(); }
+  // The robot's parts the renderer draws (the realistic optics; all usable for the clean camera).
+  cv::Mat PartsMask() const { return renderer_.PartsMask(); }
 
  private:
   const nav::sim::Scene* scene_;
@@ -78,6 +90,12 @@ class ViewRenderer {
   nav::Unwrapper unwrapper_;
   std::mt19937_64 rng_;
 };
+
+// The mask the evaluation's processing side uses, by `source`: "none" (empty), "truth" (the
+// renderer's robot parts grown by 2 px, the margin calibrate-mirror adds), or a mask image file
+// (image_mask.hpp's convention, black = masked; of the raw image's size). Set on `renderer`;
+// returns the panorama mask (empty for none). Throws std::runtime_error on a bad file.
+cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size);
 
 // How many frames of one view a still robot takes (people walking between them): the home
 // view (taken once, the robot can stand for a while) and each current view (a robot that

@@ -11,6 +11,7 @@
 #include "landmark_eval.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
+#include "snapnav/nav/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
@@ -65,6 +66,7 @@ GridOptions MakeGridOptions(const LandmarkEvalSetup& setup, const FrameProtocol&
   grid.seed = setup.seed;
   grid.input = setup.input;
   grid.frames = frames;
+  grid.random_headings = setup.random_headings;
   return grid;
 }
 
@@ -98,10 +100,13 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, " << label
             << "\n";
   ViewRenderer renderer(scene, setup.camera, setup.seed);
+  const cv::Size raw_size(setup.camera.omni_width_px, setup.camera.omni_height_px);
+  const cv::Mat mask = UseMask(setup.mask, renderer, raw_size);
   const Grid g = RenderScene(scene, MakeGridOptions(setup, setup.frames), renderer,
                              [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
-  const auto cache = ExtractAll(g.AllPanoramas(), extractor);
+  const auto cache = ExtractAll(g.AllPanoramas(), extractor, mask);
   LandmarkMethod m(extractor, homing, setup.camera.panorama, &cache, setup.fusion);
+  m.SetMask(mask);
   const auto result = EvaluateFrames(g.db, g.Frames(setup.frames.home_frames, setup.frames.current_frames), m);
   const double ms = cache.ms_per_panorama() * setup.frames.current_frames +
                     (result.method_calls ? result.seconds_in_method * 1000 / result.method_calls : 0);
@@ -115,10 +120,12 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
     nav::sim::Scene quiet = scene;
     quiet.people.count = 0;
     ViewRenderer r2(quiet, setup.camera, setup.seed);
+    UseMask(setup.mask, r2, raw_size);
     const Grid e = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
                                [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
-    const auto empty_cache = ExtractAll(e.panos, extractor);
+    const auto empty_cache = ExtractAll(e.panos, extractor, mask);
     LandmarkMethod me(extractor, homing, setup.camera.panorama, &empty_cache);
+    me.SetMask(mask);
     aae_empty = EvaluatePanoramas(e.db, e.panos, me).aae_deg;
     std::cerr << "eval-homing: without the people: AAE " << Fixed(aae_empty) << " deg (degradation "
               << Fixed(result.aae_deg - aae_empty) << " deg)\n";
@@ -128,6 +135,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
     CameraPipeline pipeline;
     pipeline.input = setup.input;
     LandmarkMethod live(extractor, homing, setup.camera.panorama, nullptr, setup.fusion);
+    live.SetMask(mask);
     returns = EvaluateReturn(g.db, live, renderer, pipeline,
                              WithFrames(setup.ret, setup.frames, setup.frames.home_frames, setup.frames.current_frames,
                                         setup.seed),
@@ -141,7 +149,10 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
                               no_return ? nullptr : &returns),
                 (out / "vector_map.png").string());
   std::ofstream json(out / "summary.json");
-  json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"method\": "
+  json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"camera\": "
+       << JsonString(setup.camera.optics.enabled ? "realistic" : "clean") << ",\n  \"mask\": " << JsonString(setup.mask)
+       << ",\n  \"masked_fraction\": " << Fixed(nav::MaskedFraction(mask), 4)
+       << ",\n  \"random_headings\": " << (setup.random_headings ? "true" : "false") << ",\n  \"method\": "
        << JsonString(nav::LandmarkMethodName(method)) << ",\n  \"alv\": " << JsonString(nav::AlvVariantName(variant))
        << ",\n  \"landmarks\": " << JsonString(NText(top_n))
        << ",\n  \"fusion\": " << JsonString(setup.frames.fused() ? nav::ViewFusionName(setup.fusion.mode) : "none")

@@ -27,6 +27,8 @@ struct LandmarkEvalSetup {
   // HOG by the median panorama. 1 and 1: the thesis' single snapshots.
   FrameFusion fusion;
   FrameProtocol frames;
+  std::string mask = "none";  // the self-occlusion mask (UseMask): none | truth | FILE; RunLandmarkEval only
+  bool random_headings = false;  // grid views at random headings (the rotation from the matches); RunLandmarkEval only
   const nav::LandmarkHomingConfig& homing(nav::LandmarkMethod m) const {
     return m == nav::LandmarkMethod::kVline ? vline_homing : keypoint_homing;
   }

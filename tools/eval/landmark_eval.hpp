@@ -24,7 +24,9 @@ struct LandmarkCache {
   double mean_landmarks = 0;
   double ms_per_panorama() const { return sets.empty() ? 0 : seconds * 1000 / sets.size(); }
 };
-LandmarkCache ExtractAll(const std::vector<cv::Mat>& panoramas, const nav::LandmarkExtractorConfig& config);
+// `mask`: the panoramas' self-occlusion mask (empty: none).
+LandmarkCache ExtractAll(const std::vector<cv::Mat>& panoramas, const nav::LandmarkExtractorConfig& config,
+                         const cv::Mat& mask = cv::Mat());
 
 // How a landmark method fuses several frames of one view (view_fusion.hpp).
 struct FrameFusion {
@@ -42,6 +44,8 @@ class LandmarkMethod : public HomingMethod {
   std::optional<nav::HomingEstimate> Home(const cv::Mat& panorama) override;
   void SetHomeFrames(const std::vector<cv::Mat>& frames) override;
   std::optional<nav::HomingEstimate> HomeFrames(const std::vector<cv::Mat>& frames) override;
+  // Landmarks it extracts itself drop the masked ones (a cache's sets are as ExtractAll made them).
+  void SetMask(const cv::Mat& panorama_mask) override { mask_ = panorama_mask; }
   // The landmark set several frames fuse into.
   nav::LandmarkSet Fused(const std::vector<cv::Mat>& frames);
   // Extraction time of panoramas not found in the cache.
@@ -58,6 +62,7 @@ class LandmarkMethod : public HomingMethod {
   nav::LandmarkHomer homer_;
   const LandmarkCache* cache_;
   nav::LandmarkSet scratch_;
+  cv::Mat mask_;
   double extract_seconds_ = 0;
   int extracted_ = 0;
   int64_t matches_ = 0, estimates_ = 0;

@@ -95,6 +95,7 @@ class ViewMaker {
       : renderer_(scene, options.camera, options.seed), view_(options.view) {
     pipeline_.input = CameraPipeline::Input::kRaw;
     pipeline_.effects = options.effects;
+    mask_ = UseMask(options.mask, renderer_, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px));
   }
   nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people,
                       const std::string& save_png = "") {
@@ -103,7 +104,7 @@ class ViewMaker {
     render_s_ += Seconds(t0);
     if (!save_png.empty()) plot::SavePng(panorama, save_png);
     t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panorama, view_);
+    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_);
     extract_s_ += Seconds(t0);
     landmarks_ += v.landmarks.size();
     ++views_;
@@ -118,6 +119,7 @@ class ViewMaker {
   ViewRenderer renderer_;
   CameraPipeline pipeline_;
   nav::PlaceViewOptions view_;
+  cv::Mat mask_;  // the panoramas' mask (empty: none)
   int views_ = 0;
   int64_t landmarks_ = 0;
   double render_s_ = 0, extract_s_ = 0;
@@ -389,6 +391,7 @@ std::string DescribeOptions(const LocalizationEvalOptions& o) {
     << " m, turn sigma " << o.walk.turn_sigma_rad << " rad, border margin " << o.walk.border_margin_m
     << " m; novelty measure " << o.explore_measure << ", thresholds";
   for (double t : o.thresholds) s << " " << t;
+  s << "\ncamera " << (o.camera.optics.enabled ? "realistic" : "clean") << ", mask " << o.mask;
   s << "\nrobot: heading drift " << o.drive.heading_drift_deg_per_m << " deg/m, odometry noise "
     << o.drive.odometry_linear_noise_frac << " (distance), " << o.drive.odometry_angular_noise_frac << " (turn)\n";
   return s.str();

@@ -120,6 +120,7 @@ struct LocalizationEvalOptions {
   double people_dt_s = 2.0;             // grid and test views: the people walk this long between images
   uint64_t seed = 1;
   std::string save_test_panoramas_dir;  // non-empty: the test positions' panoramas as test_N.png there
+  std::string mask = "none";            // self-occlusion mask of the raw images (homing_eval.hpp UseMask): none | truth | FILE
   void Validate() const;                // throws std::invalid_argument
 };
 

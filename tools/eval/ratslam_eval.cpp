@@ -171,7 +171,7 @@ SimCameraRun RunSimulatedSensors(const SimCameraOptions& options, SimSensorSink&
   nav::sim::OmniRenderer renderer(scene, options.camera);
   std::optional<nav::Unwrapper> unwrapper;
   if (options.raw_frames) {
-    unwrapper.emplace(options.camera.mirror, options.camera.panorama,
+    unwrapper.emplace(options.camera.ReportedMirror(), options.camera.panorama,
                       cv::Size(options.camera.omni_width_px, options.camera.omni_height_px));
   }
   std::mt19937_64 effects_rng(so.seed ^ 0x9e3779b97f4a7c15ULL);  // as the sim process

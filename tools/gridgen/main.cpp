@@ -85,7 +85,7 @@ int Main(int argc, char** argv) {
           f.utime = utime;
           f.sensor_name = "gridgen";
           f.kind = raw ? omni_frame_t::RAW_OMNI : omni_frame_t::PANORAMA;
-          if (raw) glue::SetMirror(config.camera.mirror, &f); else glue::SetPanorama(config.camera.panorama, &f);
+          if (raw) glue::SetMirror(config.camera.ReportedMirror(), &f); else glue::SetPanorama(config.camera.panorama, &f);
           log.Write(raw ? channels::kOmniFrame : channels::kPanorama, f);
           return file.filename().string();
         };

@@ -7,6 +7,7 @@
 
 #include <opencv2/core/hal/hal.hpp>
 
+#include "snapnav/nav/image_mask.hpp"
 #include "snapnav/nav/ratslam.hpp"
 
 namespace snapnav::nav {
@@ -68,26 +69,78 @@ LocalViewCells::LocalViewCells(const LocalViewOptions& options) : options_(optio
   templates_.reserve(1024);
 }
 
-void LocalViewCells::ConvertView(const cv::Mat& gray) {
+void LocalViewCells::ConvertView(const cv::Mat& gray, const cv::Mat& mask) {
   Require(!gray.empty() && gray.type() == CV_8UC1, "the view must be a non-empty 8-bit grey image (CV_8UC1)");
+  Require(mask.empty() || (mask.type() == CV_8UC1 && mask.size() == gray.size()),
+          "the mask must be CV_8UC1 of the view's size");
   const LocalViewOptions& o = options_;
   const Crop c = CropOf(o, gray.cols, gray.rows);
   const int nx = o.template_x_size, ny = o.template_y_size;
   // As OpenRatSLAM: blocks of (crop / size) pixels from the crop's corner; leftover pixels unused.
   const int bx = (c.x1 - c.x0) / nx, by = (c.y1 - c.y0) / ny;
   const double scale = 1.0 / (255.0 * bx * by);
-  for (int ty = 0; ty < ny; ++ty) {
-    float* out = &view_[static_cast<size_t>(ty) * nx];
-    std::fill(out, out + nx, 0.0f);
-    for (int y = c.y0 + ty * by; y < c.y0 + (ty + 1) * by; ++y) {
-      const uint8_t* row = gray.ptr<uint8_t>(y) + c.x0;
+  if (HasMaskedPixels(mask)) {
+    // The usable pixels' mean per block; blocks without one are interpolated along the row.
+    std::vector<double> sum(static_cast<size_t>(nx)), count(static_cast<size_t>(nx));
+    for (int ty = 0; ty < ny; ++ty) {
+      std::fill(sum.begin(), sum.end(), 0.0);
+      std::fill(count.begin(), count.end(), 0.0);
+      for (int y = c.y0 + ty * by; y < c.y0 + (ty + 1) * by; ++y) {
+        const uint8_t* row = gray.ptr<uint8_t>(y) + c.x0;
+        const uint8_t* usable = mask.ptr<uint8_t>(y) + c.x0;
+        for (int tx = 0; tx < nx; ++tx) {
+          for (int x = tx * bx; x < (tx + 1) * bx; ++x) {
+            if (!usable[x]) continue;
+            sum[tx] += row[x];
+            count[tx] += 1;
+          }
+        }
+      }
+      cv::Mat values(1, nx, CV_8UC1), have(1, nx, CV_8UC1);
+      float* out = &view_[static_cast<size_t>(ty) * nx];
       for (int tx = 0; tx < nx; ++tx) {
-        int sum = 0;
-        for (int x = tx * bx; x < (tx + 1) * bx; ++x) sum += row[x];
-        out[tx] += static_cast<float>(sum);
+        out[tx] = count[tx] > 0 ? static_cast<float>(sum[tx] / (255.0 * count[tx])) : 0.0f;
+        have.at<uint8_t>(0, tx) = count[tx] > 0 ? 255 : 0;
+      }
+      if (cv::countNonZero(have) == nx) continue;
+      if (cv::countNonZero(have) == 0) {
+        std::fill(out, out + nx, 0.5f);
+        continue;
+      }
+      // Linear interpolation between the nearest usable cells (circular on a panorama).
+      for (int tx = 0; tx < nx; ++tx) {
+        if (have.at<uint8_t>(0, tx)) continue;
+        int l = tx, r = tx, dl = 0, dr = 0;
+        do {
+          l = o.vt_panoramic ? (l + nx - 1) % nx : l - 1;
+          ++dl;
+        } while (l >= 0 && !have.at<uint8_t>(0, l) && dl < nx);
+        do {
+          r = o.vt_panoramic ? (r + 1) % nx : r + 1;
+          ++dr;
+        } while (r < nx && !have.at<uint8_t>(0, r) && dr < nx);
+        const bool lok = l >= 0 && have.at<uint8_t>(0, l), rok = r < nx && have.at<uint8_t>(0, r);
+        if (lok && rok) {
+          out[tx] = static_cast<float>((out[l] * dr + out[r] * dl) / static_cast<double>(dl + dr));
+        } else {
+          out[tx] = lok ? out[l] : out[r];
+        }
       }
     }
-    for (int tx = 0; tx < nx; ++tx) out[tx] = static_cast<float>(out[tx] * scale);
+  } else {
+    for (int ty = 0; ty < ny; ++ty) {
+      float* out = &view_[static_cast<size_t>(ty) * nx];
+      std::fill(out, out + nx, 0.0f);
+      for (int y = c.y0 + ty * by; y < c.y0 + (ty + 1) * by; ++y) {
+        const uint8_t* row = gray.ptr<uint8_t>(y) + c.x0;
+        for (int tx = 0; tx < nx; ++tx) {
+          int sum = 0;
+          for (int x = tx * bx; x < (tx + 1) * bx; ++x) sum += row[x];
+          out[tx] += static_cast<float>(sum);
+        }
+      }
+      for (int tx = 0; tx < nx; ++tx) out[tx] = static_cast<float>(out[tx] * scale);
+    }
   }
   const size_t n = view_.size();
   if (o.vt_normalisation > 0) {
@@ -136,8 +189,8 @@ void LocalViewCells::ConvertView(const cv::Mat& gray) {
   view_mean_ = sum / static_cast<double>(n);
 }
 
-std::vector<float> LocalViewCells::MakeTemplate(const cv::Mat& gray) {
-  ConvertView(gray);
+std::vector<float> LocalViewCells::MakeTemplate(const cv::Mat& gray, const cv::Mat& mask) {
+  ConvertView(gray, mask);
   return view_;
 }
 
@@ -207,8 +260,8 @@ double LocalViewCells::Difference(int id, double offset) const {
   return sum;
 }
 
-ViewMatch LocalViewCells::OnImage(const cv::Mat& gray) {
-  ConvertView(gray);
+ViewMatch LocalViewCells::OnImage(const cv::Mat& gray, const cv::Mat& mask) {
+  ConvertView(gray, mask);
   const LocalViewOptions& o = options_;
   const int nx = o.template_x_size, ny = o.template_y_size;
   if (o.vt_panoramic) {

@@ -65,8 +65,8 @@ void RatSlam::OnOdometry(const Pose2& delta, double dt_s) {
   map_.Relax();
 }
 
-RatSlamViewResult RatSlam::OnImage(const cv::Mat& panorama_gray) {
-  const ViewMatch m = view_.OnImage(panorama_gray);
+RatSlamViewResult RatSlam::OnImage(const cv::Mat& panorama_gray, const cv::Mat& mask) {
+  const ViewMatch m = view_.OnImage(panorama_gray, mask);
   cells_.OnViewTemplate(m.template_id, m.relative_rad);
   ++images_;
   RatSlamViewResult r;

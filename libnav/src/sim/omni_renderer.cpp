@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include <opencv2/imgproc.hpp>
 
@@ -63,6 +64,57 @@ inline cv::Vec3b SamplePlane(const Scene& scene, int texture, const cv::Vec3b& p
 
 }  // namespace
 
+void CameraOptics::Validate() const {
+  if (!enabled) return;
+  auto grey = [](double v) { return v >= 0 && v <= 255; };
+  if (!grey(housing_grey) || !grey(lens_grey)) throw std::invalid_argument("optics: grey levels must be in 0..255");
+  if (!(lens_radius_frac >= 0 && lens_radius_frac < 0.95)) throw std::invalid_argument("optics: lens_radius_frac must be in [0, 0.95)");
+  if (!(vignetting >= 0 && vignetting < 1)) throw std::invalid_argument("optics: vignetting must be in [0, 1)");
+  for (double g : {colour_gain_b, colour_gain_g, colour_gain_r}) {
+    if (!(g > 0 && g <= 4)) throw std::invalid_argument("optics: colour gains must be in (0, 4]");
+  }
+  if (!(shot_noise >= 0) || !(read_noise_grey >= 0)) throw std::invalid_argument("optics: noise must be >= 0");
+  if (!(rim_softness_px >= 0 && rim_softness_px <= 20)) throw std::invalid_argument("optics: rim_softness_px must be in [0, 20]");
+  for (const auto& p : parts) {
+    if (!(p.radius0_frac >= 0 && p.radius1_frac >= 0 && p.radius0_frac <= 2 && p.radius1_frac <= 2) ||
+        !(p.width_frac > 0 && p.width_frac <= 0.5) || !grey(p.grey) || !std::isfinite(p.bearing0_rad) ||
+        !std::isfinite(p.bearing1_rad)) {
+      throw std::invalid_argument("optics: a robot part needs radii in [0, 2], width_frac in (0, 0.5], grey in 0..255");
+    }
+  }
+  if (!(window_width_rad >= 0 && window_width_rad < 2 * M_PI) || !(window_gain >= 0 && window_gain <= 10) ||
+      !(window_elevation_top_rad >= window_elevation_bottom_rad) || !std::isfinite(window_bearing_rad)) {
+    throw std::invalid_argument("optics: the window needs width in [0, 360) deg, gain in [0, 10], top >= bottom");
+  }
+  for (double e : {calibration_error_x_px, calibration_error_y_px, calibration_error_radius_px}) {
+    if (!std::isfinite(e) || std::abs(e) > 50) throw std::invalid_argument("optics: calibration errors must be within 50 px");
+  }
+}
+
+CameraOptics CameraOpticsPreset(const std::string& name) {
+  CameraOptics o;
+  if (name == "clean") return o;
+  if (name != "realistic") throw std::invalid_argument("camera preset '" + name + "': expected clean or realistic");
+  o.enabled = true;
+  constexpr double d = M_PI / 180;
+  // Three struts holding the mirror and a cable running up one side, as on a real robot.
+  o.parts = {{60 * d, 0.38, 60 * d, 1.08, 0.035, 38},
+             {180 * d, 0.38, 180 * d, 1.08, 0.035, 38},
+             {300 * d, 0.38, 300 * d, 1.08, 0.035, 38},
+             {100 * d, 0.42, 125 * d, 1.08, 0.016, 12}};
+  return o;
+}
+
+MirrorModel OmniCameraOptions::ReportedMirror() const {
+  if (!optics.enabled) return mirror;
+  const MirrorProfile profile = MirrorProfile::FromMirror(mirror);
+  const double outer = mirror.outer_radius_px + optics.calibration_error_radius_px;
+  const double inner = std::max(mirror.inner_radius_px, optics.lens_radius_frac * mirror.outer_radius_px + 2.0) +
+                       optics.calibration_error_radius_px;
+  return MirrorWithRadii(mirror.center_x_px + optics.calibration_error_x_px,
+                         mirror.center_y_px + optics.calibration_error_y_px, inner, outer, profile);
+}
+
 void OmniCameraOptions::Validate() const {
   if (!(height_m > 0)) throw std::invalid_argument("camera: height_m must be positive");
   if (omni_width_px < 16 || omni_height_px < 16) {
@@ -70,6 +122,7 @@ void OmniCameraOptions::Validate() const {
   }
   mirror.Validate();
   panorama.Validate();
+  optics.Validate();
   if (mirror.center_x_px - mirror.outer_radius_px < -0.5 || mirror.center_x_px + mirror.outer_radius_px > omni_width_px - 0.5 ||
       mirror.center_y_px - mirror.outer_radius_px < -0.5 || mirror.center_y_px + mirror.outer_radius_px > omni_height_px - 0.5) {
     throw std::invalid_argument("camera: the mirror circle does not fit in the raw image");
@@ -127,9 +180,18 @@ OmniRenderer::OmniRenderer(const Scene& scene, const OmniCameraOptions& options)
   fine_.elevation_bottom_rad = std::min(m.elevation_inner_rad, m.elevation_outer_rad);
   map_x_.create(options_.omni_height_px, options_.omni_width_px, CV_32FC1);
   map_y_.create(options_.omni_height_px, options_.omni_width_px, CV_32FC1);
+  // With optics the rim is blended over a few pixels: the content continues just outside it.
+  const double beyond = options_.optics.enabled ? options_.optics.rim_softness_px + 1.5 : 0.0;
   for (int v = 0; v < options_.omni_height_px; ++v) {
     for (int u = 0; u < options_.omni_width_px; ++u) {
-      const auto dir = MirrorDirection(m, u, v);
+      auto dir = MirrorDirection(m, u, v);
+      if (!dir && beyond > 0) {
+        const double du = u - m.center_x_px, dv = v - m.center_y_px, r = std::hypot(du, dv);
+        if (r > m.outer_radius_px && r <= m.outer_radius_px + beyond) {
+          const double k = (m.outer_radius_px - 1e-6) / r;
+          dir = MirrorDirection(m, m.center_x_px + du * k, m.center_y_px + dv * k);
+        }
+      }
       if (!dir) {
         map_x_.at<float>(v, u) = -1;  // outside the ring: border colour
         map_y_.at<float>(v, u) = -1;
@@ -139,6 +201,136 @@ OmniRenderer::OmniRenderer(const Scene& scene, const OmniCameraOptions& options)
       map_y_.at<float>(v, u) = static_cast<float>(fine_.RowOfElevation((*dir)[1]));
     }
   }
+  if (options_.optics.enabled) BuildOptics();
+}
+
+void OmniRenderer::BuildOptics() {
+  const CameraOptics& o = options_.optics;
+  const MirrorModel& m = options_.mirror;
+  const int W = options_.omni_width_px, H = options_.omni_height_px;
+  const double R = m.outer_radius_px, Rl = o.lens_radius_frac * R;
+  // The parts' coverage (anti-aliased bars) and grey.
+  parts_alpha_ = cv::Mat(H, W, CV_32F, cv::Scalar(0));
+  cv::Mat parts_grey(H, W, CV_32F, cv::Scalar(0));
+  for (const RobotPart& p : o.parts) {
+    const Eigen::Vector2d a(m.center_x_px - p.radius0_frac * R * std::sin(p.bearing0_rad),
+                            m.center_y_px - p.radius0_frac * R * std::cos(p.bearing0_rad));
+    const Eigen::Vector2d b(m.center_x_px - p.radius1_frac * R * std::sin(p.bearing1_rad),
+                            m.center_y_px - p.radius1_frac * R * std::cos(p.bearing1_rad));
+    const double hw = 0.5 * p.width_frac * R;
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min(a.x(), b.x()) - hw - 2)));
+    const int x1 = std::min(W - 1, static_cast<int>(std::ceil(std::max(a.x(), b.x()) + hw + 2)));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min(a.y(), b.y()) - hw - 2)));
+    const int y1 = std::min(H - 1, static_cast<int>(std::ceil(std::max(a.y(), b.y()) + hw + 2)));
+    const Eigen::Vector2d ab = b - a;
+    const double len2 = std::max(1e-9, ab.squaredNorm());
+    for (int y = y0; y <= y1; ++y) {
+      for (int x = x0; x <= x1; ++x) {
+        const Eigen::Vector2d q(x, y);
+        const double t = std::clamp((q - a).dot(ab) / len2, 0.0, 1.0);
+        const double d = (q - (a + t * ab)).norm();
+        const float alpha = static_cast<float>(std::clamp(hw - d + 0.5, 0.0, 1.0));
+        if (alpha > parts_alpha_.at<float>(y, x)) {
+          parts_alpha_.at<float>(y, x) = alpha;
+          parts_grey.at<float>(y, x) = static_cast<float>(p.grey);
+        }
+      }
+    }
+  }
+  const double gains[3] = {o.colour_gain_b, o.colour_gain_g, o.colour_gain_r};
+  optics_gain_.assign(static_cast<size_t>(W) * H * 3, 0);
+  optics_offset_.assign(static_cast<size_t>(W) * H * 3, 0);
+  const double soft = std::max(1e-3, o.rim_softness_px);
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      const double r = std::hypot(x - m.center_x_px, y - m.center_y_px);
+      const double a_m = std::clamp((R - r) / soft + 0.5, 0.0, 1.0);           // the mirror (soft rim)
+      const double a_l = std::clamp(Rl - r + 0.5, 0.0, 1.0);                    // the camera's reflection
+      const double ring = std::clamp(r - 0.8 * Rl + 0.5, 0.0, 1.0);            // its lighter barrel
+      const double lens = o.lens_grey + 40.0 * ring;
+      const double a_p = parts_alpha_.at<float>(y, x);
+      const double vig = std::max(0.2, 1.0 - o.vignetting * (r / R) * (r / R));
+      const double content = a_m * (1 - a_l) * (1 - a_p);
+      const double fixed = ((lens * a_l) * a_m + o.housing_grey * (1 - a_m)) * (1 - a_p) + parts_grey.at<float>(y, x) * a_p;
+      for (int k = 0; k < 3; ++k) {
+        const double g = gains[k] * vig;
+        const size_t i = (static_cast<size_t>(y) * W + x) * 3 + k;
+        optics_gain_[i] = static_cast<uint16_t>(std::lround(std::min(1023.0, g * content * 256)));
+        optics_offset_[i] = static_cast<uint16_t>(std::lround(std::min(65535.0, g * fixed * 128)));
+      }
+    }
+  }
+  // Sensor noise: a table of standard normal samples indexed by a fast generator, scaled per grey level.
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<float> normal(0.f, 1.f);
+  noise_table_.resize(1 << 16);
+  for (float& v : noise_table_) v = normal(rng);
+  for (int v = 0; v < 256; ++v) {
+    noise_sigma_[v] = static_cast<float>(std::sqrt(o.read_noise_grey * o.read_noise_grey + o.shot_noise * v));
+  }
+  noise_state_ = o.seed * 0x9e3779b97f4a7c15ULL + 0x632be59bd9b4e019ULL;
+  if (noise_state_ == 0) noise_state_ = 1;
+}
+
+void OmniRenderer::ApplyWindow(const Pose2& robot, cv::Mat* fine) const {
+  const CameraOptics& o = options_.optics;
+  if (o.window_gain == 1.0 || o.window_width_rad <= 0) return;
+  constexpr double kSoft = 0.03;  // soft edges [rad]
+  auto weight = [](double distance_outside) { return std::clamp(0.5 - distance_outside / kSoft, 0.0, 1.0); };
+  std::vector<double> row_weight(static_cast<size_t>(fine->rows));
+  for (int r = 0; r < fine->rows; ++r) {
+    const double e = fine_.ElevationOfRow(r);
+    row_weight[r] = weight(std::max(o.window_elevation_bottom_rad - e, e - o.window_elevation_top_rad));
+  }
+  for (int c = 0; c < fine->cols; ++c) {
+    const double off = std::abs(WrapAngle(robot.theta_rad + fine_.BearingOfColumn(c) - o.window_bearing_rad));
+    const double wc = weight(off - 0.5 * o.window_width_rad);
+    if (wc <= 0) continue;
+    for (int r = 0; r < fine->rows; ++r) {
+      const double f = 1.0 + (o.window_gain - 1.0) * wc * row_weight[r];
+      if (f == 1.0) continue;
+      cv::Vec3b& px = fine->at<cv::Vec3b>(r, c);
+      for (int k = 0; k < 3; ++k) px[k] = cv::saturate_cast<uint8_t>(px[k] * f);
+    }
+  }
+}
+
+void OmniRenderer::ApplyOptics(cv::Mat* image) {
+  const int W = image->cols, H = image->rows;
+  const uint16_t* gain = optics_gain_.data();
+  const uint16_t* offset = optics_offset_.data();
+  const float* table = noise_table_.data();
+  uint64_t state = noise_state_;
+  uint64_t bits = 0;
+  int left = 0;
+  for (int y = 0; y < H; ++y) {
+    uint8_t* p = image->ptr<uint8_t>(y);
+    const size_t base = static_cast<size_t>(y) * W * 3;
+    for (int i = 0; i < W * 3; ++i) {
+      const int v = std::min(255, static_cast<int>((p[i] * gain[base + i] + 2 * offset[base + i] + 128) >> 8));
+      if (left == 0) {
+        // xorshift64*: four 16-bit table indices per draw.
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        bits = state * 0x2545F4914F6CDD1DULL;
+        left = 4;
+      }
+      const float n = table[bits & 0xffff];
+      bits >>= 16;
+      --left;
+      const float out = static_cast<float>(v) + noise_sigma_[v] * n + 0.5f;
+      p[i] = static_cast<uint8_t>(out <= 0.f ? 0 : (out >= 255.f ? 255 : static_cast<int>(out)));
+    }
+  }
+  noise_state_ = state;
+}
+
+cv::Mat OmniRenderer::PartsMask() const {
+  if (!options_.optics.enabled || parts_alpha_.empty()) {
+    return cv::Mat(options_.omni_height_px, options_.omni_width_px, CV_8UC1, cv::Scalar(255));
+  }
+  return parts_alpha_ <= 0.02f;
 }
 
 void OmniRenderer::RenderPanorama(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out) const {
@@ -151,8 +343,10 @@ void OmniRenderer::RenderOmni(const Pose2& robot, const std::vector<Cylinder>& p
   fine_image_.create(fine_.height_px, fine_.width_px + 1, CV_8UC3);
   cv::Mat body = fine_image_.colRange(0, fine_.width_px);
   Render(fine_, robot, people, &body);
+  if (options_.optics.enabled) ApplyWindow(robot, &body);
   fine_image_.col(0).copyTo(fine_image_.col(fine_.width_px));
   cv::remap(fine_image_, *out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(16, 16, 16));
+  if (options_.optics.enabled) ApplyOptics(out);
 }
 
 void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const std::vector<Cylinder>& people,

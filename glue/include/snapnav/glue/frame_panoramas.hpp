@@ -25,6 +25,12 @@ class FramePanoramas {
   // short category: "wrong size", "undecodable image", ...) and detail() saying why. The unwrap
   // map is rebuilt only when the calibration or the image size changes.
   std::optional<cv::Mat> Convert(const omni_frame_t& frame);
+  // The raw frames' self-occlusion mask (image_mask.hpp: non-zero usable, 0 the robot's own parts;
+  // empty: none), e.g. from `[mirror] mask` (glue::LoadMirrorMask). Raw frames of another size are
+  // refused ("wrong mask size"); panorama frames are used without it.
+  void SetMask(const cv::Mat& raw_mask);
+  // The mask of the panorama the last Convert returned (empty: none): what the extractors ignore.
+  const cv::Mat& mask() const { return mask_; }
   const std::string& reason() const { return reason_; }
   const std::string& detail() const { return detail_; }
   int64_t unwrapper_builds() const { return unwrapper_builds_; }
@@ -36,6 +42,7 @@ class FramePanoramas {
   }
   nav::PanoramaModel panorama_;
   nav::MirrorModel default_mirror_;
+  cv::Mat raw_mask_, mask_;
   std::optional<nav::Unwrapper> unwrapper_;  // for the last raw calibration and size seen
   cv::Size unwrapper_size_;
   // The last calibration the Unwrapper refused, so it is not rebuilt per frame.

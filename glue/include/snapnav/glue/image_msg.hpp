@@ -51,8 +51,19 @@ nav::PanoramaModel PanoramaOf(const omni_frame_t& frame);
 // are glue::ConfigError naming file and line; the models are not validated here.
 nav::MirrorModel ReadMirrorConfig(const IniFile& ini, const std::string& section = "mirror");
 nav::PanoramaModel ReadPanoramaConfig(const IniFile& ini, const std::string& section = "panorama");
+// The self-occlusion mask a config names ([mirror] mask = FILE, relative paths from the config's
+// folder; empty: none): the path, or "" for none. Marks the key read.
+std::string ReadMirrorMaskPath(const IniFile& ini, const std::string& section = "mirror");
+// A mask image (image_mask.hpp: any 8-bit image, non-zero = usable, 0 = masked) as CV_8UC1; with
+// `expected` (non-empty), of that size. Throws std::runtime_error naming the file when it cannot
+// be read, is not an image or has another size.
+cv::Mat LoadMask(const std::string& path, cv::Size expected = cv::Size());
+
 // The sections the two readers above read back (header line included).
 void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& mirror, const std::string& section = "mirror");
+// The same with the mask key (after the mirror's keys; "" for none).
+void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& mirror, const std::string& mask_path,
+                       const std::string& section);
 void PrintPanoramaConfig(std::ostream& out, const nav::PanoramaModel& panorama, const std::string& section = "panorama");
 
 }  // namespace snapnav::glue

@@ -10,6 +10,7 @@
 // at bearing phi_p; the homing direction is the sum over bins of the ALV
 // differences that reach threshold_frac of the strongest one.
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,23 +52,35 @@ Gradients ComputeGradients(const cv::Mat& gray);
 // Per pixel column and cell row, the gradient magnitude per orientation bin, as
 // prefix sums over columns: the histogram of any run of columns (a cell at any
 // shift) costs O(bins).
+//
+// With a mask (image_mask.hpp: non-zero usable, the panorama's size), masked pixels add nothing;
+// a cell's histogram is scaled up by the share of its pixels that are usable, and a cell with
+// more than kMaxMaskedShare of its pixels masked is left out (HogCells::valid): the compass and
+// the ALVs compare only cells usable in both views.
 class ColumnHistograms {
  public:
-  // Throws std::invalid_argument when the band does not fit the image.
-  ColumnHistograms(const Gradients& gradients, const HogOptions& options);
+  static constexpr double kMaxMaskedShare = 0.34;
+  // Throws std::invalid_argument when the band does not fit the image, or the mask is not of
+  // the gradients' size.
+  ColumnHistograms(const Gradients& gradients, const HogOptions& options, const cv::Mat& mask = cv::Mat());
   // Convenience: gradients of an 8-bit grey or BGR panorama.
   ColumnHistograms(const cv::Mat& panorama, const HogOptions& options);
 
   int width() const { return width_; }
   int cell_rows() const { return cell_rows_; }
   int bins() const { return bins_; }
+  int cell_size() const { return cell_size_; }
+  bool masked() const { return !masked_prefix_.empty(); }
   // Adds the histogram of columns [x0, x0 + n) (wrapping around) of cell row `row` to out[0..bins).
   void AddRun(int row, int x0, int n, double* out) const;
+  // Share of the masked pixels of columns [x0, x0 + n) (wrapping) of cell row `row` (0 without a mask).
+  double MaskedShare(int row, int x0, int n) const;
 
  private:
-  void Build(const Gradients& g, const HogOptions& o);
-  int width_ = 0, cell_rows_ = 0, bins_ = 0;
+  void Build(const Gradients& g, const HogOptions& o, const cv::Mat& mask);
+  int width_ = 0, cell_rows_ = 0, bins_ = 0, cell_size_ = 0;
   std::vector<double> prefix_;  // [(row * (width + 1) + x) * bins + b]
+  std::vector<int> masked_prefix_;  // [row * (width + 1) + x]: masked pixels of columns < x; empty without a mask
 };
 
 // Cell descriptors of a panorama at a column shift: cell (r, p) covers columns
@@ -75,7 +88,9 @@ class ColumnHistograms {
 struct HogCells {
   int cell_rows = 0, cell_cols = 0, bins = 0;
   std::vector<double> values;  // [(r * cell_cols + p) * bins + q]
+  std::vector<uint8_t> valid;  // [r * cell_cols + p]: usable (mask); empty: every cell
   double at(int r, int p, int q) const { return values[(static_cast<size_t>(r) * cell_cols + p) * bins + q]; }
+  bool usable(int r, int p) const { return valid.empty() || valid[static_cast<size_t>(r) * cell_cols + p]; }
 };
 HogCells CellsAtShift(const ColumnHistograms& h, int cell_size_px, int shift_px);
 
@@ -110,9 +125,10 @@ struct HogAlvOptions {
   void Validate() const;
 };
 
-// The per-bin ALVs of cells (bearing of cell column p from the panorama model).
+// The per-bin ALVs of cells (bearing of cell column p from the panorama model). `use` (if given,
+// one flag per cell as HogCells::valid): only those cells count.
 std::vector<Eigen::Vector2d> BinAlvs(const HogCells& cells, int cell_size_px, const PanoramaModel& panorama,
-                                     const HogAlvOptions& options = {});
+                                     const HogAlvOptions& options = {}, const std::vector<uint8_t>* use = nullptr);
 
 struct HomingEstimate {
   double direction_rad = 0;    // in the current robot frame
@@ -168,6 +184,10 @@ struct HogHomingConfig {
 class HogHomer {
  public:
   HogHomer(const HogHomingConfig& config, const PanoramaModel& panorama);
+  // The panorama's self-occlusion mask (image_mask.hpp; empty: none): masked pixels are filled
+  // and left out of the cells (ColumnHistograms). Set it before the home. Throws
+  // std::invalid_argument on a mask of another size than the model's.
+  void SetMask(const cv::Mat& panorama_mask);
   // Throws std::invalid_argument when the image does not match the panorama model.
   void SetHome(const cv::Mat& panorama);
   bool has_home() const { return home_.has_value(); }
@@ -188,6 +208,7 @@ class HogHomer {
 
   HogHomingConfig config_;
   PanoramaModel panorama_;
+  cv::Mat mask_, cell_mask_;  // the mask, and grown by a pixel (the centred differences)
   std::optional<Views> home_;
 };
 

@@ -38,6 +38,24 @@ struct PanoramaModel {
   double RowOfElevation(double elevation_rad) const;
 };
 
+// The mirror's elevation profile, scale-free: the stack's model is linear in the radius
+// (omni_geometry.hpp), e(rho) = elevation_centre + rho * (elevation_rim - elevation_centre) with
+// rho = r / rim radius. docs/calibration.md derives the two numbers from a mirror's datasheet
+// or its profile (equiangular, hyperbolic).
+struct MirrorProfile {
+  double elevation_rim_rad = 20 * 3.14159265358979323846 / 180;      // seen at the rim
+  double elevation_centre_rad = -52.63 * 3.14159265358979323846 / 180;  // the line extended to rho = 0
+  void Validate() const;  // throws std::invalid_argument
+  double ElevationAt(double rho) const { return elevation_centre_rad + rho * (elevation_rim_rad - elevation_centre_rad); }
+  // The profile a calibration implies (its elevations at its inner and outer radius), with the
+  // outer radius as the rim.
+  static MirrorProfile FromMirror(const MirrorModel& mirror);
+};
+
+// A calibration with another inner radius: the elevation at it from the profile.
+MirrorModel MirrorWithRadii(double center_x_px, double center_y_px, double inner_radius_px, double outer_radius_px,
+                            const MirrorProfile& profile);
+
 // Pixel (u, v) of the raw image that sees (bearing, elevation); nullopt outside the mirror ring.
 std::optional<Eigen::Vector2d> MirrorPixel(const MirrorModel& mirror, double bearing_rad, double elevation_rad);
 // Bearing and elevation seen by raw pixel (u, v); nullopt outside the mirror ring.

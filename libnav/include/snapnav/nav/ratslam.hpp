@@ -118,9 +118,12 @@ class LocalViewCells {
   // Compares the view with every template; a view that matches none becomes a new one.
   // `gray`: CV_8UC1, large enough for the crop and the template. Throws std::invalid_argument
   // otherwise.
-  ViewMatch OnImage(const cv::Mat& gray);
+  // `mask` (image_mask.hpp: CV_8UC1 of the image's size, 0 = the robot's own parts; empty: none):
+  // a template cell averages the usable pixels of its block only; a block without any takes the
+  // value interpolated from its row's neighbouring cells.
+  ViewMatch OnImage(const cv::Mat& gray, const cv::Mat& mask = cv::Mat());
   // The template `gray` makes, row-major template_y_size x template_x_size, values in [0, 1].
-  std::vector<float> MakeTemplate(const cv::Mat& gray);
+  std::vector<float> MakeTemplate(const cv::Mat& gray, const cv::Mat& mask = cv::Mat());
 
   const LocalViewOptions& options() const { return options_; }
   int size() const { return static_cast<int>(templates_.size()); }
@@ -132,7 +135,7 @@ class LocalViewCells {
     std::vector<float> data;
     double mean = 0;
   };
-  void ConvertView(const cv::Mat& gray);  // -> view_, view_mean_
+  void ConvertView(const cv::Mat& gray, const cv::Mat& mask);  // -> view_, view_mean_
   // Best template for view_: (id, summed difference, shift); id -1 when none was compared.
   void Compare(int* best_id, double* best_sum, int* best_shift) const;
   // The summed difference of view_ against template `id` at the fractional circular offset
@@ -364,7 +367,7 @@ class RatSlam {
   // switch, then relaxation). Throws std::invalid_argument on non-finite values or dt_s < 0.
   void OnOdometry(const Pose2& delta_robot_frame, double dt_s);
   // A grey panorama (CV_8UC1, columns over 360 degrees): local view match, then the pose cells.
-  RatSlamViewResult OnImage(const cv::Mat& panorama_gray);
+  RatSlamViewResult OnImage(const cv::Mat& panorama_gray, const cv::Mat& mask = cv::Mat());
 
   // The robot's pose in the experience-map frame (which starts at `start`): the current
   // experience's pose plus the odometry since it, as OpenRatSLAM places a new experience.

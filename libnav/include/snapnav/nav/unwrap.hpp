@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/mirror_calibration.hpp"
 
 namespace snapnav::nav {
 
@@ -18,8 +19,17 @@ class Unwrapper {
   Unwrapper(const MirrorModel& mirror, const PanoramaModel& panorama, cv::Size raw_size);
 
   // Unwraps `raw` (any 8-bit type, raw_size) into `panorama`. Throws std::invalid_argument
-  // on an empty image or one of another size than the calibration's.
+  // on an empty image or one of another size than the calibration's. With a mask (SetMask), the
+  // panorama's masked pixels are filled from their usable neighbours in the row (FillMasked):
+  // nothing of the robot's own parts reaches the panorama.
   void Unwrap(const cv::Mat& raw, cv::Mat* panorama) const;
+
+  // The raw image's self-occlusion mask (image_mask.hpp: CV_8UC1 of raw_size, non-zero usable;
+  // empty: none). A panorama pixel is masked when any raw pixel its bilinear sample reads is.
+  // Throws std::invalid_argument on a mask of another size or type.
+  void SetMask(const cv::Mat& raw_mask);
+  // The panorama's mask (empty without a raw mask).
+  const cv::Mat& panorama_mask() const { return panorama_mask_; }
 
   const MirrorModel& mirror() const { return mirror_; }
   const PanoramaModel& panorama() const { return panorama_; }
@@ -29,18 +39,9 @@ class Unwrapper {
   PanoramaModel panorama_;
   cv::Size raw_size_;
   cv::Mat map1_, map2_;  // fixed-point maps for cv::remap
+  cv::Mat panorama_mask_;
 };
 
-struct MirrorSearchOptions {
-  double min_radius_frac = 0.25;  // of the smaller image side
-  double max_radius_frac = 0.52;
-  double inner_radius_frac = 0.17; // inner radius as a fraction of the outer one when it cannot be measured
-};
-
-// Finds the mirror circle in a raw catadioptric image: the centre and outer radius of
-// the bright ring against the dark border, and the inner (camera) disc. Elevations are
-// not observable from one image and are copied from `prior`. nullopt when no circle is found.
-std::optional<MirrorModel> CalibrateMirror(const cv::Mat& raw, const MirrorModel& prior,
-                                           const MirrorSearchOptions& options = {});
+// The mirror calibration from images (CalibrateMirror, MirrorSearchOptions): mirror_calibration.hpp.
 
 }  // namespace snapnav::nav

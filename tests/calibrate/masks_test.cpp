@@ -1,0 +1,227 @@
+// Masks everywhere: on a realistic render with the robot's struts and cable and their mask, the
+// unwrap fills the masked pixels, and no landmark of any extractor (SIFT, SURF, vertical lines,
+// the place views') lies on a masked pixel; the dense descriptors (HOG, the place view's signature,
+// RatSLAM's view templates) do not depend on what the masked pixels hold.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "realistic_render.hpp"
+#include "snapnav/glue/frame_panoramas.hpp"
+#include "snapnav/glue/image_msg.hpp"
+#include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/image_mask.hpp"
+#include "snapnav/nav/landmark_extractor.hpp"
+#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/unwrap.hpp"
+
+namespace snapnav::testing {
+namespace {
+
+struct Views {
+  nav::sim::OmniCameraOptions camera;
+  cv::Mat raw_mask;  // the renderer's parts, grown by 2 px
+  cv::Mat home_raw, current_raw;
+  cv::Mat home, current;              // panoramas, unwrapped with the mask (filled)
+  cv::Mat home_plain, current_plain;  // unwrapped without it
+  cv::Mat mask;                       // the panoramas' mask
+};
+
+const Views& Rendered() {
+  static const Views v = [] {
+    Views v;
+    RenderCase c;
+    c.seed = 21;
+    v.camera = RealisticCamera(c);
+    const auto& scene = SharedScene("indoor13");
+    nav::sim::OmniRenderer r(scene, v.camera);
+    v.raw_mask = nav::GrowMasked(r.PartsMask(), 2, false);
+    r.RenderOmni({3.5, 3.0, 0.2}, {}, &v.home_raw);
+    r.RenderOmni({3.1, 2.7, 1.1}, {}, &v.current_raw);
+    nav::Unwrapper plain(v.camera.ReportedMirror(), v.camera.panorama, v.home_raw.size());
+    nav::Unwrapper masked = plain;
+    masked.SetMask(v.raw_mask);
+    masked.Unwrap(v.home_raw, &v.home);
+    masked.Unwrap(v.current_raw, &v.current);
+    plain.Unwrap(v.home_raw, &v.home_plain);
+    plain.Unwrap(v.current_raw, &v.current_plain);
+    v.mask = masked.panorama_mask();
+    return v;
+  }();
+  return v;
+}
+
+// `image` with random values in its masked pixels.
+cv::Mat Scribbled(const cv::Mat& image, const cv::Mat& mask, uint64_t seed) {
+  cv::Mat junk(image.size(), image.type());
+  cv::RNG rng(seed);
+  rng.fill(junk, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat out = image.clone();
+  junk.copyTo(out, mask == 0);
+  return out;
+}
+
+int OnMasked(const nav::LandmarkSet& set, const cv::Mat& mask) {
+  int n = 0;
+  for (const auto& l : set.landmarks) {
+    const int x = std::clamp(static_cast<int>(std::lround(l.x_px)), 0, mask.cols - 1);
+    const int y = std::clamp(static_cast<int>(std::lround(l.y_px)), 0, mask.rows - 1);
+    n += mask.at<uint8_t>(y, x) == 0;
+  }
+  return n;
+}
+
+TEST(Masks, TheRendersPartsAreMaskedInThePanorama) {
+  const Views& v = Rendered();
+  // Three struts, a cable: a few percent of the panorama, in whole columns at the struts' bearings.
+  const double f = nav::MaskedFraction(v.mask);
+  EXPECT_GT(f, 0.02);
+  EXPECT_LT(f, 0.15);
+  for (double bearing_deg : {60.0, 180.0, 300.0}) {
+    const int col = static_cast<int>(std::lround(v.camera.panorama.ColumnOfBearing(bearing_deg * M_PI / 180))) %
+                    v.camera.panorama.width_px;
+    EXPECT_EQ(cv::countNonZero(v.mask.col(col)), 0) << "strut at " << bearing_deg << " deg, column " << col;
+  }
+  // The unwrap filled them: the panorama does not depend on what the masked raw pixels hold.
+  nav::Unwrapper u(v.camera.ReportedMirror(), v.camera.panorama, v.home_raw.size());
+  u.SetMask(v.raw_mask);
+  cv::Mat again;
+  u.Unwrap(Scribbled(v.home_raw, v.raw_mask, 5), &again);
+  EXPECT_EQ(cv::norm(again, v.home, cv::NORM_INF), 0);
+  EXPECT_THROW(u.SetMask(cv::Mat(10, 10, CV_8UC1)), std::invalid_argument);
+}
+
+TEST(Masks, NoLandmarkOnTheRobotsParts) {
+  const Views& v = Rendered();
+  for (auto method : {nav::LandmarkMethod::kSift, nav::LandmarkMethod::kSurf, nav::LandmarkMethod::kVline}) {
+    SCOPED_TRACE(nav::LandmarkMethodName(method));
+    nav::LandmarkExtractorConfig c;
+    c.method = method;
+    // Without the mask, the cable and struts give landmarks (SIFT, SURF: blobs and corners on them).
+    const auto unmasked = nav::ExtractLandmarks(v.home_plain, c);
+    if (method != nav::LandmarkMethod::kVline) {
+      EXPECT_GT(OnMasked(unmasked, v.mask), 0);
+    }
+    const auto set = nav::ExtractLandmarks(v.home, c, v.mask);
+    EXPECT_GT(set.size(), 5);
+    EXPECT_EQ(OnMasked(set, v.mask), 0);
+    const cv::Mat clearance = nav::MaskClearance(v.mask);
+    for (const auto& l : set.landmarks) {
+      const double need = c.mask_margin_px + (method == nav::LandmarkMethod::kVline ? 0 : 0.5 * l.scale_px);
+      EXPECT_GE(clearance.at<float>(static_cast<int>(std::lround(l.y_px)),
+                                    std::clamp(static_cast<int>(std::lround(l.x_px)), 0, v.mask.cols - 1)),
+                need - 1.0);
+    }
+    // And what the masked pixels hold does not matter.
+    const auto scribbled = nav::ExtractLandmarks(Scribbled(v.home, v.mask, 7), c, v.mask);
+    ASSERT_EQ(scribbled.size(), set.size());
+    EXPECT_EQ(cv::norm(scribbled.descriptors, set.descriptors, cv::NORM_INF), 0);
+  }
+}
+
+TEST(Masks, PlaceViewsIgnoreMaskedPixels) {
+  const Views& v = Rendered();
+  nav::PlaceViewOptions o;
+  const auto view = nav::MakePlaceView(v.home, o, v.mask);
+  EXPECT_EQ(OnMasked(view.landmarks, v.mask), 0);
+  EXPECT_EQ(OnMasked(view.vlines, v.mask), 0);
+  const auto again = nav::MakePlaceView(Scribbled(v.home, v.mask, 9), o, v.mask);
+  EXPECT_EQ(cv::norm(again.signature, view.signature, cv::NORM_INF), 0);
+  ASSERT_EQ(again.landmarks.size(), view.landmarks.size());
+  ASSERT_EQ(again.vlines.size(), view.vlines.size());
+  EXPECT_THROW(nav::MakePlaceView(v.home, o, cv::Mat(5, 5, CV_8UC1, cv::Scalar(0))), std::invalid_argument);
+}
+
+TEST(Masks, HogHomingIgnoresMaskedPixels) {
+  const Views& v = Rendered();
+  nav::HogHomingConfig c;
+  c.hog.cell_size_px = 20;
+  c.compass_hog.cell_size_px = 20;
+  nav::HogHomer a(c, v.camera.panorama), b(c, v.camera.panorama);
+  a.SetMask(v.mask);
+  b.SetMask(v.mask);
+  a.SetHome(v.home);
+  b.SetHome(Scribbled(v.home, v.mask, 11));
+  const auto ea = a.Home(v.current), eb = b.Home(Scribbled(v.current, v.mask, 13));
+  ASSERT_TRUE(ea && eb);
+  EXPECT_DOUBLE_EQ(ea->direction_rad, eb->direction_rad);
+  EXPECT_DOUBLE_EQ(ea->compass_rotation_rad, eb->compass_rotation_rad);
+  // The compass still finds the rotation between the views (1.1 - 0.2 rad), the robot's parts being
+  // at the same columns in both.
+  EXPECT_NEAR(nav::WrapAngle(ea->compass_rotation_rad - 0.9), 0, 0.12);
+  // Cells whose pixels are mostly masked are left out.
+  nav::Gradients g = nav::ComputeGradients([&] {
+    cv::Mat gray;
+    cv::cvtColor(v.home, gray, cv::COLOR_BGR2GRAY);
+    return gray;
+  }());
+  const nav::ColumnHistograms h(g, c.hog, v.mask);
+  const auto cells = nav::CellsAtShift(h, c.hog.cell_size_px, 0);
+  ASSERT_FALSE(cells.valid.empty());
+  const int invalid = static_cast<int>(std::count(cells.valid.begin(), cells.valid.end(), 0));
+  EXPECT_GT(invalid, 0);
+  EXPECT_LT(invalid, static_cast<int>(cells.valid.size()) / 3);
+}
+
+TEST(Masks, RatSlamTemplatesIgnoreMaskedPixels) {
+  const Views& v = Rendered();
+  cv::Mat gray, scribbled;
+  cv::cvtColor(v.home, gray, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(Scribbled(v.home, v.mask, 3), scribbled, cv::COLOR_BGR2GRAY);
+  scribbled.setTo(0, v.mask == 0);  // black bars where the parts are
+  nav::LocalViewCells cells({});
+  const auto t = cells.MakeTemplate(gray, v.mask);
+  const auto u = cells.MakeTemplate(scribbled, v.mask);
+  ASSERT_EQ(t.size(), u.size());
+  for (size_t i = 0; i < t.size(); ++i) EXPECT_FLOAT_EQ(t[i], u[i]) << i;
+  const auto black = cells.MakeTemplate(scribbled);  // without the mask the bars are in the template
+  double diff = 0;
+  for (size_t i = 0; i < t.size(); ++i) diff += std::abs(t[i] - black[i]);
+  EXPECT_GT(diff, 0.5);
+}
+
+TEST(Masks, FramePanoramasCarryTheMask) {
+  const Views& v = Rendered();
+  glue::FramePanoramas frames(v.camera.panorama, v.camera.mirror);
+  frames.SetMask(v.raw_mask);
+  omni_frame_t f = glue::ImageToFrame(v.home_raw, omni_frame_t::RGB8);
+  glue::SetMirror(v.camera.ReportedMirror(), &f);
+  const auto pano = frames.Convert(f);
+  ASSERT_TRUE(pano.has_value()) << frames.detail();
+  // As the unwrap with the frame's calibration (floats on the bus) and the mask.
+  nav::Unwrapper u(glue::MirrorOf(f), v.camera.panorama, v.home_raw.size());
+  u.SetMask(v.raw_mask);
+  cv::Mat expected;
+  u.Unwrap(v.home_raw, &expected);
+  EXPECT_EQ(cv::norm(*pano, expected, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(frames.mask(), u.panorama_mask(), cv::NORM_INF), 0);
+  // A raw frame of another size than the mask is refused, by name.
+  omni_frame_t small = glue::ImageToFrame(cv::Mat(240, 320, CV_8UC3, cv::Scalar(50, 50, 50)), omni_frame_t::RGB8);
+  EXPECT_FALSE(frames.Convert(small).has_value());
+  EXPECT_EQ(frames.reason(), "wrong mask size");
+}
+
+TEST(ImageMask, FillClearanceAndGrow) {
+  cv::Mat img(1, 8, CV_8UC1);
+  for (int x = 0; x < 8; ++x) img.at<uint8_t>(0, x) = static_cast<uint8_t>(10 * x);
+  cv::Mat mask(1, 8, CV_8UC1, cv::Scalar(255));
+  mask.at<uint8_t>(0, 3) = mask.at<uint8_t>(0, 4) = 0;
+  mask.at<uint8_t>(0, 7) = 0;
+  cv::Mat filled = img.clone();
+  nav::FillMasked(mask, &filled);
+  EXPECT_EQ(filled.at<uint8_t>(0, 3), 30);  // between 20 (x=2) and 50 (x=5)
+  EXPECT_EQ(filled.at<uint8_t>(0, 4), 40);
+  EXPECT_EQ(filled.at<uint8_t>(0, 7), 30);  // between 60 (x=6) and 0 (x=0, wrapping)
+  const cv::Mat clearance = nav::MaskClearance(mask);
+  EXPECT_FLOAT_EQ(clearance.at<float>(0, 0), 1.0f);  // next to x=7 across the seam
+  EXPECT_FLOAT_EQ(clearance.at<float>(0, 1), 2.0f);
+  const cv::Mat grown = nav::GrowMasked(mask, 1);
+  EXPECT_EQ(grown.at<uint8_t>(0, 0), 0);
+  EXPECT_EQ(grown.at<uint8_t>(0, 1), 255);
+  EXPECT_EQ(grown.at<uint8_t>(0, 2), 0);
+}
+
+}  // namespace
+}  // namespace snapnav::testing
