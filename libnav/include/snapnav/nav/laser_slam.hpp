@@ -234,6 +234,7 @@ class LaserSlam {
 
  private:
   MapMatcher matcher() const { return MapMatcher(map_, options_); }
+  static PointGridMap MakeMap(const LaserSlamOptions& options);
 
   LaserSlamOptions options_;
   Pose2 pose_;
@@ -282,6 +283,10 @@ class LaserSlam {
   // builds the map, always does). Defaults: true, 0 (every scan maps, as before).
   void SetMapping(bool add_points, double min_fit = 0);
   bool adding_points() const { return add_points_; }
+  // Replaces the map by these points (map frame) with their unit normals (zero: unknown), each
+  // kept unless a point already kept lies within add_distance_m (as scans add theirs); the pose
+  // stays. The graph back end (GraphSlam) rebuilds its front end's map so from the optimized keyframes.
+  void ResetMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals);
 
  private:
   bool MayAddPoints(const LaserSlamUpdate& u) const;
