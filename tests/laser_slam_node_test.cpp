@@ -229,6 +229,103 @@ TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
   EXPECT_EQ(bus.total_errors(), 0u);
 }
 
+// The graph back end (backend = graph) in the same room: three times around the circle with the
+// biased odometry; keyframes join the graph, the loop is searched and closed, the pose stays on the
+// truth; the status says so (backend, keyframes, closures, corrections) and the map is the graph's.
+TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
+  glue::Bus bus("memq://");
+  LaserSlamConfig config = TestConfig("LS9_");
+  config.backend = SlamBackend::kGraph;
+  config.graph.loop_min_travel_m = 5;  // the circle is 9.4 m around
+  LaserSlamNode node(bus, config);
+  std::vector<pose_t> poses;
+  std::vector<point_map_t> maps;
+  std::vector<laser_slam_status_t> statuses;
+  bus.Subscribe<pose_t>("LS9_POSE_LASER_SLAM", [&](const pose_t& p) { poses.push_back(p); });
+  bus.Subscribe<point_map_t>("LS9_POINT_MAP", [&](const point_map_t& m) { maps.push_back(m); });
+  bus.Subscribe<laser_slam_status_t>("LS9_LASER_SLAM_STATUS",
+                                     [&](const laser_slam_status_t& s) { statuses.push_back(s); });
+  constexpr int kSteps = 560;
+  constexpr double kRadius = 1.5, kStep = 0.05, kScale = 1.02, kHeadingBias = 0.003;
+  const double turn = kStep / kRadius;
+  const nav::Pose2 true_delta{kRadius * std::sin(turn), kRadius * (1 - std::cos(turn)), turn};
+  const nav::Pose2 odo_delta{kScale * true_delta.x_m, kScale * true_delta.y_m, true_delta.theta_rad + kHeadingBias};
+  std::mt19937 rng(9);
+  nav::Pose2 truth{kRoom / 2, kRoom / 2 - kRadius, 0.0}, odometry = truth;
+  double slam_max = 0;
+  for (int k = 0; k <= kSteps; ++k) {
+    const int64_t utime = 1'700'000'000'000'000 + k * 100'000;
+    if (k > 0) {
+      truth = truth.Compose(true_delta);
+      odometry = odometry.Compose(odo_delta);
+    }
+    bus.Publish("LS9_ODOMETRY", Odo(utime, odometry, k > 0 ? odo_delta : nav::Pose2{}));
+    bus.Publish("LS9_LASER_SCAN", Scan(utime, CastRoom(truth, &rng)));
+    Drain(bus);
+    ASSERT_EQ(poses.size(), static_cast<size_t>(k + 1));
+    slam_max = std::max(slam_max, Distance(poses.back(), truth));
+  }
+  ASSERT_NE(node.graph(), nullptr);
+  const nav::GraphSlam& graph = *node.graph();
+  std::cout << "laser-slam node, graph back end: " << graph.keyframes() << " keyframes, closures "
+            << graph.loop_accepted() << " accepted / " << graph.loop_rejected() << " rejected of "
+            << graph.loop_candidates() << ", " << graph.corrections() << " corrections, max error " << slam_max
+            << " m, " << node.mean_update_ms() << " ms per update\n";
+  EXPECT_LT(slam_max, 0.1);
+  EXPECT_LT(Distance(poses.back(), truth), 0.1);
+  EXPECT_GT(graph.keyframes(), 20);
+  EXPECT_GT(graph.loop_accepted(), 0);
+  EXPECT_EQ(node.slam(), &graph.front_end());
+  ASSERT_EQ(statuses.size(), poses.size());
+  const laser_slam_status_t& last = statuses.back();
+  EXPECT_EQ(last.backend, laser_slam_status_t::BACKEND_GRAPH);
+  EXPECT_EQ(last.keyframes, graph.keyframes());
+  EXPECT_EQ(last.loop_candidates, graph.loop_candidates());
+  EXPECT_EQ(last.loop_accepted, graph.loop_accepted());
+  EXPECT_EQ(last.loop_rejected, graph.loop_rejected());
+  EXPECT_EQ(last.corrections, graph.corrections());
+  // Each correction is announced once, on the scan whose optimization made it; its size follows.
+  int64_t announced = 0, corrections = 0;
+  for (const laser_slam_status_t& s : statuses) {
+    EXPECT_GE(s.corrections, corrections);
+    if (s.corrections > corrections) {
+      EXPECT_TRUE(s.corrected);
+      EXPECT_EQ(s.correction_utime, s.utime);
+      EXPECT_GE(s.correction_m, 0.0);
+    } else {
+      EXPECT_FALSE(s.corrected);
+    }
+    announced += s.corrected;
+    corrections = s.corrections;
+  }
+  EXPECT_EQ(announced, graph.corrections());
+  // The map: the optimized keyframes' points, on the walls.
+  ASSERT_FALSE(maps.empty());
+  const point_map_t& map = maps.back();
+  EXPECT_EQ(map.npoints, static_cast<int32_t>(graph.Map().size()));
+  EXPECT_EQ(last.map_points, map.npoints);
+  int off_wall = 0;
+  for (int i = 0; i < map.npoints; ++i) {
+    const double x = map.x_m[i], y = map.y_m[i];
+    if (std::min({std::abs(x), std::abs(kRoom - x), std::abs(y), std::abs(kRoom - y)}) > 0.1) ++off_wall;
+  }
+  EXPECT_EQ(off_wall, 0);
+  EXPECT_EQ(node.internal_errors(), 0);
+  // The EKF's status has the graph's fields at zero.
+  glue::Bus bus2("memq://");
+  LaserSlamNode ekf(bus2, TestConfig("LS8_"));
+  std::vector<laser_slam_status_t> ekf_statuses;
+  bus2.Subscribe<laser_slam_status_t>("LS8_LASER_SLAM_STATUS",
+                                      [&](const laser_slam_status_t& s) { ekf_statuses.push_back(s); });
+  bus2.Publish("LS8_ODOMETRY", Odo(1000, truth, {}));
+  bus2.Publish("LS8_LASER_SCAN", Scan(2000, CastRoom(truth, &rng)));
+  Drain(bus2);
+  ASSERT_EQ(ekf_statuses.size(), 1u);
+  EXPECT_EQ(ekf_statuses[0].backend, laser_slam_status_t::BACKEND_EKF);
+  EXPECT_EQ(ekf_statuses[0].keyframes, 0);
+  EXPECT_EQ(ekf.graph(), nullptr);
+}
+
 // Malformed scans are counted and publish nothing; a well-formed scan without a single valid
 // return skips the update but still publishes its (predicted) pose; nothing reaches the bus as
 // a handler error.
@@ -335,6 +432,21 @@ TEST(LaserSlamConfig, UnknownKeyIsAnError) {
   } catch (const glue::ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("icp_iteration"), std::string::npos) << e.what();
   }
+}
+
+TEST(LaserSlamConfig, BackendAndGraphKeysAreChecked) {
+  const auto graph = LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"backend", "graph"}), "x.ini"), "");
+  EXPECT_EQ(graph.backend, SlamBackend::kGraph);
+  EXPECT_THROW(LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"backend", "ukf"}), "x.ini"), ""),
+               glue::ConfigError);
+  EXPECT_THROW(LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("graph_loop_candidates"), "x.ini"), ""),
+               glue::ConfigError);
+  EXPECT_THROW(
+      LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"graph_loop_max_ambiguity", "0"}), "x.ini"), ""),
+      glue::ConfigError);
+  EXPECT_THROW(
+      LaserSlamConfig::FromIni(glue::IniFile::Parse(IniText("", "", {"graph_keyframe_distance_m", "-1"}), "x.ini"), ""),
+      glue::ConfigError);
 }
 
 TEST(LaserSlamConfig, InvalidValuesAreConfigErrors) {
@@ -455,11 +567,19 @@ TEST(LaserSlamConfig, ShippedConfigHasTheLibnavDefaults) {
   PrintLaserSlamOptions(shipped, o);
   PrintLaserSlamOptions(defaults, d);
   EXPECT_EQ(shipped.str(), defaults.str());
+  // The back end: the EKF until the graph back end is measured better (docs/laser_slam.md); the
+  // graph back end's keys hold libnav's defaults too.
+  std::ostringstream shipped_graph, default_graph;
+  PrintGraphSlamOptions(shipped_graph, c.graph);
+  PrintGraphSlamOptions(default_graph, nav::GraphSlamOptions{});
+  EXPECT_EQ(shipped_graph.str(), default_graph.str());
   // Print writes what FromIni reads back.
   std::ostringstream printed;
   c.Print(printed);
   const auto again = LaserSlamConfig::FromIni(glue::IniFile::Parse(printed.str(), "printed"), "");
   EXPECT_EQ(again.scan_channel, c.scan_channel);
+  EXPECT_EQ(again.backend, c.backend);
+  EXPECT_NEAR(again.graph.loop_window_max_rad, c.graph.loop_window_max_rad, 1e-9);
   EXPECT_NEAR(again.options.initial_sigma_theta_rad, o.initial_sigma_theta_rad, 1e-6);
 }
 

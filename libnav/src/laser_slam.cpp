@@ -92,16 +92,31 @@ void LaserSlamOptions::Validate() const {
 LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
     : options_(options),
       pose_(start),
-      map_(options.map_resolution_m, std::max(0.25, options.match_distance_m),
-           options.lookup_cell_m > 0 ? std::max(options.match_distance_start_m, options.add_distance_m) : 0,
-           options.lookup_cell_m > 0 ? options.lookup_cell_m : 1.0,
-           options.matcher == ScanMatcher::kCorrelative && options.lookup_cell_m > 0 ? options.search_sigma_m : 0) {
+      map_(MakeMap(options)) {
   options_.Validate();
   covariance_ = Eigen::Vector3d(options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_theta_rad * options.initial_sigma_theta_rad)
                     .asDiagonal();
   anchor_covariance_ = covariance_;
+}
+
+PointGridMap LaserSlam::MakeMap(const LaserSlamOptions& options) {
+  return PointGridMap(options.map_resolution_m, std::max(0.25, options.match_distance_m),
+                      options.lookup_cell_m > 0 ? std::max(options.match_distance_start_m, options.add_distance_m) : 0,
+                      options.lookup_cell_m > 0 ? options.lookup_cell_m : 1.0,
+                      options.matcher == ScanMatcher::kCorrelative && options.lookup_cell_m > 0 ? options.search_sigma_m
+                                                                                                : 0);
+}
+
+void LaserSlam::ResetMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals) {
+  if (normals.size() != points.size()) throw std::invalid_argument("laser slam: ResetMap needs a normal per point");
+  map_ = MakeMap(options_);
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) continue;
+    if (map_.size() > 0 && map_.HasPointWithin(points[i], options_.add_distance_m)) continue;
+    map_.Add(points[i], normals[i]);
+  }
 }
 
 LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {

@@ -143,6 +143,13 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
   c.options = ReadLaserSlamOptions(ini, "laser_slam");
   c.map_every_n_scans = ini.GetInt("laser_slam", "map_every_n_scans");
+  const std::string backend = ini.GetString("laser_slam", "backend");
+  const auto parsed_backend = ParseSlamBackend(backend);
+  if (!parsed_backend) {
+    ini.FailKey("laser_slam", "backend", "expected ekf or graph");
+  }
+  c.backend = *parsed_backend;
+  c.graph = ReadGraphSlamOptions(ini, "laser_slam");
   c.grid = GridConfig::FromIni(ini, channel_prefix);
   c.localize = LocalizeConfig::FromIni(ini, channel_prefix);
   c.localize.options.tracking = c.options;
@@ -158,7 +165,8 @@ void LaserSlamConfig::Print(std::ostream& out) const {
       << "\ngrid_request = " << grid.request_channel << "\nlocalization_status = " << localize.status_channel
       << "\n[laser_slam]\n";
   PrintLaserSlamOptions(out, options);
-  out << "map_every_n_scans = " << map_every_n_scans << "\n";
+  out << "map_every_n_scans = " << map_every_n_scans << "\nbackend = " << SlamBackendName(backend) << "\n";
+  PrintGraphSlamOptions(out, graph);
   grid.Print(out);
   out << "[localize]\n";
   localize.Print(out);
@@ -167,6 +175,7 @@ void LaserSlamConfig::Print(std::ostream& out) const {
 LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config)
     : bus_(bus), config_(config), problems_(bus, "laser-slam") {
   config_.options.Validate();  // throws std::invalid_argument before anything is subscribed
+  config_.graph.Validate();
   bus_.Subscribe(config_.odometry_channel, &LaserSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.scan_channel, &LaserSlamNode::OnScan, this);
   if (!config_.grid.channel.empty()) grid_.emplace(bus_, config_.grid, "laser_slam", problems_);
@@ -191,7 +200,7 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
       return;
     }
     odometry_seen_ = true;
-    if (!slam_) slam_.emplace(config_.options, glue::OdometryPose(msg));
+    if (!started()) Start(glue::OdometryPose(msg));
     return;
   }
   if (const std::string problem = glue::OdometryProblem(msg, false); !problem.empty()) {
@@ -202,7 +211,19 @@ void LaserSlamNode::HandleOdometry(const odometry_t& msg) {
     return;
   }
   if (scans_ > 0 && msg.utime < last_scan_utime_) ++late_odometry_;  // applied anyway: arrival order
-  slam_->Predict(glue::OdometryDelta(msg), msg.utime);
+  if (graph_) {
+    graph_->Predict(glue::OdometryDelta(msg), msg.utime);
+  } else {
+    slam_->Predict(glue::OdometryDelta(msg), msg.utime);
+  }
+}
+
+void LaserSlamNode::Start(const nav::Pose2& pose) {
+  if (config_.backend == SlamBackend::kGraph) {
+    graph_.emplace(config_.options, config_.graph, pose);
+  } else {
+    slam_.emplace(config_.options, pose);
+  }
 }
 
 void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
@@ -213,7 +234,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
     return;
   }
   last_scan_utime_ = msg.utime;
-  if (!slam_) slam_.emplace(config_.options, nav::Pose2{});  // no odometry yet: start at the origin
+  if (!started()) Start(nav::Pose2{});  // no odometry yet: start at the origin
 
   const auto points = glue::LaserScanPoints(msg);
   std::optional<nav::LaserSlamUpdate> update;
@@ -223,7 +244,13 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
     Skip("no valid points", "", false);
   } else {
     const auto t0 = std::chrono::steady_clock::now();
-    update = slam_->Update(points, msg.utime);
+    if (graph_) {
+      const nav::GraphSlamUpdate g = graph_->Update(points, msg.utime);
+      update = g.front_end;
+      if (g.corrected) last_correction_utime_ = msg.utime;
+    } else {
+      update = slam_->Update(points, msg.utime);
+    }
     update_ms_total_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     ++updates_;
     measured_ += update->outcome == nav::MatchOutcome::kAccepted;
@@ -231,8 +258,8 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
     ambiguous_ += update->outcome == nav::MatchOutcome::kAmbiguous;
     no_match_ += update->outcome == nav::MatchOutcome::kNoMatch;
   }
-  bus_.Publish(config_.pose_channel,
-               glue::ToPoseMsg(msg.utime, "laser_slam", "map", slam_->pose(), slam_->covariance()));
+  bus_.Publish(config_.pose_channel, glue::ToPoseMsg(msg.utime, "laser_slam", "map", graph_ ? graph_->pose() : slam_->pose(),
+                                                     graph_ ? graph_->covariance() : slam_->covariance()));
   ++poses_published_;
   PublishStatus(msg.utime, update ? &*update : nullptr);  // only what the inputs decide: a replay repeats it
   if (!points.empty() && config_.map_every_n_scans > 0 && updates_ % config_.map_every_n_scans == 0) {
@@ -241,7 +268,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   if (grid_) {
     // The scans the point map takes (not a gated or ambiguous match), at the pose they were matched at.
     if (update && update->outcome != nav::MatchOutcome::kGated && update->outcome != nav::MatchOutcome::kAmbiguous) {
-      grid_->AddScan(msg, slam_->scan_pose());
+      grid_->AddScan(msg, graph_ ? graph_->scan_pose() : slam_->scan_pose());
     }
     grid_->AfterScan(msg.utime);
   }
@@ -277,7 +304,21 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
     s.matches = u->matches;
     s.coasting_scans = u->coasting;
   }
-  const Eigen::Matrix3d& p = slam_->covariance();
+  if (graph_) {
+    s.backend = laser_slam_status_t::BACKEND_GRAPH;
+    s.keyframes = graph_->keyframes();
+    s.loop_candidates = graph_->loop_candidates();
+    s.loop_accepted = graph_->loop_accepted();
+    s.loop_rejected = graph_->loop_rejected();
+    s.corrections = graph_->corrections();
+    s.corrected = graph_->corrections() > 0 && last_correction_utime_ == utime;
+    s.correction_m = graph_->last_correction_m();
+    s.correction_deg = graph_->last_correction_rad() * kDegPerRad;
+    s.correction_utime = last_correction_utime_;
+  } else {
+    s.backend = laser_slam_status_t::BACKEND_EKF;
+  }
+  const Eigen::Matrix3d& p = slam()->covariance();
   s.position_sigma_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(p.topLeftCorner<2, 2>())
                                                    .eigenvalues()(1)));
   s.heading_sigma_deg = std::sqrt(std::max(0.0, p(2, 2))) * kDegPerRad;
@@ -286,16 +327,17 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
   s.gated = gated_;
   s.ambiguous = ambiguous_;
   s.no_match = no_match_;
-  s.map_points = static_cast<int32_t>(slam_->map().size());
+  s.map_points = static_cast<int32_t>(graph_ ? graph_->Map().size() : slam_->map().size());
   bus_.Publish(config_.status_channel, s);
 }
 
 void LaserSlamNode::PublishMap(int64_t utime) {
-  const std::vector<Eigen::Vector2d>& points = slam_->map().points();
+  // The graph back end's map: the optimized keyframes' points (GraphSlam::Map).
+  const std::vector<Eigen::Vector2d>& points = graph_ ? graph_->Map() : slam_->map().points();
   point_map_t m{};
   m.utime = utime;
   m.estimator = "laser_slam";
-  m.resolution_m = static_cast<float>(slam_->map().resolution_m());
+  m.resolution_m = static_cast<float>(slam()->map().resolution_m());
   m.npoints = static_cast<int32_t>(points.size());
   m.x_m.reserve(points.size());
   m.y_m.reserve(points.size());
@@ -314,6 +356,11 @@ void LaserSlamNode::Report(std::ostream& out) const {
       << maps_published_ << ", skipped " << problems_.skipped_total() << ", internal errors " << problems_.internal_errors() << "\n";
   out << "laser-slam: mean update " << mean_update_ms() << " ms per scan";
   if (slam_) out << ", map " << slam_->map().size() << " points";
+  if (graph_) {
+    out << ", graph back end: " << graph_->keyframes() << " keyframes, loop closures " << graph_->loop_accepted()
+        << " accepted / " << graph_->loop_rejected() << " rejected of " << graph_->loop_candidates()
+        << " candidates, " << graph_->corrections() << " corrections, map " << graph_->Map().size() << " points";
+  }
   out << "\n";
   if (grid_) {
     out << "laser-slam: ";

@@ -27,6 +27,7 @@
 #include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
+#include "graph_slam_config.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/laser_slam.hpp"
 #include "snapnav/odometry_t.hpp"
@@ -43,6 +44,8 @@ struct LaserSlamConfig {
   int map_every_n_scans = 10;  // publish the map after every n-th updating scan; 0: never
   GridConfig grid;             // the occupancy grid on the bus (grid.channel empty: none)
   LocalizeConfig localize;     // --mode localize (localize.options.tracking = options)
+  SlamBackend backend = SlamBackend::kEkf;  // [laser_slam] backend
+  nav::GraphSlamOptions graph;               // [laser_slam] graph_* (backend = graph)
 
   // Reads [channels] and [laser_slam]; every key is required, unknown keys and invalid values
   // are glue::ConfigError.
@@ -84,8 +87,10 @@ class LaserSlamNode {
   int64_t internal_errors() const { return problems_.internal_errors(); }
   // Mean wall time of LaserSlam::Update per updating scan [ms] (a statistic only; 0 before any).
   double mean_update_ms() const { return updates_ > 0 ? update_ms_total_ / static_cast<double>(updates_) : 0.0; }
-  // The filter; nullptr before the first usable message.
-  const nav::LaserSlam* slam() const { return slam_ ? &*slam_ : nullptr; }
+  // The filter (with backend = graph, the graph back end's front end); nullptr before the first usable message.
+  const nav::LaserSlam* slam() const { return slam_ ? &*slam_ : graph_ ? &graph_->front_end() : nullptr; }
+  // The graph back end (backend = graph); nullptr otherwise or before the first usable message.
+  const nav::GraphSlam* graph() const { return graph_ ? &*graph_ : nullptr; }
   // The node's counts, one line each.
   void Report(std::ostream& out) const;
 
@@ -103,7 +108,11 @@ class LaserSlamNode {
 
   glue::Bus& bus_;
   LaserSlamConfig config_;
-  std::optional<nav::LaserSlam> slam_;
+  std::optional<nav::LaserSlam> slam_;   // backend = ekf
+  std::optional<nav::GraphSlam> graph_;  // backend = graph
+  void Start(const nav::Pose2& pose);    // makes the one of the two the config asks for
+  bool started() const { return slam_ || graph_; }
+  int64_t last_correction_utime_ = 0;    // the scan of the graph's last correction
   bool odometry_seen_ = false;
   int64_t last_scan_utime_ = 0;
   int64_t scans_ = 0, updates_ = 0, measured_ = 0, odometry_ = 0, late_odometry_ = 0;

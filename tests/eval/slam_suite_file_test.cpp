@@ -31,10 +31,14 @@ TEST(SlamSuiteFile, ShippedSuiteHasEveryLogAtEveryOdometry) {
     EXPECT_GT(e.goal_ate_m, 0) << e.name;
     EXPECT_EQ(e.no_worse_than_dead_reckoning, e.noise > 0 || e.kind == "carmen") << e.name;
   }
+  // Issue 22's goals for the graph back end, run beside the EKF: 0.10 m on every log, CSAIL raw 0.05 m.
+  EXPECT_TRUE(s.graph);
+  for (const SuiteEntry& e : s.entries) EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, e.name == "csail" ? 0.05 : 0.10) << e.name;
   const Suite held = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_heldout.ini");
   EXPECT_EQ(held.entries.size(), 12u);
   for (const SuiteEntry& e : held.entries) {
     EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
+    EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, 0.10) << e.name;
   }
 }
 

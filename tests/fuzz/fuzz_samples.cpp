@@ -79,6 +79,16 @@ laser_slam_status_t SampleLaserSlamStatus() {
   m.ambiguous = 1;
   m.no_match = 1;
   m.map_points = 4000;
+  m.backend = laser_slam_status_t::BACKEND_GRAPH;
+  m.keyframes = 120;
+  m.loop_candidates = 40;
+  m.loop_accepted = 12;
+  m.loop_rejected = 28;
+  m.corrections = 6;
+  m.corrected = true;
+  m.correction_m = 0.35;
+  m.correction_deg = 2.5;
+  m.correction_utime = 1700000000000000;
   return m;
 }
 
@@ -374,7 +384,7 @@ std::string OutputProblem(const std::string& channel, const std::string& payload
     const auto m = glue::Decode<laser_slam_status_t>(payload.data(), payload.size(), &error);
     if (!m) return channel + ": " + error;
     return bad(AllFinite({m->mahalanobis2, m->gate_mahalanobis2, m->ambiguity, m->fit, m->kernel, m->position_sigma_m,
-                          m->heading_sigma_deg}),
+                          m->heading_sigma_deg, m->correction_m, m->correction_deg}),
                "laser_slam_status_t");
   }
   if (*fp == static_cast<uint64_t>(occupancy_grid_t::getHash())) {

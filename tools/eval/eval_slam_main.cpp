@@ -21,6 +21,7 @@
 #include "slam_config.hpp"
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
+#include "slam_graph.hpp"
 #include "slam_suite.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/codec.hpp"
@@ -119,9 +120,13 @@ int Main(int argc, char** argv) {
   const fs::path out(out_dir);
 
   const eval::SlamLog log = eval::LoadSlamLog(log_path);
-  const eval::SlamRun run = eval::RunSlam(log, options);
+  // With backend = graph the laser SLAM is the graph back end: its optimized trajectory and map.
+  const eval::SlamBackendChoice backend = eval::LoadSlamBackend(config);
+  const eval::SlamRun run =
+      backend.graph ? eval::RunGraphSlam(log, options, backend.options).run : eval::RunSlam(log, options);
   const double ms_per_scan = run.ms_per_scan();
-  std::cerr << "eval-slam: laser slam " << ms_per_scan << " ms/scan, map " << run.map.size() << " points\n";
+  std::cerr << "eval-slam: laser slam" << (backend.graph ? " (graph back end)" : "") << " " << ms_per_scan
+            << " ms/scan, map " << run.map.size() << " points\n";
   // The thesis' own procedure (5.3.1) beside it: point-to-point ICP at one match distance, no
   // heading search, the odometry noise of dead reckoning.
   const nav::LaserSlamOptions thesis = nav::ThesisLaserSlamOptions(options);

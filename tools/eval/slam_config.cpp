@@ -11,7 +11,9 @@
 
 namespace snapnav::eval {
 
-nav::LaserSlamOptions LoadLaserSlamOptions(const LaserSlamConfigChoice& choice) {
+namespace {
+
+processes::LaserSlamConfig LoadConfig(const LaserSlamConfigChoice& choice) {
   glue::IniFile ini = glue::IniFile::Load(choice.path);
   for (const std::string& o : choice.overrides) {
     const size_t eq = o.find('=');
@@ -25,7 +27,19 @@ nav::LaserSlamOptions LoadLaserSlamOptions(const LaserSlamConfigChoice& choice) 
     };
     ini.Set("laser_slam", trim(o.substr(0, eq)), trim(o.substr(eq + 1)), "override " + o);
   }
-  return processes::LaserSlamConfig::FromIni(ini, "").options;
+  return processes::LaserSlamConfig::FromIni(ini, "");
+}
+
+}  // namespace
+
+nav::LaserSlamOptions LoadLaserSlamOptions(const LaserSlamConfigChoice& choice) { return LoadConfig(choice).options; }
+
+SlamBackendChoice LoadSlamBackend(const LaserSlamConfigChoice& choice) {
+  const processes::LaserSlamConfig c = LoadConfig(choice);
+  SlamBackendChoice b;
+  b.graph = c.backend == processes::SlamBackend::kGraph;
+  b.options = c.graph;
+  return b;
 }
 
 void AddOverride(LaserSlamConfigChoice* choice, const std::string& key, const std::string& value) {

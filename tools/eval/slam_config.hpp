@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "snapnav/nav/graph_slam.hpp"
 #include "snapnav/nav/laser_slam.hpp"
 
 namespace snapnav::eval {
@@ -22,6 +23,14 @@ struct LaserSlamConfigChoice {
 // value, or an override of a key the file does not have is a glue::ConfigError naming the file
 // (or the override).
 nav::LaserSlamOptions LoadLaserSlamOptions(const LaserSlamConfigChoice& choice);
+
+// The back end of the same file and overrides (`backend`, the graph_* keys): whether it is the graph
+// back end, and the graph back end's options (read whatever the backend, as laser-slam reads them).
+struct SlamBackendChoice {
+  bool graph = false;
+  nav::GraphSlamOptions options;
+};
+SlamBackendChoice LoadSlamBackend(const LaserSlamConfigChoice& choice);
 
 // "--set" overrides from flags given as values: `key` = `value` for each non-empty value.
 void AddOverride(LaserSlamConfigChoice* choice, const std::string& key, const std::string& value);

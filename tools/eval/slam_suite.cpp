@@ -45,6 +45,22 @@ AteFigure MeasureAte(const std::vector<nav::Pose2>& estimate, const SlamRun& run
   return f;
 }
 
+RpeFigure MeasureRpe(const std::vector<nav::Pose2>& estimate, const SlamRun& run, const Reference& reference) {
+  RpeFigure f;
+  const auto pairs = PairWithReference(estimate, run, reference);
+  if (pairs.size() < 2) return f;
+  const nav::RpeResult one = nav::ComputeRpe(pairs, 1.0);
+  const nav::RpeResult ten = nav::ComputeRpe(pairs, 10.0);
+  if (one.segments == 0) return f;
+  f.measured = true;
+  f.translation_1m_m = one.translation_rmse_m;
+  f.rotation_1m_deg = one.rotation_rmse_deg;
+  f.translation_10m_m = ten.translation_rmse_m;
+  f.rotation_10m_deg = ten.rotation_rmse_deg;
+  f.segments_10m = ten.segments;
+  return f;
+}
+
 OutcomeCounts CountOutcomes(const SlamRun& run) {
   OutcomeCounts c;
   for (const nav::LaserSlamUpdate& u : run.updates) {
@@ -68,6 +84,7 @@ Suite LoadSuite(const std::string& path) {
   suite.raw_like_tool = Resolve(dir, ini.GetString("suite", "raw_like_tool"));
   suite.laser_slam_config = Resolve(dir, ini.GetString("suite", "laser_slam_config"));
   suite.icp_slam = ini.GetBool("suite", "icp_slam");
+  if (ini.Has("suite", "graph")) suite.graph = ini.GetBool("suite", "graph");
   for (const std::string& name : ini.SectionsInFileOrder()) {
     if (name == "suite") continue;
     SuiteEntry e;
@@ -105,6 +122,7 @@ Suite LoadSuite(const std::string& path) {
     }
     e.goal_ate_m = ini.GetDouble(name, "goal_ate_m");
     e.no_worse_than_dead_reckoning = ini.GetBool(name, "no_worse_than_dead_reckoning");
+    if (ini.Has(name, "graph_goal_ate_m")) e.graph_goal_ate_m = ini.GetDouble(name, "graph_goal_ate_m");
     suite.entries.push_back(e);
   }
   ini.CheckAllUsed();
@@ -123,7 +141,7 @@ std::string MissingInput(const Suite& suite, const SuiteEntry& e) {
 }
 
 SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSlamOptions& options,
-                     const fs::path& dir, const SuiteOptions& so) {
+                     const SlamBackendChoice& backend, const fs::path& dir, const SuiteOptions& so) {
   SuiteResult r;
   r.entry = e;
   fs::create_directories(dir);
@@ -151,9 +169,15 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
   }
   const SlamLog log = LoadSlamLog(lcm_log, false);
   r.scans = log.scans;
-  const SlamRun run = RunSlam(log, options);
+  const SlamRun ekf_run = RunSlam(log, options);
   const SlamRun thesis = RunSlam(log, nav::ThesisLaserSlamOptions(options));
+  std::optional<GraphSlamRun> graph_run;
+  if (suite.graph || backend.graph) graph_run = RunGraphSlam(log, options, backend.options);
+  // The configured back end is "laser SLAM" in the table and its goals.
+  const SlamRun& run = backend.graph ? graph_run->run : ekf_run;
+  r.backend = backend.graph ? "graph" : "ekf";
   r.slam_ms_per_scan = run.ms_per_scan();
+  r.ekf_ms_per_scan = ekf_run.ms_per_scan();
   r.thesis_ms_per_scan = thesis.ms_per_scan();
   r.outcomes = CountOutcomes(run);
   std::optional<IcpSlamRun> icp;
@@ -176,8 +200,73 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
   r.slam = MeasureAte(run.slam, run, reference);
   r.thesis = MeasureAte(thesis.slam, thesis, reference);
   r.dead_reckoning = MeasureAte(run.dead_reckoning, run, reference);
+  r.ekf = MeasureAte(ekf_run.slam, ekf_run, reference);
+  r.ekf_rpe = MeasureRpe(ekf_run.slam, ekf_run, reference);
+  if (graph_run) {
+    const GraphSlamRun& g = *graph_run;
+    r.graph_ran = true;
+    r.graph = MeasureAte(g.run.slam, g.run, reference);
+    r.graph_live = MeasureAte(g.live, g.run, reference);
+    r.graph_rpe = MeasureRpe(g.run.slam, g.run, reference);
+    r.graph_front_ms_per_scan = g.front_ms_per_scan();
+    r.graph_back_ms_per_scan = g.back_ms_per_scan();
+    r.graph_back_max_ms = g.back_max_ms;
+    r.keyframes = g.keyframes;
+    r.corrections = g.corrections;
+    r.largest_correction_m = g.largest_correction_m;
+    r.closures = CheckClosures(g, reference);
+    WriteClosuresCsv((dir / "closures.csv").string(), g, reference);
+    {
+      // Every scan's poses: the reference's (where it has one), the EKF's, the graph's (optimized and live).
+      std::ofstream t(dir / "trajectories.csv");
+      t << "scan,utime,reference_x_m,reference_y_m,reference_theta_rad,ekf_x_m,ekf_y_m,ekf_theta_rad,graph_x_m,"
+           "graph_y_m,graph_theta_rad,live_x_m,live_y_m,live_theta_rad,dead_reckoning_x_m,dead_reckoning_y_m,"
+           "dead_reckoning_theta_rad\n";
+      t.precision(9);
+      for (size_t i = 0; i < g.run.slam.size() && i < ekf_run.slam.size(); ++i) {
+        t << i + 1 << "," << g.run.utime[i] << ",";
+        if (const auto ref = reference.Find(g.run.ranges_key[i], g.run.utime[i])) {
+          t << ref->x_m << "," << ref->y_m << "," << ref->theta_rad << ",";
+        } else {
+          t << ",,,";
+        }
+        for (const nav::Pose2* p : {&ekf_run.slam[i], &g.run.slam[i], &g.live[i], &g.run.dead_reckoning[i]}) {
+          t << p->x_m << "," << p->y_m << "," << p->theta_rad << (p == &g.run.dead_reckoning[i] ? "\n" : ",");
+        }
+      }
+    }
+    std::vector<std::string> failed;
+    if (!r.graph.measured) failed.push_back("no scan paired with the reference");
+    if (e.graph_goal_ate_m > 0 && r.graph.measured && r.graph.rmse_m > e.graph_goal_ate_m) {
+      failed.push_back("ATE " + Fixed(r.graph.rmse_m, 3) + " > " + Fixed(e.graph_goal_ate_m, 2) + " m");
+    }
+    if (r.closures.wrong > 0) failed.push_back(std::to_string(r.closures.wrong) + " wrong closures");
+    if (e.no_worse_than_dead_reckoning && r.graph.measured && r.dead_reckoning.measured &&
+        r.graph.rmse_m > r.dead_reckoning.rmse_m) {
+      failed.push_back("worse than dead reckoning");
+    }
+    r.graph_pass = failed.empty();
+    for (const std::string& f : failed) r.graph_failed += (r.graph_failed.empty() ? "" : "; ") + f;
+    // The graph's map (its optimized keyframes) with its trajectory, the EKF's and the reference.
+    std::vector<std::vector<nav::Pose2>> graph_tracks = {g.run.slam, ekf_run.slam};
+    std::vector<std::string> graph_names = {"graph back end", "EKF"};
+    const auto graph_pairs = PairWithReference(g.run.slam, g.run, reference);
+    if (graph_pairs.size() >= 2) {
+      const nav::Pose2 to_graph = nav::AlignSE2(graph_pairs).Inverse();
+      std::vector<nav::Pose2> ref_track;
+      for (const auto& [est, truth] : graph_pairs) ref_track.push_back(to_graph.Compose(truth));
+      graph_tracks.push_back(ref_track);
+      graph_names.push_back(e.reference == "icp-slam" ? "reference (icp-slam)" : "reference");
+    }
+    const std::string graph_title = e.name + ": graph back end ATE " + Fixed(r.graph.rmse_m, 3) + " m (EKF " +
+                                    Fixed(r.ekf.rmse_m, 3) + "), closures " + std::to_string(r.closures.accepted) +
+                                    " accepted / " + std::to_string(r.closures.rejected) + " rejected / " +
+                                    std::to_string(r.closures.wrong) + " wrong";
+    plot::SavePng(DrawRun(graph_tracks, graph_names, g.run.map, graph_title), (dir / "graph_map.png").string());
+    r.graph_png = e.name + "/graph_map.png";
+  }
   std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
-  std::vector<std::string> names = {"laser slam", "dead reckoning"};
+  std::vector<std::string> names = {backend.graph ? "laser slam (graph)" : "laser slam", "dead reckoning"};
   if (cmp) {
     std::vector<nav::Pose2> icp_track;
     std::vector<nav::Pose2> icp_estimate(run.slam.size());
@@ -249,11 +338,34 @@ void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results)
   }
 }
 
+void WriteGraphTable(std::ostream& out, const std::vector<SuiteResult>& results) {
+  out << "| run | EKF ATE [m] | graph ATE [m] | graph live [m] | RPE 1 m EKF / graph [m] | RPE 10 m EKF / graph [m] | "
+         "closures accepted / rejected / wrong | keyframes | ms/scan front + back (max back) | graph goal | result |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  const auto rpe = [](const RpeFigure& f, bool ten) {
+    if (!f.measured || (ten && f.segments_10m == 0)) return std::string("-");
+    return Fixed(ten ? f.translation_10m_m : f.translation_1m_m, 3);
+  };
+  for (const SuiteResult& r : results) {
+    if (r.skipped || !r.graph_ran) continue;
+    std::string goal = r.entry.graph_goal_ate_m > 0 ? "<= " + Fixed(r.entry.graph_goal_ate_m, 2) + ", " : "";
+    goal += "0 wrong";
+    if (r.entry.no_worse_than_dead_reckoning) goal += ", <= DR";
+    out << "| " << r.entry.name << " | " << Cell(r.ekf) << " | **" << Cell(r.graph) << "** | " << Cell(r.graph_live)
+        << " | " << rpe(r.ekf_rpe, false) << " / " << rpe(r.graph_rpe, false) << " | " << rpe(r.ekf_rpe, true) << " / "
+        << rpe(r.graph_rpe, true) << " | " << r.closures.accepted << " / " << r.closures.rejected << " / "
+        << r.closures.wrong << " | " << r.keyframes << " | " << Fixed(r.graph_front_ms_per_scan, 2) << " + "
+        << Fixed(r.graph_back_ms_per_scan, 2) << " (" << Fixed(r.graph_back_max_ms, 0) << ") | " << goal << " | "
+        << (r.graph_pass ? "pass" : "**fail**: " + r.graph_failed) << " |\n";
+  }
+}
+
 std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir, const SuiteOptions& options) {
   LaserSlamConfigChoice choice;
   choice.path = suite.laser_slam_config;
   choice.overrides = options.overrides;
   const nav::LaserSlamOptions slam_options = LoadLaserSlamOptions(choice);
+  const SlamBackendChoice backend = LoadSlamBackend(choice);
   const fs::path out(out_dir);
   fs::create_directories(out);
   std::vector<SuiteResult> results;
@@ -277,22 +389,31 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
       continue;
     }
     const auto t_run = Clock::now();
-    SuiteResult r = RunEntry(suite, e, slam_options, out / e.name, options);
+    SuiteResult r = RunEntry(suite, e, slam_options, backend, out / e.name, options);
     results.push_back(r);
     if (options.progress) {
       std::cerr << "eval-slam suite: " << counter << e.name << ": " << r.scans << " scans, ATE laser slam "
                 << Cell(r.slam) << " m (thesis " << Cell(r.thesis, 2) << ", icp-slam " << Cell(r.icp_slam, 2)
                 << ", dead reckoning " << Cell(r.dead_reckoning, 2) << "), " << Fixed(r.slam_ms_per_scan, 2)
-                << " ms/scan: " << (r.pass ? "pass" : "FAIL (" + r.failed + ")") << " ["
+                << " ms/scan: " << (r.pass ? "pass" : "FAIL (" + r.failed + ")");
+      if (r.graph_ran) {
+        std::cerr << "; graph back end " << Cell(r.graph) << " m (EKF " << Cell(r.ekf) << "), closures "
+                  << r.closures.accepted << " / " << r.closures.rejected << " / " << r.closures.wrong << " wrong, "
+                  << Fixed(r.graph_front_ms_per_scan, 2) << " + " << Fixed(r.graph_back_ms_per_scan, 2)
+                  << " ms/scan: " << (r.graph_pass ? "pass" : "FAIL (" + r.graph_failed + ")");
+      }
+      std::cerr << " ["
                 << Fixed(std::chrono::duration<double>(Clock::now() - t_run).count(), 1) << " s]\n";
     }
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  int runs = 0, passed = 0, skipped = 0;
+  int runs = 0, passed = 0, skipped = 0, graph_runs = 0, graph_passed = 0;
   for (const SuiteResult& r : results) {
     skipped += r.skipped;
     runs += !r.skipped;
     passed += !r.skipped && r.pass;
+    graph_runs += !r.skipped && r.graph_ran;
+    graph_passed += !r.skipped && r.graph_ran && r.graph_pass;
   }
   {
     std::ofstream md(out / "suite.md");
@@ -301,15 +422,28 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
     for (const std::string& o : options.overrides) md << ", " << o;
     md << "; ATE = RMSE of the scan poses after SE(2) alignment with the reference. " << passed << " of " << runs
        << " runs meet their goals" << (skipped ? ", " + std::to_string(skipped) + " skipped" : std::string()) << "; "
-       << Fixed(seconds, 0) << " s.\n\n";
+       << Fixed(seconds, 0) << " s. Laser SLAM is the config's back end (" << (backend.graph ? "graph" : "ekf")
+       << ").\n\n";
     WriteSuiteTable(md, results);
+    if (graph_runs > 0) {
+      md << "\n## The graph back end beside the EKF\n\n"
+         << "ATE of the optimized trajectory (every scan's pose after the last optimization) and of the pose as "
+            "published at each scan (live); RPE = translation RMSE over segments of 1 m and 10 m of the "
+            "reference's travel; a closure is wrong when its two poses are more than 0.5 m or 5 deg apart in the "
+            "reference. "
+         << graph_passed << " of " << graph_runs << " runs meet the graph back end's goals.\n\n";
+      WriteGraphTable(md, results);
+    }
   }
   {
     std::ofstream csv(out / "suite.csv");
     csv << "run,kind,noise,seed,every,scans,skipped,laser_slam_ate_rmse_m,laser_slam_ate_max_m,thesis_ate_rmse_m,"
            "icp_slam_ate_rmse_m,dead_reckoning_ate_rmse_m,laser_slam_ms_per_scan,thesis_ms_per_scan,"
            "icp_slam_ms_per_scan,accepted,gated,ambiguous,no_match,stale_predictions,catch_up_predictions,"
-           "goal_ate_m,no_worse_than_dead_reckoning,pass\n";
+           "goal_ate_m,no_worse_than_dead_reckoning,pass,backend,ekf_ate_rmse_m,ekf_rpe_1m_m,ekf_rpe_10m_m,"
+           "graph_ate_rmse_m,graph_ate_max_m,graph_live_ate_rmse_m,graph_rpe_1m_m,graph_rpe_1m_deg,graph_rpe_10m_m,"
+           "graph_rpe_10m_deg,loop_candidates,loop_accepted,loop_rejected,loop_wrong,loop_switched_off,keyframes,"
+           "corrections,graph_front_ms_per_scan,graph_back_ms_per_scan,graph_back_max_ms,graph_goal_ate_m,graph_pass\n";
     const auto num = [](const AteFigure& f, bool max = false) {
       return f.measured ? Fixed(max ? f.max_m : f.rmse_m, 4) : std::string();
     };
@@ -321,7 +455,21 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
           << Fixed(r.thesis_ms_per_scan, 3) << "," << (r.icp_slam_ran ? Fixed(r.icp_slam_ms_per_scan, 3) : "") << "," << r.outcomes.accepted
           << "," << r.outcomes.gated << "," << r.outcomes.ambiguous << "," << r.outcomes.no_match << ","
           << r.outcomes.stale_predictions << "," << r.outcomes.catch_up_predictions << "," << e.goal_ate_m << ","
-          << (e.no_worse_than_dead_reckoning ? 1 : 0) << "," << (r.skipped ? "" : r.pass ? "1" : "0") << "\n";
+          << (e.no_worse_than_dead_reckoning ? 1 : 0) << "," << (r.skipped ? "" : r.pass ? "1" : "0") << ","
+          << r.backend << "," << num(r.ekf) << "," << (r.ekf_rpe.measured ? Fixed(r.ekf_rpe.translation_1m_m, 4) : "")
+          << "," << (r.ekf_rpe.measured ? Fixed(r.ekf_rpe.translation_10m_m, 4) : "") << ",";
+      if (r.graph_ran) {
+        csv << num(r.graph) << "," << num(r.graph, true) << "," << num(r.graph_live) << ","
+            << Fixed(r.graph_rpe.translation_1m_m, 4) << "," << Fixed(r.graph_rpe.rotation_1m_deg, 3) << ","
+            << Fixed(r.graph_rpe.translation_10m_m, 4) << "," << Fixed(r.graph_rpe.rotation_10m_deg, 3) << ","
+            << r.closures.candidates << "," << r.closures.accepted << "," << r.closures.rejected << ","
+            << r.closures.wrong << "," << r.closures.switched_off << "," << r.keyframes << "," << r.corrections << ","
+            << Fixed(r.graph_front_ms_per_scan, 3) << "," << Fixed(r.graph_back_ms_per_scan, 3) << ","
+            << Fixed(r.graph_back_max_ms, 1) << "," << e.graph_goal_ate_m << "," << (r.graph_pass ? "1" : "0");
+      } else {
+        csv << ",,,,,,,,,,,,,,,,,,";
+      }
+      csv << "\n";
     }
   }
   {
@@ -332,6 +480,9 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
     j["runs"] = runs;
     j["runs_passed"] = passed;
     j["runs_skipped"] = skipped;
+    j["backend"] = backend.graph ? "graph" : "ekf";
+    j["graph_runs"] = graph_runs;
+    j["graph_runs_passed"] = graph_passed;
     j["seconds"] = seconds;
     for (const SuiteResult& r : results) {
       const std::string k = r.entry.name + "_";
@@ -353,10 +504,44 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
       j[k + "no_match_scans"] = r.outcomes.no_match;
       j[k + "pass"] = r.pass;
       j[k + "png"] = r.png;
+      if (r.ekf.measured) j[k + "ekf_ate_rmse_m"] = r.ekf.rmse_m;
+      if (r.ekf_rpe.measured) {
+        j[k + "ekf_rpe_1m_m"] = r.ekf_rpe.translation_1m_m;
+        j[k + "ekf_rpe_10m_m"] = r.ekf_rpe.translation_10m_m;
+      }
+      if (r.graph_ran) {
+        if (r.graph.measured) {
+          j[k + "graph_ate_rmse_m"] = r.graph.rmse_m;
+          j[k + "graph_ate_max_m"] = r.graph.max_m;
+        }
+        if (r.graph_live.measured) j[k + "graph_live_ate_rmse_m"] = r.graph_live.rmse_m;
+        if (r.graph_rpe.measured) {
+          j[k + "graph_rpe_1m_m"] = r.graph_rpe.translation_1m_m;
+          j[k + "graph_rpe_1m_deg"] = r.graph_rpe.rotation_1m_deg;
+          j[k + "graph_rpe_10m_m"] = r.graph_rpe.translation_10m_m;
+          j[k + "graph_rpe_10m_deg"] = r.graph_rpe.rotation_10m_deg;
+        }
+        j[k + "loop_candidates"] = r.closures.candidates;
+        j[k + "loop_accepted"] = r.closures.accepted;
+        j[k + "loop_rejected"] = r.closures.rejected;
+        j[k + "loop_wrong"] = r.closures.wrong;
+        j[k + "loop_switched_off"] = r.closures.switched_off;
+        j[k + "keyframes"] = r.keyframes;
+        j[k + "corrections"] = r.corrections;
+        j[k + "graph_front_ms_per_scan"] = r.graph_front_ms_per_scan;
+        j[k + "graph_back_ms_per_scan"] = r.graph_back_ms_per_scan;
+        j[k + "graph_back_max_ms"] = r.graph_back_max_ms;
+        j[k + "graph_pass"] = r.graph_pass;
+        j[k + "graph_png"] = r.graph_png;
+      }
     }
     std::ofstream(out / "summary.json") << j.dump(2) << "\n";
   }
   if (options.progress) {
+    if (graph_runs > 0) {
+      std::cerr << "eval-slam suite: graph back end: " << graph_passed << " of " << graph_runs
+                << " runs meet its goals\n";
+    }
     std::cerr << "eval-slam suite: " << passed << " of " << runs << " runs meet their goals"
               << (skipped ? ", " + std::to_string(skipped) + " skipped" : std::string()) << " (" << Fixed(seconds, 0)
               << " s); " << (out / "suite.md").string() << ", suite.csv, summary.json\n";

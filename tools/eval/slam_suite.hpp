@@ -18,6 +18,9 @@
 //   every = 1
 //   goal_ate_m = 0.30                   ; the laser SLAM's ATE goal [m] (0: none)
 //   no_worse_than_dead_reckoning = true ; also a goal: ATE <= dead reckoning's
+//   graph_goal_ate_m = 0.10             ; optional: the graph back end's ATE goal [m] (0 or absent: none)
+// [suite] graph = true|false (optional, default true): the graph back end runs beside the EKF (its
+// table: ATE, RPE over 1 m and 10 m, loop closures accepted / rejected / wrong, ms per scan).
 // A run whose data file (or the raw-like tool) is missing is skipped with a line naming it.
 #include <cstdint>
 #include <iosfwd>
@@ -26,6 +29,7 @@
 #include <vector>
 
 #include "icp_slam.hpp"
+#include "slam_graph.hpp"
 #include "slam_log.hpp"
 #include "snapnav/nav/laser_slam.hpp"
 
@@ -55,6 +59,7 @@ struct SuiteEntry {
   double noise = 0;
   double goal_ate_m = 0;
   bool no_worse_than_dead_reckoning = false;
+  double graph_goal_ate_m = 0;  // the graph back end's (issue 22's goals)
 };
 
 struct Suite {
@@ -62,11 +67,21 @@ struct Suite {
   std::string raw_like_tool;     // resolved
   std::string laser_slam_config; // resolved
   bool icp_slam = true;
+  bool graph = true;             // run the graph back end beside the EKF
   std::vector<SuiteEntry> entries;
 };
 // Reads a suite file; a missing or unknown key, or a bad value, is a glue::ConfigError naming the
 // file, line and key.
 Suite LoadSuite(const std::string& path);
+
+// Relative pose error (Kuemmerle et al. 2009) over segments of 1 m and 10 m of the reference's travel.
+struct RpeFigure {
+  bool measured = false;
+  double translation_1m_m = 0, rotation_1m_deg = 0;    // RMSE over the 1 m segments
+  double translation_10m_m = 0, rotation_10m_deg = 0;  // ... over the 10 m segments (0 if none)
+  int segments_10m = 0;
+};
+RpeFigure MeasureRpe(const std::vector<nav::Pose2>& estimate, const SlamRun& run, const Reference& reference);
 
 // One run of the suite.
 struct SuiteResult {
@@ -81,6 +96,22 @@ struct SuiteResult {
   bool pass = false;           // every goal of the entry met
   std::string failed;          // which goals failed
   std::string png;             // the trajectory figure (relative to the output folder)
+  // The configured back end ("ekf" or "graph": what `slam` above is), and both back ends apart.
+  std::string backend = "ekf";
+  AteFigure ekf;
+  RpeFigure ekf_rpe;
+  double ekf_ms_per_scan = 0;
+  bool graph_ran = false;
+  AteFigure graph, graph_live;    // the optimized trajectory, and the pose as published at each scan
+  RpeFigure graph_rpe;
+  double graph_front_ms_per_scan = 0, graph_back_ms_per_scan = 0, graph_back_max_ms = 0;
+  int keyframes = 0;
+  int64_t corrections = 0;
+  double largest_correction_m = 0;
+  ClosureCheck closures;
+  bool graph_pass = false;        // the graph back end met graph_goal_ate_m, no wrong closure, <= DR if asked
+  std::string graph_failed;
+  std::string graph_png;          // the graph's map and trajectory over the reference
 };
 
 struct SuiteOptions {
@@ -96,5 +127,7 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
 
 // The suite table as Markdown (suite.md's table).
 void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results);
+// The graph back end beside the EKF as Markdown (suite.md's second table).
+void WriteGraphTable(std::ostream& out, const std::vector<SuiteResult>& results);
 
 }  // namespace snapnav::eval

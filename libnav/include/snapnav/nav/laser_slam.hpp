@@ -234,6 +234,7 @@ class LaserSlam {
 
  private:
   MapMatcher matcher() const { return MapMatcher(map_, options_); }
+  static PointGridMap MakeMap(const LaserSlamOptions& options);
 
   LaserSlamOptions options_;
   Pose2 pose_;
@@ -287,6 +288,10 @@ class LaserSlam {
   void SeedMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals = {}) {
     for (size_t i = 0; i < points.size(); ++i) map_.Add(points[i], i < normals.size() ? normals[i] : Eigen::Vector2d::Zero());
   }
+  // Replaces the map by these points (map frame) with their unit normals (zero: unknown), each
+  // kept unless a point already kept lies within add_distance_m (as scans add theirs); the pose
+  // stays. The graph back end (GraphSlam) rebuilds its front end's map so from the optimized keyframes.
+  void ResetMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals);
 
  private:
   bool MayAddPoints(const LaserSlamUpdate& u) const;
