@@ -202,6 +202,13 @@ TEST(Ini, ValidationErrorNamesTheKeysItsMessageNames) {
   EXPECT_EQ(std::string(effects.ValidationError("drive: robot_radius_m must be positive").what()),
             "e.ini:4: [robot] radius_m = '0': drive: robot_radius_m must be positive");
   EXPECT_EQ(std::string(effects.ValidationError("drive: too far, 3 m").what()), "e.ini: drive: too far, 3 m");
+  // Of the keys matched so, those sharing the longest tail with a word: `loop_search_sigmas` is
+  // graph_loop_search_sigmas (18 characters shared), not search_sigmas (13).
+  const auto tails = IniFile::Parse("[slam]\nsearch_sigmas = 3\ngraph_loop_search_sigmas = -1\n", "t.ini");
+  tails.GetDouble("slam", "search_sigmas");
+  tails.GetDouble("slam", "graph_loop_search_sigmas");
+  EXPECT_EQ(std::string(tails.ValidationError("graph: loop_search_sigmas must be > 0").what()),
+            "t.ini:3: [slam] graph_loop_search_sigmas = '-1': graph: loop_search_sigmas must be > 0");
   // An option in radians names its key in degrees.
   const auto angles = IniFile::Parse("[follower]\nalign_deg = -5\nmax_angular_deg_per_s = 0\n", "a.ini");
   angles.GetDouble("follower", "align_deg");

@@ -215,9 +215,17 @@ ConfigError IniFile::ValidationError(const std::string& what) const {
            text.compare(text.size() - tail.size(), tail.size(), tail) == 0 &&
            text[text.size() - tail.size() - 1] == '_';
   };
+  // A word names a key that it ends with, or that ends with it, at a '_'; of the keys one word
+  // names so, those sharing the longest tail with it (`loop_search_sigmas` names
+  // `graph_loop_search_sigmas`, not `search_sigmas`).
+  const auto tail = [&](const std::string& w, const std::string& key) -> size_t {
+    return ends_with(w, key) || ends_with(key, w) ? std::min(w.size(), key.size()) : 0;
+  };
+  std::map<std::string, size_t> longest_tail;  // by word, over the keys that may be named
   const auto suffix_match = [&](const std::string& key) {
     for (const auto& w : words) {
-      if (ends_with(w, key) || ends_with(key, w)) return true;
+      const size_t t = tail(w, key);
+      if (t > 0 && t == longest_tail[w]) return true;
     }
     return false;
   };
@@ -228,6 +236,10 @@ ConfigError IniFile::ValidationError(const std::string& what) const {
     return what.find("[" + section + "]") != std::string::npos || what.find(section + "." + key) != std::string::npos;
   };
   std::vector<Named> named, narrowed;
+  for (const auto& [section, key] : used_) {
+    if (section == "channels" && !named_section(section, key)) continue;
+    for (const auto& w : words) longest_tail[w] = std::max(longest_tail[w], tail(w, key));
+  }
   for (const bool exact : {true, false}) {
     for (const auto& [section, key] : used_) {
       if (exact ? !words.count(key) : !suffix_match(key)) continue;

@@ -75,10 +75,11 @@ class ProcessStatsTest(unittest.TestCase):
     def test_sample_follows_a_live_process_and_summary_judges_its_growth(self):
         d = tempfile.mkdtemp(prefix="process_stats_test.")
         self.addCleanup(shutil.rmtree, d)
-        # A process that holds 10 MB, then 40 MB more after 1.5 s, and ends at 3 s.
+        # A process that holds 10 MB, then 40 MB more after 1.5 s, and ends at 3 s: os._exit, so no
+        # sample can see the interpreter free its memory on the way out (under load it did).
         child = subprocess.Popen([sys.executable, "-c",
-                                  "import time\na = bytearray(10 << 20)\ntime.sleep(1.5)\n"
-                                  "b = bytearray(40 << 20)\ntime.sleep(1.5)\n"])
+                                  "import os, time\na = bytearray(10 << 20)\ntime.sleep(1.5)\n"
+                                  "b = bytearray(40 << 20)\ntime.sleep(1.5)\nos._exit(0)\n"])
         out = os.path.join(d, "p.csv")
         sampler = subprocess.run([sys.executable, PROCESS_STATS, "sample", "--out", out, "--pid", f"grower={child.pid}",
                                   "--interval-s", "0.2"], timeout=30)
