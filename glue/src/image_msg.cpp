@@ -260,6 +260,18 @@ cv::Mat LoadMask(const std::string& path, cv::Size expected) {
   return m;
 }
 
+MirrorMask ReadMirrorMask(const IniFile& ini, cv::Size expected, const std::string& section) {
+  MirrorMask m;
+  m.path = ReadMirrorMaskPath(ini, section);
+  if (m.path.empty()) return m;
+  try {
+    m.mask = LoadMask(m.path, expected);
+  } catch (const std::runtime_error& e) {
+    ini.FailKey(section, "mask", e.what());
+  }
+  return m;
+}
+
 void PrintPanoramaConfig(std::ostream& out, const nav::PanoramaModel& p, const std::string& section) {
   constexpr double kDeg = M_PI / 180;
   out << "[" << section << "]\nwidth_px = " << p.width_px << "\nheight_px = " << p.height_px

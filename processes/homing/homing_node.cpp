@@ -100,7 +100,9 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
-  c.mask_path = glue::ReadMirrorMaskPath(ini);
+  const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
+  c.mask_path = mask.path;
+  c.mask = mask.mask;
 
   auto& h = c.homing;
   h.hog = ReadHog(ini, "hog");
@@ -141,13 +143,6 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
 
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
-  if (!c.mask_path.empty()) {
-    try {
-      c.mask = glue::LoadMask(c.mask_path);
-    } catch (const std::exception& e) {
-      ini.FailKey("mirror", "mask", e.what());
-    }
-  }
   return c;
 }
 

@@ -20,7 +20,9 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
   c.raw_input = glue::ReadChoice<bool>(ini, "landmarks", "input", {{"raw", true}, {"panorama", false}});
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
-  c.mask_path = glue::ReadMirrorMaskPath(ini);
+  const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
+  c.mask_path = mask.path;
+  c.mask = mask.mask;
   c.extractor = glue::ReadLandmarkExtractor(ini);
   if (!method.empty()) {
     const auto m = nav::ParseLandmarkMethod(method);
@@ -40,13 +42,6 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
     c.extractor.Validate();
   } catch (const std::invalid_argument& e) {
     throw ini.ValidationError(e.what());
-  }
-  if (!c.mask_path.empty()) {
-    try {
-      c.mask = glue::LoadMask(c.mask_path);
-    } catch (const std::exception& e) {
-      throw glue::ConfigError(ini.origin() + ": [mirror] " + e.what());
-    }
   }
   if (c.landmarks_channel == c.input_channel()) {
     throw ini.ValidationError("[channels] landmarks and " + std::string(c.raw_input ? "omni" : "panorama") +

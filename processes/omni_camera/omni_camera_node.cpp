@@ -42,16 +42,9 @@ OmniCameraConfig OmniCameraConfig::FromIni(const glue::IniFile& ini, const std::
   c.frame.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
   c.frame.mirror = glue::ReadMirrorConfig(ini);
   // The mask is for the processes that read the frames; the camera checks that it fits.
-  c.mask_path = glue::ReadMirrorMaskPath(ini);
+  c.mask_path = glue::ReadMirrorMask(ini, c.capture.width_px > 0 ? cv::Size(c.capture.width_px, c.capture.height_px)
+                                                                 : cv::Size()).path;
   ini.CheckAllUsed();
-  if (!c.mask_path.empty()) {
-    try {
-      const cv::Size expected = c.capture.width_px > 0 ? cv::Size(c.capture.width_px, c.capture.height_px) : cv::Size();
-      (void)glue::LoadMask(c.mask_path, expected);
-    } catch (const std::exception& e) {
-      throw glue::ConfigError(ini.origin() + ": [mirror] " + e.what());
-    }
-  }
   try {
     c.capture.source = FrameSourceSpec::Parse(source);
     c.frame.encoding = glue::ParseFrameEncoding(encoding);

@@ -117,19 +117,14 @@ PlaceCellsConfig PlaceCellsConfig::FromIni(const glue::IniFile& ini, const std::
 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
-  c.mask_path = glue::ReadMirrorMaskPath(ini);
+  const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
+  c.mask_path = mask.path;
+  c.mask = mask.mask;
   c.view = glue::ReadPlaceViewOptions(ini);
   c.localizer = glue::ReadLocalizerOptions(ini);
   c.vocabulary = glue::ReadVocabularyOptions(ini);
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
-  if (!c.mask_path.empty()) {
-    try {
-      c.mask = glue::LoadMask(c.mask_path);
-    } catch (const std::exception& e) {
-      ini.FailKey("mirror", "mask", e.what());
-    }
-  }
   return c;
 }
 

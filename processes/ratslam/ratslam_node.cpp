@@ -153,7 +153,9 @@ RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string
   c.stats_interval_s = ini.GetDouble("node", "stats_interval_s");
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
-  c.mask_path = glue::ReadMirrorMaskPath(ini);
+  const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
+  c.mask_path = mask.path;
+  c.mask = mask.mask;
   c.options = ReadRatSlamOptions(ini);
   ini.CheckAllUsed();
   if (!(c.experience_map_interval_s >= 0) || !std::isfinite(c.experience_map_interval_s)) {
@@ -167,13 +169,6 @@ RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string
     c.mirror.Validate();
   } catch (const std::invalid_argument& e) {
     throw ini.ValidationError(e.what());
-  }
-  if (!c.mask_path.empty()) {
-    try {
-      c.mask = glue::LoadMask(c.mask_path);
-    } catch (const std::exception& e) {
-      throw glue::ConfigError(ini.origin() + ": [mirror] " + e.what());
-    }
   }
   return c;
 }

@@ -83,16 +83,11 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.max_place_cell_matches = ini.GetInt("viewer", "max_place_cell_matches");
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
-  c.mask_path = glue::ReadMirrorMaskPath(ini);
+  const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
+  c.mask_path = mask.path;
+  c.mask = mask.mask;
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
-  if (!c.mask_path.empty()) {
-    try {
-      c.mask = glue::LoadMask(c.mask_path);
-    } catch (const std::exception& e) {
-      ini.FailKey("mirror", "mask", e.what());
-    }
-  }
   return c;
 }
 

@@ -4,8 +4,14 @@
 // RatSLAM's view templates) do not depend on what the masked pixels hold.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <unistd.h>
+
+#include "snapnav/glue/ini.hpp"
 
 #include "realistic_render.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
@@ -221,6 +227,39 @@ TEST(ImageMask, FillClearanceAndGrow) {
   EXPECT_EQ(grown.at<uint8_t>(0, 0), 0);
   EXPECT_EQ(grown.at<uint8_t>(0, 1), 255);
   EXPECT_EQ(grown.at<uint8_t>(0, 2), 0);
+}
+
+// A config's [mirror] mask: relative to the config's folder; a missing file, a file that is no
+// image or a mask of another size than the camera's is refused naming the config's file, line and key.
+TEST(MaskConfig, ReadFromTheConfigsFolderAndRefusedWithFileLineAndKey) {
+  const auto dir = std::filesystem::temp_directory_path() / ("mask_config_test." + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  cv::imwrite((dir / "mask.png").string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(255)));
+  std::ofstream((dir / "notimage.png").string()) << "plain text\n";
+  const auto config = [&](const std::string& mask) {
+    const std::string path = (dir / "c.ini").string();
+    std::ofstream(path) << "[mirror]\nmask = " << mask << "\n";
+    return glue::IniFile::Load(path);
+  };
+  const auto error = [&](const std::string& mask, cv::Size expected) {
+    try {
+      (void)glue::ReadMirrorMask(config(mask), expected);
+    } catch (const glue::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const glue::MirrorMask m = glue::ReadMirrorMask(config("mask.png"), cv::Size(64, 48));
+  EXPECT_EQ(m.path, (dir / "mask.png").string());
+  EXPECT_EQ(m.mask.size(), cv::Size(64, 48));
+  EXPECT_TRUE(glue::ReadMirrorMask(config("")).mask.empty());
+  const std::string at = (dir / "c.ini").string() + ":2: [mirror] mask = ";
+  EXPECT_EQ(error("nosuch.png", {}).rfind(at + "'nosuch.png': mask ", 0), 0u) << error("nosuch.png", {});
+  EXPECT_NE(error("nosuch.png", {}).find("no such file"), std::string::npos);
+  EXPECT_NE(error("notimage.png", {}).find("not an image"), std::string::npos);
+  EXPECT_EQ(error("notimage.png", {}).rfind(at, 0), 0u);
+  EXPECT_NE(error("mask.png", cv::Size(640, 480)).find("64x48, the camera's images are 640x480"), std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

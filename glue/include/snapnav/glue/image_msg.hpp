@@ -58,6 +58,14 @@ std::string ReadMirrorMaskPath(const IniFile& ini, const std::string& section = 
 // `expected` (non-empty), of that size. Throws std::runtime_error naming the file when it cannot
 // be read, is not an image or has another size.
 cv::Mat LoadMask(const std::string& path, cv::Size expected = cv::Size());
+// The mask a config names, loaded (LoadMask): empty when none; a file that cannot be read, is no
+// image or has another size than `expected` (non-empty) is a ConfigError naming the config's file,
+// line and key ("sim.ini:12: [mirror] mask = 'm.png': mask /x/m.png: no such file").
+struct MirrorMask {
+  std::string path;  // "" for none
+  cv::Mat mask;      // CV_8UC1, empty for none
+};
+MirrorMask ReadMirrorMask(const IniFile& ini, cv::Size expected = cv::Size(), const std::string& section = "mirror");
 
 // The sections the two readers above read back (header line included).
 void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& mirror, const std::string& section = "mirror");
