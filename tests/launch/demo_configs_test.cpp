@@ -1,5 +1,5 @@
 // The demo deployment's config variants (config/deploy/demo/*.ini) parse with their programs'
-// parsers, like every config in config/ (tests/config_files_test.cpp).
+// parsers, like every config in config/ (tests/glue/config_files_test.cpp).
 #include <gtest/gtest.h>
 
 #include <filesystem>

@@ -1,7 +1,7 @@
 // The tools that read LCM logs, on damaged logs: log-report and eval-slam's loader read every
 // intact event before and after a corrupt stretch and a truncated tail, name the file and the
 // byte offset of each damaged place, and log-report exits with 3. (replay: tests/replay; the
-// reader itself: tests/log_reader_test.cpp; the importers' own inputs: tests/importers.)
+// reader itself: tests/glue/log_reader_test.cpp; the importers' own inputs: tests/importers.)
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>

@@ -6,7 +6,7 @@
 #   spy_cli_test.sh BIN_DIR OUT_DIR
 set -uo pipefail
 BIN="$1"; OUT="$2"
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 rm -rf "$OUT"; mkdir -p "$OUT"
 fail() { echo "FAIL: $*"; exit 1; }
 pids=()

@@ -6,7 +6,7 @@
 #   no_route_test.sh BIN_DIR
 set -uo pipefail
 BIN="$1"
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 ns=(-n)
 [ "$(id -u)" = 0 ] || ns=(-r -n)
 fail() { echo "FAIL: $*"; exit 1; }

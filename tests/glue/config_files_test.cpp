@@ -69,7 +69,7 @@ TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // Configs with heavy dependencies are tested in their own test executables
   // (tests/drivers/): omni_camera.ini, laser_hokuyo.ini; (tests/homing/homing_node_test.cpp): homing.ini,
   // landmarks.ini.
-  // laser_slam.ini: tests/laser_slam_node_test.cpp; placecells.ini: tests/placecells/place_cells_glue_test.cpp;
+  // laser_slam.ini: tests/slam/laser_slam_node_test.cpp; placecells.ini: tests/placecells/place_cells_glue_test.cpp;
   // navigator.ini: tests/navigator/; viewer.ini: tests/viewer/viewer_test.cpp; ratslam.ini:
   // tests/ratslam/ratslam_node_test.cpp; slam_suite.ini, slam_suite_heldout.ini (eval-slam --suite):
   // tests/eval/slam_suite_file_test.cpp. Deployment files (config/deploy/*.deploy) and the demo's
