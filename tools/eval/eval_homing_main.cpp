@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "homing_eval.hpp"
+#include "sim_config_use.hpp"
 #include "landmark_compare.hpp"
 #include "people_diagnosis.hpp"
 #include "snapnav/glue/landmarks.hpp"
@@ -180,7 +181,9 @@ int Main(int argc, char** argv) {
   flags.AddString("counts", &counts, "--compare: landmark counts (N or all)");
   flags.AddString("home", &home_text, "home position X,Y [m] (a grid position; default: the grid centre)");
   flags.AddString("config", &config_path, "homing config (its [hog], [compass], [alv], [preprocess])");
-  flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama)");
+  flags.AddString("sim-config", &sim_config_path,
+                  "simulator config: its camera, [mirror], [panorama], [effects] and seed apply; a changed key it does not "
+                  "use is refused");
   flags.AddString("input", &input, "raw (render catadioptric images and unwrap) or panorama (render panoramas)");
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &mask_source,
@@ -214,7 +217,10 @@ int Main(int argc, char** argv) {
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
 
-  auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  const auto sim_ini = glue::IniFile::Load(sim_config_path);
+  auto sim = processes::SimConfig::FromIni(sim_ini, "");
+  // All of the file applies ([effects] on every rendered image) or it is refused.
+  eval::RefuseUnusedSimKeys(sim_ini, glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini"), eval::HomingSimConfigUse());
   if (!camera.empty()) {
     try {
       sim.camera.optics = nav::sim::CameraOpticsPreset(camera);
@@ -237,6 +243,7 @@ int Main(int argc, char** argv) {
   if (compare || people_diagnosis || method != "hog") {
     eval::LandmarkEvalSetup setup;
     setup.camera = sim.camera;
+    setup.effects = sim.effects;
     setup.hog = config;
     setup.extractor = glue::ReadLandmarkExtractor(glue::IniFile::Load(landmarks_config_path));
     setup.keypoint_homing = homing.keypoint_homing;
@@ -300,6 +307,7 @@ int Main(int argc, char** argv) {
   grid.input = input == "raw" ? CameraPipeline::Input::kRaw : CameraPipeline::Input::kPanorama;
   CameraPipeline pipeline;
   pipeline.input = grid.input;
+  pipeline.effects = sim.effects;
 
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, input "
             << input << ", " << Describe(config) << "\n";
@@ -495,6 +503,7 @@ int Main(int argc, char** argv) {
         const auto other = eval::RenderGrid(s, r, g);
         CameraPipeline p;
         p.input = CameraPipeline::Input::kPanorama;
+        p.effects = sim.effects;
         for (const auto& img : other.sensor) images.push_back(r.ToPanorama(img, p));
       }
       plot::Series series{s.name, {}, {}};
@@ -569,7 +578,10 @@ int Main(int argc, char** argv) {
   std::ofstream json(out / "summary.json");
   json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"method\": \"" << method
        << "\",\n  \"input\": \"" << input << "\",\n  \"camera\": \"" << sim.camera_preset << "\",\n  \"mask\": \""
-       << mask_source << "\",\n  \"masked_fraction\": " << nav::MaskedFraction(mask) << ",\n  \"random_headings\": " << (random_headings ? "true" : "false")
+       << mask_source << "\",\n  \"effects\": {\"blur_sigma_px\": " << pipeline.effects.blur_sigma_px
+       << ", \"noise_sigma\": " << pipeline.effects.noise_sigma << ", \"salt_pepper_fraction\": "
+       << pipeline.effects.salt_pepper_fraction << ", \"illumination_gain\": " << pipeline.effects.gain
+       << ", \"illumination_offset\": " << pipeline.effects.offset << "},\n  \"masked_fraction\": " << nav::MaskedFraction(mask) << ",\n  \"random_headings\": " << (random_headings ? "true" : "false")
        << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
        << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
        << ",\n  \"average_angular_error_deg\": " << result.aae_deg

@@ -13,6 +13,7 @@
 #include <opencv2/core/utility.hpp>
 
 #include "localization_eval.hpp"
+#include "sim_config_use.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
@@ -91,7 +92,8 @@ int Main(int argc, char** argv) {
   flags.AddString("out", &out_dir, "output folder (required)");
   flags.AddString("config", &config_path, "place-cell config: [landmarks] [place_view] [vline] [sift] [surf] [matching] "
                                           "[measure] [distance_filter] [localizer] [vocabulary]");
-  flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama, effects, robot noise)");
+  flags.AddString("sim-config", &sim_config_path, "simulator config: its camera, [mirror], [panorama], [effects], seed and robot noise apply; a changed key "
+                  "it does not use is refused");
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &o.mask, "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE");
   flags.AddString("features", &features, "override [landmarks] method: sift | surf");
@@ -153,7 +155,9 @@ int Main(int argc, char** argv) {
   o.seed = static_cast<uint64_t>(seed);
   cv::setNumThreads(threads);
 
-  const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  const auto sim_ini = glue::IniFile::Load(sim_config_path);
+  const auto sim = processes::SimConfig::FromIni(sim_ini, "");
+  eval::RefuseUnusedSimKeys(sim_ini, glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini"), eval::LocalizationSimConfigUse());
   o.camera = sim.camera;
   if (!camera.empty()) {
     try {
