@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/imgproc.hpp>
@@ -115,6 +116,33 @@ double Aae(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos, cons
   return r.aae_deg;
 }
 
+// The thesis' 3.1.4 protocol: the 5x5 positions of the grid around the home (fig. 3.6), the home
+// at its centre. Throws a FlagError when the home is less than 2 positions from the grid's edge.
+struct SubGrid {
+  eval::GridDatabase db;
+  std::vector<cv::Mat> panos;
+};
+SubGrid Thesis5x5(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos) {
+  const int hx = db.home_index % db.nx, hy = db.home_index / db.nx;
+  if (hx < 2 || hy < 2 || hx + 2 >= db.nx || hy + 2 >= db.ny) {
+    throw glue::FlagError("--protocols thesis-5x5 needs the home at least 2 grid positions from the grid's edge");
+  }
+  SubGrid s;
+  s.db.nx = s.db.ny = 5;
+  for (int iy = hy - 2; iy <= hy + 2; ++iy) {
+    for (int ix = hx - 2; ix <= hx + 2; ++ix) {
+      const int i = iy * db.nx + ix;
+      if (i == db.home_index) s.db.home_index = static_cast<int>(s.db.poses.size());
+      s.db.poses.push_back(db.poses[i]);
+      s.db.sensor.push_back(db.sensor[i]);
+      s.db.people.push_back(db.people[i]);
+      s.panos.push_back(panos[i]);
+    }
+  }
+  s.db.home = db.home;
+  return s;
+}
+
 plot::Axes MakeAxes(const std::string& title, const std::string& x_label, const std::string& y_label) {
   plot::Axes axes;
   axes.title = title;
@@ -140,7 +168,7 @@ int Main(int argc, char** argv) {
   bool people_diagnosis = false, return_best_only = false;
   int home_frames = -1, current_frames = -1, return_stride = 1;
   double home_interval_s = -1, current_interval_s = -1;
-  std::string fusion, camera, mask_source = "none";
+  std::string fusion, camera, mask_source = "none", protocols = "snapnav";
   double min_fraction = -1;
   eval::FrameProtocol fused{9, 1.0, 3, 0.5};
   int seed = 1;
@@ -188,6 +216,9 @@ int Main(int argc, char** argv) {
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &mask_source,
                   "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE (black = masked)");
+  flags.AddString("protocols", &protocols,
+                  "HOG: snapnav (the scene's whole grid; always run) and/or thesis-5x5 (thesis 3.1.4: the 5x5 positions "
+                  "around the home): AAE of the shipped configuration and of the thesis' at 20, 40 and 60 px cells under each");
   flags.AddBool("random-headings", &random_headings, "grid images at random headings (exercises the compass)");
   flags.AddInt("seed", &seed, "seed for headings, people and noise");
   flags.AddInt("cell", &o.cell, "override: cell size [px]");
@@ -214,6 +245,14 @@ int Main(int argc, char** argv) {
   if (!nav::ParseAlvVariant(alv)) throw glue::FlagError("--alv must be unit, weighted or scale, not '" + alv + "'");
   if (top_n < 0) throw glue::FlagError("--landmarks must be >= 0 (0: all)");
   if (input != "raw" && input != "panorama") throw glue::FlagError("--input must be raw or panorama");
+  bool thesis_5x5 = false;
+  for (const auto& p : glue::SplitList(protocols)) {
+    if (p == "thesis-5x5") thesis_5x5 = true;
+    else if (p != "snapnav") throw glue::FlagError("--protocols takes snapnav and thesis-5x5, not '" + p + "'");
+  }
+  if (thesis_5x5 && (compare || people_diagnosis || method != "hog")) {
+    throw glue::FlagError("--protocols thesis-5x5 is for HOG's single evaluation (--method hog)");
+  }
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
 
@@ -353,6 +392,47 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-homing: thesis configuration AAE " << Fixed(thesis_aae) << " deg (with current - home: "
             << Fixed(thesis_lambrinos_aae) << " deg)\n";
 
+  // The protocols side by side (issue 21): the shipped configuration and the thesis' at the
+  // thesis' 40-60 px cells and the shipped 20 px, over the whole grid and the thesis' 5x5.
+  struct ProtocolRow {
+    std::string key, label;
+    nav::HogHomingConfig config;
+    double snapnav = 0, thesis5 = 0;
+  };
+  std::vector<ProtocolRow> protocol_rows;
+  std::optional<SubGrid> five;
+  eval::GridResult five_result;
+  if (thesis_5x5) {
+    five = Thesis5x5(db, panos);
+    auto cell = [&](nav::HogHomingConfig c, int px) {
+      c.hog.cell_size_px = px;
+      if (c.hog.band_height_px > 0 && c.hog.band_height_px < px) c.hog.band_height_px = px;
+      if (c.hog.band_top_px + std::max(c.hog.band_height_px, px) > pm.height_px) c.hog.band_top_px = pm.height_px - px;
+      return c;
+    };
+    const std::string shipped = std::to_string(config.hog.cell_size_px) + " px";
+    nav::HogHomingConfig lambrinos = ThesisConfig(config);
+    lambrinos.alv.difference = nav::AlvDifference::kCurrentMinusHome;
+    protocol_rows = {{"configuration", "this configuration (" + shipped + " cells)", config},
+                     {"configuration_cell40", "this configuration at 40 px cells", cell(config, 40)},
+                     {"configuration_cell60", "this configuration at 60 px cells", cell(config, 60)},
+                     {"thesis_configuration", "thesis configuration (40 px, 8 bins, all, home - current)", ThesisConfig(config)},
+                     {"thesis_configuration_current_minus_home_cell20", "thesis configuration with current - home, 20 px cells",
+                      cell(lambrinos, 20)},
+                     {"thesis_configuration_current_minus_home", "thesis configuration with current - home, 40 px cells",
+                      lambrinos},
+                     {"thesis_configuration_current_minus_home_cell60", "thesis configuration with current - home, 60 px cells",
+                      cell(lambrinos, 60)}};
+    for (size_t k = 0; k < protocol_rows.size(); ++k) {
+      auto& r = protocol_rows[k];
+      r.snapnav = Aae(db, panos, r.config, pm, mask);
+      r.thesis5 = Aae(five->db, five->panos, r.config, pm, mask, k == 0 ? &five_result : nullptr);
+    }
+    std::cerr << "eval-homing: thesis 5x5 protocol (" << five_result.positions << " positions): AAE "
+              << Fixed(protocol_rows[0].thesis5) << " deg, thesis configuration " << Fixed(protocol_rows[3].thesis5)
+              << " deg (thesis 18.11 deg)\n";
+  }
+
   eval::ReturnResult returns;
   if (!no_return) {
     eval::HogMethod m(config, pm);
@@ -373,6 +453,10 @@ int Main(int argc, char** argv) {
        "vector_map.png");
   save(eval::DrawVectorMap(db, thesis_result, scene.name + " thesis configuration: AAE " + Fixed(thesis_aae, 1) + " deg"),
        "vector_map_thesis_config.png");
+  if (five) {
+    save(eval::DrawVectorMap(five->db, five_result, scene.name + " thesis 5x5 protocol: AAE " + Fixed(five_result.aae_deg, 1) + " deg"),
+         "vector_map_thesis_5x5.png");
+  }
 
   std::ostringstream report;
   report << "# Homing evaluation: " << scene.name << "\n\n"
@@ -385,7 +469,15 @@ int Main(int argc, char** argv) {
          << "| thesis configuration (40 px, 8 bins, all, home - current) | " << Fixed(thesis_aae) << " | | | |\n"
          << "| thesis configuration with current - home | " << Fixed(thesis_lambrinos_aae) << " | | | |\n"
          << "| thesis' own figure (3.1.4) | 18.11 | | | |\n\n"
-         << "Visual compass over the grid (parallax included): mean error " << Fixed(result.compass_mean_deg)
+         ;
+  if (five) {
+    report << "## Protocols (thesis 3.1.4 beside ours)\n\nsnapnav: every position of the scene's " << db.nx << "x" << db.ny
+           << " grid (" << result.positions << " positions); thesis-5x5: the 5x5 positions around the home (fig. 3.6, "
+           << five_result.positions << " positions), the same images.\n\n| configuration | snapnav AAE [deg] | thesis-5x5 AAE [deg] |\n|---|---|---|\n";
+    for (const auto& r : protocol_rows) report << "| " << r.label << " | " << Fixed(r.snapnav) << " | " << Fixed(r.thesis5) << " |\n";
+    report << "| thesis' own figure (3.1.4) | | 18.11 |\n\n";
+  }
+  report << "Visual compass over the grid (parallax included): mean error " << Fixed(result.compass_mean_deg)
          << " deg. On pure rotations at the home position (36 headings): median " << Fixed(rotation_median)
          << " deg, max " << Fixed(rotation_errors.back()) << " deg.\n\n";
 
@@ -593,6 +685,12 @@ int Main(int argc, char** argv) {
        << ",\n  \"thesis_configuration_aae_deg\": " << thesis_aae
        << ",\n  \"thesis_configuration_current_minus_home_aae_deg\": " << thesis_lambrinos_aae
        << ",\n  \"thesis_reported_aae_deg\": 18.11";
+  if (five) {
+    json << ",\n  \"protocols\": [\"snapnav\", \"thesis-5x5\"],\n  \"thesis_5x5_positions\": " << five_result.positions;
+    for (const auto& r : protocol_rows) {
+      json << ",\n  \"snapnav_" << r.key << "_aae_deg\": " << r.snapnav << ",\n  \"thesis_5x5_" << r.key << "_aae_deg\": " << r.thesis5;
+    }
+  }
   if (!no_return) {
     json << ",\n  \"return_ratio\": " << returns.ratio << ",\n  \"return_starts\": " << returns.starts
          << ",\n  \"return_successes\": " << returns.successes << ",\n  \"return_mean_path_ratio\": " << returns.mean_path_ratio
@@ -606,6 +704,10 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-homing: wrote " << (out / "summary.json").string() << ", report.md and " << figures.size()
             << " figures\n";
   std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
+  if (five) {
+    std::cout << "thesis_5x5_average_angular_error_deg " << Fixed(protocol_rows[0].thesis5) << "\n"
+              << "thesis_5x5_thesis_configuration_aae_deg " << Fixed(protocol_rows[3].thesis5) << "\n";
+  }
   if (!no_return) std::cout << "return_ratio " << Fixed(returns.ratio, 3) << "\n";
   return 0;
 }

@@ -73,7 +73,7 @@ int Main(int argc, char** argv) {
   std::string features, memories = "grid,route,random", measures = "bearing-smallest,bearing-ransac,count,vline";
   std::string filters = "on,off", pose_source = "truth", thresholds = "0.08,0.05,0.03", explore_measure = "bearing-smallest";
   int threads = 1, seed = 1;
-  std::string camera;
+  std::string camera, protocols = "snapnav";
   eval::LocalizationEvalOptions o;
   Overrides ov;
   glue::Flags flags("eval-localization",
@@ -97,6 +97,10 @@ int Main(int argc, char** argv) {
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &o.mask, "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE");
   flags.AddString("features", &features, "override [landmarks] method: sift | surf");
+  flags.AddString("protocols", &protocols,
+                  "snapnav (random off-grid test positions, the whole grid kept; always run) and/or leave-one-out "
+                  "(thesis 5.2.2 and 4.4: every grid image a query against the grid without its own cell)");
+  flags.AddInt("leave-one-out-stride", &o.leave_one_out_stride, "leave-one-out: every n-th grid image a query");
   flags.AddString("memories", &memories, "memories: grid, route, random (comma-separated)");
   flags.AddString("measures", &measures, "distance measures: bearing-smallest, bearing-ransac, count, vline");
   flags.AddString("filters", &filters, "distance filter settings: on, off");
@@ -143,6 +147,10 @@ int Main(int argc, char** argv) {
   if (pose_source != "truth" && pose_source != "odometry") throw glue::FlagError("--pose-source must be truth or odometry");
   if (threads < 1) throw glue::FlagError("--threads must be >= 1");
   o.memories = glue::SplitList(memories);
+  for (const auto& p : glue::SplitList(protocols)) {
+    if (p == "leave-one-out") o.leave_one_out = true;
+    else if (p != "snapnav") throw glue::FlagError("--protocols takes snapnav and leave-one-out, not '" + p + "'");
+  }
   o.measures = glue::SplitList(measures);
   o.filters.clear();
   for (const auto& f : glue::SplitList(filters)) {
@@ -218,6 +226,13 @@ int Main(int argc, char** argv) {
       std::cout << scene.name << " mean_localization_error_m " << eval::Fixed(def->errors.mean_m, 4)
                 << " max_localization_error_m " << eval::Fixed(def->errors.max_m, 4);
       if (thesis) std::cout << " thesis_configuration_mean_localization_error_m " << eval::Fixed(thesis->errors.mean_m, 4);
+      const auto* loo = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+      const auto* loo_near = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kNearestCell);
+      if (loo) std::cout << " leave_one_out_mean_localization_error_m " << eval::Fixed(loo->errors.mean_m, 4);
+      if (loo_near) std::cout << " leave_one_out_nearest_cell_mean_localization_error_m " << eval::Fixed(loo_near->errors.mean_m, 4);
+      if (loo) {
+        top << ",\n  \"" << scene.name << "_leave_one_out_mean_localization_error_m\": " << eval::Fixed(loo->errors.mean_m, 4);
+      }
       if (target) std::cout << " target " << eval::Fixed(*target, 2) << (def->errors.mean_m <= *target ? " met" : " MISSED");
       std::cout << "\n";
       if (target && def->errors.mean_m > *target) ++missed;

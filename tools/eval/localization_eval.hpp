@@ -121,6 +121,11 @@ struct LocalizationEvalOptions {
   uint64_t seed = 1;
   std::string save_test_panoramas_dir;  // non-empty: the test positions' panoramas as test_N.png there
   std::string mask = "none";            // self-occlusion mask of the raw images (homing_eval.hpp UseMask): none | truth | FILE
+  // The thesis' protocol beside ours (5.2.2 and the 169 locations of 4.4): every grid image (every
+  // leave_one_out_stride-th) is a query against the grid memory with its own cell removed, so the
+  // nearest cell is one grid spacing away. Needs the grid memory.
+  bool leave_one_out = false;
+  int leave_one_out_stride = 1;
   void Validate() const;                // throws std::invalid_argument
 };
 
@@ -166,6 +171,12 @@ struct LocalizationEvalResult {
   std::vector<EvalMemory> memories;
   std::vector<EvalTest> tests;
   std::vector<ConfigResult> results;
+  // The leave-one-out protocol (options.leave_one_out): memory "grid", one result per measure x
+  // filter x estimate over leave_one_out_queries grid images.
+  std::vector<ConfigResult> leave_one_out;
+  std::vector<nav::Pose2> leave_one_out_queries;
+  double leave_one_out_nearest_cell_m = 0;  // mean distance of a query to the nearest cell left in the memory
+  double tests_nearest_cell_m = 0;          // ... of snapnav's test positions to the nearest grid cell
   int views_made = 0;
   double extract_ms_per_view = 0;   // MakePlaceView
   double render_ms_per_view = 0;    // render + unwrap
@@ -175,6 +186,7 @@ struct LocalizationEvalResult {
   // (the same with the nearest cell); nullptr when not evaluated.
   const ConfigResult* Find(const std::string& memory, const std::string& measure, bool filter,
                            nav::PlaceEstimate estimate) const;
+  const ConfigResult* FindLeaveOneOut(const std::string& measure, bool filter, nav::PlaceEstimate estimate) const;
 };
 
 // Renders, explores, localizes. `progress` gets one line of text per step (and "\r" updates).
