@@ -12,6 +12,7 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include "grid_folder.hpp"
 #include "localization_eval.hpp"
 #include "sim_config_use.hpp"
 #include "report_text.hpp"
@@ -73,7 +74,7 @@ int Main(int argc, char** argv) {
   std::string features, memories = "grid,route,random", measures = "bearing-smallest,bearing-ransac,count,vline";
   std::string filters = "on,off", pose_source = "truth", thresholds = "0.08,0.05,0.03", explore_measure = "bearing-smallest";
   int threads = 1, seed = 1;
-  std::string camera, protocols = "snapnav";
+  std::string camera, protocols = "snapnav", grid_dir;
   eval::LocalizationEvalOptions o;
   Overrides ov;
   glue::Flags flags("eval-localization",
@@ -88,6 +89,9 @@ int Main(int argc, char** argv) {
                     "Writes report.md, results.csv, queries.csv, summary.json (mean_localization_error_m: bearing-\n"
                     "smallest, filter on, interpolated, grid memory) and figures into --out.");
   flags.AddString("scene", &scene_name, "scene name (config/scenes) or file");
+  flags.AddString("grid", &grid_dir,
+                  "a lab's own image grid instead of a scene: a folder as gridgen writes (positions.csv; raw images with "
+                  "a camera.ini [mirror], or panoramas of the sim config's [panorama]); the leave-one-out protocol over it");
   flags.AddString("scenes", &scenes, "several scenes (comma-separated): one sub-folder of --out each");
   flags.AddString("out", &out_dir, "output folder (required)");
   flags.AddString("config", &config_path, "place-cell config: [landmarks] [place_view] [vline] [sift] [surf] [matching] "
@@ -201,6 +205,24 @@ int Main(int argc, char** argv) {
   std::istringstream lines(options_text);
   for (std::string line; std::getline(lines, line);) std::cerr << "  " << line << "\n";
 
+  if (!grid_dir.empty()) {
+    if (!scenes.empty()) throw glue::FlagError("--grid and --scenes: one or the other");
+    const auto folder = eval::LoadGridFolder(grid_dir);
+    cv::Mat mask;
+    const auto panoramas = eval::GridFolderPanoramas(folder, o.camera.panorama, &mask);
+    std::vector<nav::Pose2> poses;
+    for (const auto& im : folder.images) poses.push_back(im.pose);
+    std::cerr << "eval-localization: grid folder " << grid_dir << ": " << poses.size() << " "
+              << (folder.raw ? "raw" : "panorama") << " images" << (mask.empty() ? "" : ", masked") << "\n";
+    const auto result = eval::RunGridFolderLocalization(grid_dir, poses, panoramas, mask, o, [&](const std::string& text, bool transient) {
+      std::cerr << "eval-localization: " << text << (transient ? "\r" : "\n") << std::flush;
+    });
+    eval::WriteGridFolderOutputs(result, o, out_dir, options_text);
+    const auto* def = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+    if (def) std::cout << "leave_one_out_mean_localization_error_m " << eval::Fixed(def->errors.mean_m, 4) << "\n";
+    std::cerr << "eval-localization: wrote " << (fs::path(out_dir) / "summary.json").string() << " and report.md\n";
+    return 0;
+  }
   const std::vector<std::string> scene_names = scenes.empty() ? std::vector<std::string>{scene_name} : glue::SplitList(scenes);
   if (scene_names.empty()) throw glue::FlagError("--scenes must name at least one scene");
   const fs::path out(out_dir);

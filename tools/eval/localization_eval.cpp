@@ -751,6 +751,53 @@ LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const L
   return result;
 }
 
+LocalizationEvalResult RunGridFolderLocalization(const std::string& name, const std::vector<nav::Pose2>& poses,
+                                                 const std::vector<cv::Mat>& panoramas, const cv::Mat& panorama_mask,
+                                                 const LocalizationEvalOptions& options,
+                                                 const std::function<void(const std::string&, bool)>& progress) {
+  options.Validate();
+  if (poses.size() != panoramas.size() || poses.size() < 2) {
+    throw std::invalid_argument("grid folder localization: at least 2 images, one pose each");
+  }
+  const auto t_start = Clock::now();
+  auto say = [&](const std::string& text, bool transient = false) {
+    if (progress) progress(text, transient);
+  };
+  LocalizationEvalResult result;
+  result.scene = name;
+  result.area.min = result.area.max = Xy(poses.front());
+  for (const auto& p : poses) {
+    result.area.min = result.area.min.cwiseMin(Xy(p));
+    result.area.max = result.area.max.cwiseMax(Xy(p));
+  }
+  EvalMemory m;
+  m.name = "grid";
+  m.description = "the grid folder " + name + ", " + std::to_string(poses.size()) + " images";
+  m.memory = std::make_unique<nav::PlaceCellMemory>(options.view, options.camera.panorama, options.vocabulary);
+  double extract_s = 0;
+  int64_t landmarks = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const auto t0 = Clock::now();
+    nav::PlaceView v = nav::MakePlaceView(panoramas[i], options.view, panorama_mask);
+    extract_s += Seconds(t0);
+    landmarks += v.landmarks.size();
+    m.memory->Add(poses[i], static_cast<int64_t>(i) * 2'000'000, std::move(v));
+    m.true_cell_poses.push_back(poses[i]);
+    if ((i + 1) % 10 == 0 || i + 1 == poses.size()) {
+      say("views " + std::to_string(i + 1) + "/" + std::to_string(poses.size()), i + 1 != poses.size());
+    }
+  }
+  m.explored_views = static_cast<int>(poses.size());
+  m.cells_per_m2 = result.area.area_m2() > 0 ? m.memory->size() / result.area.area_m2() : 0;
+  result.memories.push_back(std::move(m));
+  result.views_made = static_cast<int>(poses.size());
+  result.extract_ms_per_view = 1000 * extract_s / poses.size();
+  result.mean_landmarks = static_cast<double>(landmarks) / poses.size();
+  LeaveOneOut(options, say, &result);
+  result.total_seconds = Seconds(t_start);
+  return result;
+}
+
 // ---------------------------------------------------------------------------------------------
 cv::Mat DrawLocalizationMap(const LocalizationEvalResult& result, const EvalMemory& memory, const ConfigResult* config,
                             const std::string& title) {
@@ -1075,6 +1122,46 @@ std::vector<std::string> WriteLocalizationOutputs(const LocalizationEvalResult& 
   for (size_t i = 0; i < figures.size(); ++i) j << (i ? ", " : "") << JsonString(figures[i]);
   j << "]\n}\n";
   return figures;
+}
+
+void WriteGridFolderOutputs(const LocalizationEvalResult& r, const LocalizationEvalOptions& o, const std::string& out_dir,
+                            const std::string& options_text) {
+  fs::create_directories(out_dir);
+  const fs::path out(out_dir);
+  const ConfigResult* def = r.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+  const ConfigResult* near = r.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kNearestCell);
+  std::ostringstream md;
+  md << "# Place-cell localization: grid folder " << r.scene << "\n\n"
+     << "Leave-one-out (thesis 5.2.2): each of " << r.leave_one_out_queries.size() << " images a query against the "
+     << "others (its own removed; mean distance to the nearest other image " << Fixed(r.leave_one_out_nearest_cell_m, 3)
+     << " m). " << r.views_made << " views, " << Fixed(r.mean_landmarks, 0) << " landmarks each, MakePlaceView "
+     << Fixed(r.extract_ms_per_view, 1) << " ms per view. Run time " << Fixed(r.total_seconds, 0) << " s.\n\n"
+     << "| measure | filter | estimate | mean [m] | median | max | heading mean [deg] | ms/query | n/a |\n"
+     << "|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : r.leave_one_out) {
+    md << "| " << c.measure << " | " << OnOff(c.filter) << " | " << EstimateName(c.estimate) << " | "
+       << Fixed(c.errors.mean_m, 3) << " | " << Fixed(c.errors.median_m, 3) << " | " << Fixed(c.errors.max_m, 3) << " | "
+       << Fixed(c.errors.mean_heading_deg, 1) << " | " << Fixed(c.ms_per_query, 1) << " | " << c.failures << " |\n";
+  }
+  md << "| thesis' own figure (5.2.2, SIFT count measure, nearest cell) | | | 0.196 | | | | | |\n\n## Options\n\n```\n"
+     << options_text << "```\n";
+  std::ofstream(out / "report.md") << md.str();
+  std::ofstream j(out / "summary.json");
+  j << std::fixed << std::setprecision(4) << "{\n  \"grid\": " << JsonString(r.scene) << ",\n  \"images\": " << r.views_made
+    << ",\n  \"protocols\": [\"leave-one-out\"],\n  \"leave_one_out_queries\": " << r.leave_one_out_queries.size()
+    << ",\n  \"leave_one_out_mean_nearest_cell_distance_m\": " << r.leave_one_out_nearest_cell_m
+    << ",\n  \"prediction_sigma_m\": " << o.prediction_sigma_m << ",\n  \"seed\": " << o.seed;
+  if (def) {
+    j << ",\n  \"leave_one_out_mean_localization_error_m\": " << def->errors.mean_m
+      << ",\n  \"leave_one_out_max_localization_error_m\": " << def->errors.max_m;
+  }
+  if (near) j << ",\n  \"leave_one_out_thesis_configuration_mean_localization_error_m\": " << near->errors.mean_m;
+  for (const auto& c : r.leave_one_out) {
+    const std::string k = "leave_one_out_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
+    j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
+      << ",\n  \"" << k << "_failures\": " << c.failures;
+  }
+  j << ",\n  \"thesis_reported_mean_localization_error_m\": 0.1957\n}\n";
 }
 
 }  // namespace snapnav::eval

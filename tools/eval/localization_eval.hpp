@@ -193,6 +193,18 @@ struct LocalizationEvalResult {
 LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const LocalizationEvalOptions& options,
                                            const std::function<void(const std::string&, bool)>& progress = {});
 
+// A lab's own image grid (grid_folder.hpp): its images (as panoramas of options.camera.panorama,
+// with their mask) become the grid memory, and the leave-one-out protocol runs over them
+// (options.measures x options.filters). No rendering: options.camera's optics and the scene
+// options are not used.
+LocalizationEvalResult RunGridFolderLocalization(const std::string& name, const std::vector<nav::Pose2>& poses,
+                                                 const std::vector<cv::Mat>& panoramas, const cv::Mat& panorama_mask,
+                                                 const LocalizationEvalOptions& options,
+                                                 const std::function<void(const std::string&, bool)>& progress = {});
+// Its report.md and summary.json (leave_one_out_* keys as WriteLocalizationOutputs).
+void WriteGridFolderOutputs(const LocalizationEvalResult& result, const LocalizationEvalOptions& options,
+                            const std::string& out_dir, const std::string& options_text);
+
 // The target mean error of a scene (issue 6: indoor13 0.10 m, people11 0.15 m); nullopt for others.
 std::optional<double> TargetMeanErrorM(const std::string& scene);
 
