@@ -7,11 +7,14 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include <opencv2/imgproc.hpp>
 
+#include "grid_folder.hpp"
 #include "homing_eval.hpp"
+#include "sim_config_use.hpp"
 #include "landmark_compare.hpp"
 #include "people_diagnosis.hpp"
 #include "snapnav/glue/landmarks.hpp"
@@ -114,6 +117,33 @@ double Aae(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos, cons
   return r.aae_deg;
 }
 
+// The thesis' 3.1.4 protocol: the 5x5 positions of the grid around the home (fig. 3.6), the home
+// at its centre. Throws a FlagError when the home is less than 2 positions from the grid's edge.
+struct SubGrid {
+  eval::GridDatabase db;
+  std::vector<cv::Mat> panos;
+};
+SubGrid Thesis5x5(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos) {
+  const int hx = db.home_index % db.nx, hy = db.home_index / db.nx;
+  if (hx < 2 || hy < 2 || hx + 2 >= db.nx || hy + 2 >= db.ny) {
+    throw glue::FlagError("--protocols thesis-5x5 needs the home at least 2 grid positions from the grid's edge");
+  }
+  SubGrid s;
+  s.db.nx = s.db.ny = 5;
+  for (int iy = hy - 2; iy <= hy + 2; ++iy) {
+    for (int ix = hx - 2; ix <= hx + 2; ++ix) {
+      const int i = iy * db.nx + ix;
+      if (i == db.home_index) s.db.home_index = static_cast<int>(s.db.poses.size());
+      s.db.poses.push_back(db.poses[i]);
+      s.db.sensor.push_back(db.sensor[i]);
+      s.db.people.push_back(db.people[i]);
+      s.panos.push_back(panos[i]);
+    }
+  }
+  s.db.home = db.home;
+  return s;
+}
+
 plot::Axes MakeAxes(const std::string& title, const std::string& x_label, const std::string& y_label) {
   plot::Axes axes;
   axes.title = title;
@@ -128,6 +158,166 @@ std::string Fixed(double v, int digits = 2) {
   return s.str();
 }
 
+// The protocols side by side (issue 21): the shipped configuration and the thesis' at the
+// thesis' 40-60 px cells and the shipped 20 px, over the whole grid and the thesis' 5x5.
+struct ProtocolRow {
+  std::string key, label;
+  nav::HogHomingConfig config;
+  double snapnav = 0, thesis5 = 0;
+};
+struct Protocols {
+  std::vector<ProtocolRow> rows;  // rows[0]: the configuration under test, rows[3]: the thesis'
+  SubGrid five;
+  eval::GridResult five_result;   // rows[0] on the 5x5
+};
+Protocols CompareProtocols(const eval::GridDatabase& db, const std::vector<cv::Mat>& panos,
+                           const nav::HogHomingConfig& config, const nav::PanoramaModel& pm, const cv::Mat& mask) {
+  Protocols p;
+  p.five = Thesis5x5(db, panos);
+  auto cell = [&](nav::HogHomingConfig c, int px) {
+    c.hog.cell_size_px = px;
+    if (c.hog.band_height_px > 0 && c.hog.band_height_px < px) c.hog.band_height_px = px;
+    if (c.hog.band_top_px + std::max(c.hog.band_height_px, px) > pm.height_px) c.hog.band_top_px = pm.height_px - px;
+    return c;
+  };
+  const std::string shipped = std::to_string(config.hog.cell_size_px) + " px";
+  nav::HogHomingConfig lambrinos = ThesisConfig(config);
+  lambrinos.alv.difference = nav::AlvDifference::kCurrentMinusHome;
+  p.rows = {{"configuration", "this configuration (" + shipped + " cells)", config},
+            {"configuration_cell40", "this configuration at 40 px cells", cell(config, 40)},
+            {"configuration_cell60", "this configuration at 60 px cells", cell(config, 60)},
+            {"thesis_configuration", "thesis configuration (40 px, 8 bins, all, home - current)", ThesisConfig(config)},
+            {"thesis_configuration_current_minus_home_cell20", "thesis configuration with current - home, 20 px cells",
+             cell(lambrinos, 20)},
+            {"thesis_configuration_current_minus_home", "thesis configuration with current - home, 40 px cells", lambrinos},
+            {"thesis_configuration_current_minus_home_cell60", "thesis configuration with current - home, 60 px cells",
+             cell(lambrinos, 60)}};
+  for (size_t k = 0; k < p.rows.size(); ++k) {
+    auto& r = p.rows[k];
+    r.snapnav = Aae(db, panos, r.config, pm, mask);
+    r.thesis5 = Aae(p.five.db, p.five.panos, r.config, pm, mask, k == 0 ? &p.five_result : nullptr);
+  }
+  std::cerr << "eval-homing: thesis 5x5 protocol (" << p.five_result.positions << " positions): AAE "
+            << Fixed(p.rows[0].thesis5) << " deg, thesis configuration " << Fixed(p.rows[3].thesis5)
+            << " deg (thesis 18.11 deg)\n";
+  return p;
+}
+
+void WriteProtocols(std::ostream& report, const eval::GridDatabase& db, int positions, const Protocols& p) {
+  report << "## Protocols (thesis 3.1.4 beside ours)\n\nsnapnav: every position of the " << db.nx << "x" << db.ny
+         << " grid (" << positions << " positions); thesis-5x5: the 5x5 positions around the home (fig. 3.6, "
+         << p.five_result.positions << " positions), the same images.\n\n"
+         << "| configuration | snapnav AAE [deg] | thesis-5x5 AAE [deg] |\n|---|---|---|\n";
+  for (const auto& r : p.rows) report << "| " << r.label << " | " << Fixed(r.snapnav) << " | " << Fixed(r.thesis5) << " |\n";
+  report << "| thesis' own figure (3.1.4) | | 18.11 |\n\n";
+}
+
+void WriteProtocolsJson(std::ostream& json, const Protocols& p) {
+  json << ",\n  \"protocols\": [\"snapnav\", \"thesis-5x5\"],\n  \"thesis_5x5_positions\": " << p.five_result.positions;
+  for (const auto& r : p.rows) {
+    json << ",\n  \"snapnav_" << r.key << "_aae_deg\": " << r.snapnav << ",\n  \"thesis_5x5_" << r.key << "_aae_deg\": " << r.thesis5;
+  }
+}
+
+// eval homing --grid DIR: HOG homing over a lab's own image grid (grid_folder.hpp): AAE of the
+// configuration and the thesis', the protocols with --protocols thesis-5x5, the vector map. No
+// return runs and no rotation test (they render views the folder does not have).
+int RunGridFolder(const std::string& dir, const nav::HogHomingConfig& config, const nav::PanoramaModel& pm,
+                  const std::string& home_text, bool thesis_5x5, const fs::path& out) {
+  const auto folder = eval::LoadGridFolder(dir);
+  const std::string csv = (fs::path(dir) / "positions.csv").string();
+  if (!folder.complete()) {
+    throw std::runtime_error(csv + ": " + std::to_string(folder.images.size()) + " images for a " +
+                             std::to_string(folder.nx) + "x" + std::to_string(folder.ny) +
+                             " grid (the largest ix and iy): eval homing needs an image at every (ix, iy)");
+  }
+  cv::Mat mask;
+  const auto images = eval::GridFolderPanoramas(folder, pm, &mask);
+  eval::GridDatabase db;
+  db.nx = folder.nx;
+  db.ny = folder.ny;
+  db.poses.resize(folder.images.size());
+  db.sensor.resize(folder.images.size());
+  db.people.resize(folder.images.size());
+  db.more_sensor.resize(folder.images.size());
+  db.more_people.resize(folder.images.size());
+  std::vector<cv::Mat> panos(folder.images.size());
+  for (size_t k = 0; k < folder.images.size(); ++k) {
+    const auto& im = folder.images[k];
+    const int i = im.iy * db.nx + im.ix;
+    db.poses[i] = im.pose;
+    db.sensor[i] = images[k];
+    panos[i] = images[k];
+  }
+  db.home_index = (db.ny / 2) * db.nx + db.nx / 2;
+  if (!home_text.empty()) {
+    const auto parts = glue::SplitList(home_text);
+    if (parts.size() != 2) throw glue::FlagError("--home must be X,Y");
+    const Eigen::Vector2d home(std::stod(parts[0]), std::stod(parts[1]));
+    double best = 1e18;
+    for (size_t i = 0; i < db.poses.size(); ++i) {
+      const double d = (Eigen::Vector2d(db.poses[i].x_m, db.poses[i].y_m) - home).norm();
+      if (d < best) {
+        best = d;
+        db.home_index = static_cast<int>(i);
+      }
+    }
+    if (best > 0.01) throw glue::FlagError("--home " + home_text + " is " + Fixed(best, 3) + " m from the nearest image of " + csv);
+  }
+  db.home = db.poses[db.home_index];
+  std::cerr << "eval-homing: grid folder " << dir << ": " << folder.images.size() << " " << (folder.raw ? "raw" : "panorama")
+            << " images of " << folder.size.width << "x" << folder.size.height << ", " << db.nx << "x" << db.ny
+            << " grid, home (" << db.home.x_m << ", " << db.home.y_m << ")" << (mask.empty() ? "" : ", masked") << "\n";
+  eval::GridResult result, thesis_result;
+  Aae(db, panos, config, pm, mask, &result);
+  const double thesis_aae = Aae(db, panos, ThesisConfig(config), pm, mask, &thesis_result);
+  std::optional<Protocols> protocol;
+  if (thesis_5x5) protocol = CompareProtocols(db, panos, config, pm, mask);
+  fs::create_directories(out);
+  std::vector<std::string> figures;
+  auto save = [&](const cv::Mat& img, const std::string& name) {
+    plot::SavePng(img, (out / name).string());
+    figures.push_back(name);
+  };
+  const std::string name = fs::path(dir).filename().string().empty() ? dir : fs::path(dir).filename().string();
+  save(eval::DrawVectorMap(db, result, name + " hog: AAE " + Fixed(result.aae_deg, 1) + " deg"), "vector_map.png");
+  save(eval::DrawVectorMap(db, thesis_result, name + " thesis configuration: AAE " + Fixed(thesis_aae, 1) + " deg"),
+       "vector_map_thesis_config.png");
+  if (protocol) {
+    save(eval::DrawVectorMap(protocol->five.db, protocol->five_result,
+                             name + " thesis 5x5 protocol: AAE " + Fixed(protocol->five_result.aae_deg, 1) + " deg"),
+         "vector_map_thesis_5x5.png");
+  }
+  std::ostringstream report;
+  report << "# Homing evaluation: grid folder " << dir << "\n\n- configuration: " << Describe(config) << "\n- images: "
+         << folder.images.size() << (folder.raw ? " raw omni images, unwrapped with its camera.ini [mirror]" : " panoramas")
+         << (mask.empty() ? "" : ", masked") << "\n- home (" << db.home.x_m << ", " << db.home.y_m << ")\n\n"
+         << "| | AAE [deg] | median | max | positions without an answer |\n|---|---|---|---|---|\n"
+         << "| this configuration | " << Fixed(result.aae_deg) << " | " << Fixed(result.median_deg) << " | "
+         << Fixed(result.max_deg) << " | " << result.failures << " |\n"
+         << "| thesis configuration (40 px, 8 bins, all, home - current) | " << Fixed(thesis_aae) << " | | | |\n\n"
+         << "Visual compass over the grid: mean error " << Fixed(result.compass_mean_deg) << " deg.\n\n";
+  if (protocol) WriteProtocols(report, db, result.positions, *protocol);
+  std::ofstream(out / "report.md") << report.str();
+  std::ofstream json(out / "summary.json");
+  json << std::fixed << std::setprecision(4) << "{\n  \"grid\": \"" << dir << "\",\n  \"input\": \""
+       << (folder.raw ? "raw" : "panorama") << "\",\n  \"grid_nx\": " << db.nx << ",\n  \"grid_ny\": " << db.ny
+       << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
+       << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
+       << ",\n  \"average_angular_error_deg\": " << result.aae_deg << ",\n  \"median_angular_error_deg\": " << result.median_deg
+       << ",\n  \"max_angular_error_deg\": " << result.max_deg << ",\n  \"positions_without_answer\": " << result.failures
+       << ",\n  \"compass_mean_error_deg\": " << result.compass_mean_deg
+       << ",\n  \"thesis_configuration_aae_deg\": " << thesis_aae << ",\n  \"thesis_reported_aae_deg\": 18.11";
+  if (protocol) WriteProtocolsJson(json, *protocol);
+  json << ",\n  \"figures\": [";
+  for (size_t i = 0; i < figures.size(); ++i) json << (i ? ", " : "") << "\"" << figures[i] << "\"";
+  json << "]\n}\n";
+  std::cerr << "eval-homing: wrote " << (out / "summary.json").string() << ", report.md and " << figures.size() << " figures\n";
+  std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
+  if (protocol) std::cout << "thesis_5x5_average_angular_error_deg " << Fixed(protocol->rows[0].thesis5) << "\n";
+  return 0;
+}
+
 int Main(int argc, char** argv) {
   std::string scene_name = "indoor13", method = "hog", home_text, out_dir, input = "raw";
   std::string config_path = SNAPNAV_CONFIG_DIR "/homing.ini", sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini";
@@ -139,7 +329,7 @@ int Main(int argc, char** argv) {
   bool people_diagnosis = false, return_best_only = false;
   int home_frames = -1, current_frames = -1, return_stride = 1;
   double home_interval_s = -1, current_interval_s = -1;
-  std::string fusion, camera, mask_source = "none";
+  std::string fusion, camera, mask_source = "none", protocols = "snapnav", grid_dir;
   double min_fraction = -1;
   eval::FrameProtocol fused{9, 1.0, 3, 0.5};
   int seed = 1;
@@ -151,6 +341,9 @@ int Main(int argc, char** argv) {
                     "descriptor range, by noise, entropy by cell size) and, with --sweep, a parameter table.\n"
                     "Writes OUT/summary.json, PNGs, and OUT/report.md.");
   flags.AddString("scene", &scene_name, "scene name (config/scenes) or file");
+  flags.AddString("grid", &grid_dir,
+                  "HOG over a lab's own image grid instead of a scene: a folder as gridgen writes (positions.csv; raw "
+                  "images with a camera.ini [mirror], or panoramas of --config's [panorama]); AAE, vector map, --protocols");
   flags.AddString("method", &method, "homing method: hog | vline | sift | surf (feature landmarks, thesis 4.1-4.3)");
   flags.AddString("alv", &alv, "landmark methods: unit | weighted | scale ALV");
   flags.AddInt("landmarks", &top_n, "landmark methods: use the N best matches (thesis 3, 5, 20); 0: all");
@@ -180,11 +373,16 @@ int Main(int argc, char** argv) {
   flags.AddString("counts", &counts, "--compare: landmark counts (N or all)");
   flags.AddString("home", &home_text, "home position X,Y [m] (a grid position; default: the grid centre)");
   flags.AddString("config", &config_path, "homing config (its [hog], [compass], [alv], [preprocess])");
-  flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama)");
+  flags.AddString("sim-config", &sim_config_path,
+                  "simulator config: its camera, [mirror], [panorama], [effects] and seed apply; a changed key it does not "
+                  "use is refused");
   flags.AddString("input", &input, "raw (render catadioptric images and unwrap) or panorama (render panoramas)");
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &mask_source,
                   "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE (black = masked)");
+  flags.AddString("protocols", &protocols,
+                  "HOG: snapnav (the scene's whole grid; always run) and/or thesis-5x5 (thesis 3.1.4: the 5x5 positions "
+                  "around the home): AAE of the shipped configuration and of the thesis' at 20, 40 and 60 px cells under each");
   flags.AddBool("random-headings", &random_headings, "grid images at random headings (exercises the compass)");
   flags.AddInt("seed", &seed, "seed for headings, people and noise");
   flags.AddInt("cell", &o.cell, "override: cell size [px]");
@@ -211,10 +409,21 @@ int Main(int argc, char** argv) {
   if (!nav::ParseAlvVariant(alv)) throw glue::FlagError("--alv must be unit, weighted or scale, not '" + alv + "'");
   if (top_n < 0) throw glue::FlagError("--landmarks must be >= 0 (0: all)");
   if (input != "raw" && input != "panorama") throw glue::FlagError("--input must be raw or panorama");
+  bool thesis_5x5 = false;
+  for (const auto& p : glue::SplitList(protocols)) {
+    if (p == "thesis-5x5") thesis_5x5 = true;
+    else if (p != "snapnav") throw glue::FlagError("--protocols takes snapnav and thesis-5x5, not '" + p + "'");
+  }
+  if (thesis_5x5 && (compare || people_diagnosis || method != "hog")) {
+    throw glue::FlagError("--protocols thesis-5x5 is for HOG's single evaluation (--method hog)");
+  }
   fs::create_directories(out_dir);
   const fs::path out(out_dir);
 
-  auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  const auto sim_ini = glue::IniFile::Load(sim_config_path);
+  auto sim = processes::SimConfig::FromIni(sim_ini, "");
+  // All of the file applies ([effects] on every rendered image) or it is refused.
+  eval::RefuseUnusedSimKeys(sim_ini, glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini"), eval::HomingSimConfigUse());
   if (!camera.empty()) {
     try {
       sim.camera.optics = nav::sim::CameraOpticsPreset(camera);
@@ -234,9 +443,17 @@ int Main(int argc, char** argv) {
                             std::to_string(pm.width_px) + "x" + std::to_string(pm.height_px));
   }
   const nav::HogHomingConfig config = Apply(homing.homing, o);
+  if (!grid_dir.empty()) {
+    if (compare || people_diagnosis || method != "hog" || sweep || mask_source != "none" || random_headings) {
+      throw glue::FlagError("--grid is for HOG's evaluation (--method hog; no --compare, --people-diagnosis, --sweep, "
+                            "--mask or --random-headings: the folder's camera.ini [mirror] mask and headings apply)");
+    }
+    return RunGridFolder(grid_dir, config, homing.panorama, home_text, thesis_5x5, out);
+  }
   if (compare || people_diagnosis || method != "hog") {
     eval::LandmarkEvalSetup setup;
     setup.camera = sim.camera;
+    setup.effects = sim.effects;
     setup.hog = config;
     setup.extractor = glue::ReadLandmarkExtractor(glue::IniFile::Load(landmarks_config_path));
     setup.keypoint_homing = homing.keypoint_homing;
@@ -300,6 +517,7 @@ int Main(int argc, char** argv) {
   grid.input = input == "raw" ? CameraPipeline::Input::kRaw : CameraPipeline::Input::kPanorama;
   CameraPipeline pipeline;
   pipeline.input = grid.input;
+  pipeline.effects = sim.effects;
 
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, input "
             << input << ", " << Describe(config) << "\n";
@@ -345,6 +563,10 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-homing: thesis configuration AAE " << Fixed(thesis_aae) << " deg (with current - home: "
             << Fixed(thesis_lambrinos_aae) << " deg)\n";
 
+  // The protocols side by side (issue 21).
+  std::optional<Protocols> protocol;
+  if (thesis_5x5) protocol = CompareProtocols(db, panos, config, pm, mask);
+
   eval::ReturnResult returns;
   if (!no_return) {
     eval::HogMethod m(config, pm);
@@ -365,6 +587,11 @@ int Main(int argc, char** argv) {
        "vector_map.png");
   save(eval::DrawVectorMap(db, thesis_result, scene.name + " thesis configuration: AAE " + Fixed(thesis_aae, 1) + " deg"),
        "vector_map_thesis_config.png");
+  if (protocol) {
+    save(eval::DrawVectorMap(protocol->five.db, protocol->five_result,
+                             scene.name + " thesis 5x5 protocol: AAE " + Fixed(protocol->five_result.aae_deg, 1) + " deg"),
+         "vector_map_thesis_5x5.png");
+  }
 
   std::ostringstream report;
   report << "# Homing evaluation: " << scene.name << "\n\n"
@@ -377,7 +604,9 @@ int Main(int argc, char** argv) {
          << "| thesis configuration (40 px, 8 bins, all, home - current) | " << Fixed(thesis_aae) << " | | | |\n"
          << "| thesis configuration with current - home | " << Fixed(thesis_lambrinos_aae) << " | | | |\n"
          << "| thesis' own figure (3.1.4) | 18.11 | | | |\n\n"
-         << "Visual compass over the grid (parallax included): mean error " << Fixed(result.compass_mean_deg)
+         ;
+  if (protocol) WriteProtocols(report, db, result.positions, *protocol);
+  report << "Visual compass over the grid (parallax included): mean error " << Fixed(result.compass_mean_deg)
          << " deg. On pure rotations at the home position (36 headings): median " << Fixed(rotation_median)
          << " deg, max " << Fixed(rotation_errors.back()) << " deg.\n\n";
 
@@ -495,6 +724,7 @@ int Main(int argc, char** argv) {
         const auto other = eval::RenderGrid(s, r, g);
         CameraPipeline p;
         p.input = CameraPipeline::Input::kPanorama;
+        p.effects = sim.effects;
         for (const auto& img : other.sensor) images.push_back(r.ToPanorama(img, p));
       }
       plot::Series series{s.name, {}, {}};
@@ -569,7 +799,10 @@ int Main(int argc, char** argv) {
   std::ofstream json(out / "summary.json");
   json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"method\": \"" << method
        << "\",\n  \"input\": \"" << input << "\",\n  \"camera\": \"" << sim.camera_preset << "\",\n  \"mask\": \""
-       << mask_source << "\",\n  \"masked_fraction\": " << nav::MaskedFraction(mask) << ",\n  \"random_headings\": " << (random_headings ? "true" : "false")
+       << mask_source << "\",\n  \"effects\": {\"blur_sigma_px\": " << pipeline.effects.blur_sigma_px
+       << ", \"noise_sigma\": " << pipeline.effects.noise_sigma << ", \"salt_pepper_fraction\": "
+       << pipeline.effects.salt_pepper_fraction << ", \"illumination_gain\": " << pipeline.effects.gain
+       << ", \"illumination_offset\": " << pipeline.effects.offset << "},\n  \"masked_fraction\": " << nav::MaskedFraction(mask) << ",\n  \"random_headings\": " << (random_headings ? "true" : "false")
        << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
        << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
        << ",\n  \"average_angular_error_deg\": " << result.aae_deg
@@ -581,6 +814,7 @@ int Main(int argc, char** argv) {
        << ",\n  \"thesis_configuration_aae_deg\": " << thesis_aae
        << ",\n  \"thesis_configuration_current_minus_home_aae_deg\": " << thesis_lambrinos_aae
        << ",\n  \"thesis_reported_aae_deg\": 18.11";
+  if (protocol) WriteProtocolsJson(json, *protocol);
   if (!no_return) {
     json << ",\n  \"return_ratio\": " << returns.ratio << ",\n  \"return_starts\": " << returns.starts
          << ",\n  \"return_successes\": " << returns.successes << ",\n  \"return_mean_path_ratio\": " << returns.mean_path_ratio
@@ -594,6 +828,10 @@ int Main(int argc, char** argv) {
   std::cerr << "eval-homing: wrote " << (out / "summary.json").string() << ", report.md and " << figures.size()
             << " figures\n";
   std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
+  if (protocol) {
+    std::cout << "thesis_5x5_average_angular_error_deg " << Fixed(protocol->rows[0].thesis5) << "\n"
+              << "thesis_5x5_thesis_configuration_aae_deg " << Fixed(protocol->rows[3].thesis5) << "\n";
+  }
   if (!no_return) std::cout << "return_ratio " << Fixed(returns.ratio, 3) << "\n";
   return 0;
 }

@@ -12,7 +12,9 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include "grid_folder.hpp"
 #include "localization_eval.hpp"
+#include "sim_config_use.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
@@ -72,7 +74,7 @@ int Main(int argc, char** argv) {
   std::string features, memories = "grid,route,random", measures = "bearing-smallest,bearing-ransac,count,vline";
   std::string filters = "on,off", pose_source = "truth", thresholds = "0.08,0.05,0.03", explore_measure = "bearing-smallest";
   int threads = 1, seed = 1;
-  std::string camera;
+  std::string camera, protocols = "snapnav", grid_dir;
   eval::LocalizationEvalOptions o;
   Overrides ov;
   glue::Flags flags("eval-localization",
@@ -87,14 +89,22 @@ int Main(int argc, char** argv) {
                     "Writes report.md, results.csv, queries.csv, summary.json (mean_localization_error_m: bearing-\n"
                     "smallest, filter on, interpolated, grid memory) and figures into --out.");
   flags.AddString("scene", &scene_name, "scene name (config/scenes) or file");
+  flags.AddString("grid", &grid_dir,
+                  "a lab's own image grid instead of a scene: a folder as gridgen writes (positions.csv; raw images with "
+                  "a camera.ini [mirror], or panoramas of the sim config's [panorama]); the leave-one-out protocol over it");
   flags.AddString("scenes", &scenes, "several scenes (comma-separated): one sub-folder of --out each");
   flags.AddString("out", &out_dir, "output folder (required)");
   flags.AddString("config", &config_path, "place-cell config: [landmarks] [place_view] [vline] [sift] [surf] [matching] "
                                           "[measure] [distance_filter] [localizer] [vocabulary]");
-  flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama, effects, robot noise)");
+  flags.AddString("sim-config", &sim_config_path, "simulator config: its camera, [mirror], [panorama], [effects], seed and robot noise apply; a changed key "
+                  "it does not use is refused");
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &o.mask, "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE");
   flags.AddString("features", &features, "override [landmarks] method: sift | surf");
+  flags.AddString("protocols", &protocols,
+                  "snapnav (random off-grid test positions, the whole grid kept; always run) and/or leave-one-out "
+                  "(thesis 5.2.2 and 4.4: every grid image a query against the grid without its own cell)");
+  flags.AddInt("leave-one-out-stride", &o.leave_one_out_stride, "leave-one-out: every n-th grid image a query");
   flags.AddString("memories", &memories, "memories: grid, route, random (comma-separated)");
   flags.AddString("measures", &measures, "distance measures: bearing-smallest, bearing-ransac, count, vline");
   flags.AddString("filters", &filters, "distance filter settings: on, off");
@@ -141,6 +151,10 @@ int Main(int argc, char** argv) {
   if (pose_source != "truth" && pose_source != "odometry") throw glue::FlagError("--pose-source must be truth or odometry");
   if (threads < 1) throw glue::FlagError("--threads must be >= 1");
   o.memories = glue::SplitList(memories);
+  for (const auto& p : glue::SplitList(protocols)) {
+    if (p == "leave-one-out") o.leave_one_out = true;
+    else if (p != "snapnav") throw glue::FlagError("--protocols takes snapnav and leave-one-out, not '" + p + "'");
+  }
   o.measures = glue::SplitList(measures);
   o.filters.clear();
   for (const auto& f : glue::SplitList(filters)) {
@@ -153,7 +167,9 @@ int Main(int argc, char** argv) {
   o.seed = static_cast<uint64_t>(seed);
   cv::setNumThreads(threads);
 
-  const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
+  const auto sim_ini = glue::IniFile::Load(sim_config_path);
+  const auto sim = processes::SimConfig::FromIni(sim_ini, "");
+  eval::RefuseUnusedSimKeys(sim_ini, glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini"), eval::LocalizationSimConfigUse());
   o.camera = sim.camera;
   if (!camera.empty()) {
     try {
@@ -189,6 +205,24 @@ int Main(int argc, char** argv) {
   std::istringstream lines(options_text);
   for (std::string line; std::getline(lines, line);) std::cerr << "  " << line << "\n";
 
+  if (!grid_dir.empty()) {
+    if (!scenes.empty()) throw glue::FlagError("--grid and --scenes: one or the other");
+    const auto folder = eval::LoadGridFolder(grid_dir);
+    cv::Mat mask;
+    const auto panoramas = eval::GridFolderPanoramas(folder, o.camera.panorama, &mask);
+    std::vector<nav::Pose2> poses;
+    for (const auto& im : folder.images) poses.push_back(im.pose);
+    std::cerr << "eval-localization: grid folder " << grid_dir << ": " << poses.size() << " "
+              << (folder.raw ? "raw" : "panorama") << " images" << (mask.empty() ? "" : ", masked") << "\n";
+    const auto result = eval::RunGridFolderLocalization(grid_dir, poses, panoramas, mask, o, [&](const std::string& text, bool transient) {
+      std::cerr << "eval-localization: " << text << (transient ? "\r" : "\n") << std::flush;
+    });
+    eval::WriteGridFolderOutputs(result, o, out_dir, options_text);
+    const auto* def = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+    if (def) std::cout << "leave_one_out_mean_localization_error_m " << eval::Fixed(def->errors.mean_m, 4) << "\n";
+    std::cerr << "eval-localization: wrote " << (fs::path(out_dir) / "summary.json").string() << " and report.md\n";
+    return 0;
+  }
   const std::vector<std::string> scene_names = scenes.empty() ? std::vector<std::string>{scene_name} : glue::SplitList(scenes);
   if (scene_names.empty()) throw glue::FlagError("--scenes must name at least one scene");
   const fs::path out(out_dir);
@@ -214,6 +248,13 @@ int Main(int argc, char** argv) {
       std::cout << scene.name << " mean_localization_error_m " << eval::Fixed(def->errors.mean_m, 4)
                 << " max_localization_error_m " << eval::Fixed(def->errors.max_m, 4);
       if (thesis) std::cout << " thesis_configuration_mean_localization_error_m " << eval::Fixed(thesis->errors.mean_m, 4);
+      const auto* loo = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+      const auto* loo_near = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kNearestCell);
+      if (loo) std::cout << " leave_one_out_mean_localization_error_m " << eval::Fixed(loo->errors.mean_m, 4);
+      if (loo_near) std::cout << " leave_one_out_nearest_cell_mean_localization_error_m " << eval::Fixed(loo_near->errors.mean_m, 4);
+      if (loo) {
+        top << ",\n  \"" << scene.name << "_leave_one_out_mean_localization_error_m\": " << eval::Fixed(loo->errors.mean_m, 4);
+      }
       if (target) std::cout << " target " << eval::Fixed(*target, 2) << (def->errors.mean_m <= *target ? " met" : " MISSED");
       std::cout << "\n";
       if (target && def->errors.mean_m > *target) ++missed;

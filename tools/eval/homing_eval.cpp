@@ -188,8 +188,9 @@ GridResult EvaluateFrames(const GridDatabase& db, const std::vector<std::vector<
     if (e) {
       world = nav::WrapAngle(e->direction_rad + pose.theta_rad);
       error = std::abs(nav::WrapAngle(world - truth));
-      // The compass reports the heading of the current view relative to home (heading 0).
-      compass_error = std::abs(nav::WrapAngle(e->compass_rotation_rad - pose.theta_rad));
+      // The compass reports the heading of the current view relative to home (heading 0 in a
+      // rendered grid; a lab's grid folder has its own).
+      compass_error = std::abs(nav::WrapAngle(e->compass_rotation_rad - (pose.theta_rad - db.home.theta_rad)));
       compass.push_back(compass_error);
     } else {
       ++r.failures;

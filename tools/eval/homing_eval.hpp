@@ -127,6 +127,9 @@ struct GridOptions {
   bool random_headings = false;         // else heading 0 everywhere (the home is always heading 0)
   uint64_t seed = 1;
   CameraPipeline::Input input = CameraPipeline::Input::kRaw;
+  // Image effects (the sim config's [effects]) of the panoramas made from the database: RenderGrid
+  // keeps the sensor images clean, the callers' CameraPipeline applies these.
+  nav::sim::ImageEffectsOptions effects;
   // Frames per position: at home, and at the other positions. The first frame of every position
   // does not depend on these (the extra frames walk a copy of the crowd).
   FrameProtocol frames;

@@ -65,6 +65,7 @@ GridOptions MakeGridOptions(const LandmarkEvalSetup& setup, const FrameProtocol&
   GridOptions grid;
   grid.seed = setup.seed;
   grid.input = setup.input;
+  grid.effects = setup.effects;
   grid.frames = frames;
   grid.random_headings = setup.random_headings;
   return grid;
@@ -134,6 +135,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   if (!no_return) {
     CameraPipeline pipeline;
     pipeline.input = setup.input;
+    pipeline.effects = setup.effects;
     LandmarkMethod live(extractor, homing, setup.camera.panorama, nullptr, setup.fusion);
     live.SetMask(mask);
     returns = EvaluateReturn(g.db, live, renderer, pipeline,
@@ -195,6 +197,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
                                                     nav::LandmarkMethod::kSurf};
   CameraPipeline pipeline;
   pipeline.input = setup.input;
+  pipeline.effects = setup.effects;
   std::vector<Row> rows;
   std::vector<std::string> figures;
   std::ostringstream md;

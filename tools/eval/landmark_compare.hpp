@@ -17,6 +17,7 @@ namespace snapnav::eval {
 
 struct LandmarkEvalSetup {
   nav::sim::OmniCameraOptions camera;
+  nav::sim::ImageEffectsOptions effects;          // the sim config's [effects], on every view
   nav::HogHomingConfig hog;                       // the HOG row of the comparison
   nav::LandmarkExtractorConfig extractor;         // method-independent parts; method set per row
   nav::LandmarkHomingConfig keypoint_homing, vline_homing;

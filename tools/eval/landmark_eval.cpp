@@ -90,6 +90,7 @@ Grid RenderScene(const nav::sim::Scene& scene, const GridOptions& options, ViewR
   g.scene = scene;
   CameraPipeline pipeline;
   pipeline.input = options.input;
+  pipeline.effects = options.effects;
   g.db = RenderGrid(scene, renderer, options, progress);
   for (size_t i = 0; i < g.db.sensor.size(); ++i) {
     g.panos.push_back(renderer.ToPanorama(g.db.sensor[i], pipeline));

@@ -354,6 +354,10 @@ void LocalizationEvalOptions::Validate() const {
     if (!(t > 0)) throw std::invalid_argument("thresholds must be positive");
   }
   if (!(people_dt_s > 0)) throw std::invalid_argument("people_dt_s must be positive");
+  if (leave_one_out && std::find(memories.begin(), memories.end(), "grid") == memories.end()) {
+    throw std::invalid_argument("the leave-one-out protocol needs the grid memory (memories: grid)");
+  }
+  if (leave_one_out_stride < 1) throw std::invalid_argument("leave_one_out_stride must be >= 1");
 }
 
 std::string ConfigResult::Label() const {
@@ -364,6 +368,14 @@ const ConfigResult* LocalizationEvalResult::Find(const std::string& memory, cons
                                                  nav::PlaceEstimate estimate) const {
   for (const auto& r : results) {
     if (r.memory == memory && r.measure == measure && r.filter == filter && r.estimate == estimate) return &r;
+  }
+  return nullptr;
+}
+
+const ConfigResult* LocalizationEvalResult::FindLeaveOneOut(const std::string& measure, bool filter,
+                                                            nav::PlaceEstimate estimate) const {
+  for (const auto& r : leave_one_out) {
+    if (r.measure == measure && r.filter == filter && r.estimate == estimate) return &r;
   }
   return nullptr;
 }
@@ -395,6 +407,127 @@ std::string DescribeOptions(const LocalizationEvalOptions& o) {
   s << "\nrobot: heading drift " << o.drive.heading_drift_deg_per_m << " deg/m, odometry noise "
     << o.drive.odometry_linear_noise_frac << " (distance), " << o.drive.odometry_angular_noise_frac << " (turn)\n";
   return s.str();
+}
+
+// The thesis' leave-one-out protocol (5.2.2; the 169 locations of 4.4 on a 13x13 grid): each grid
+// image is a query against the grid memory without its own cell (a memory of the other cells,
+// its vocabulary trained on them), so the nearest cell is one grid spacing away. The distance
+// filter gets the truth + N(0, prediction_sigma^2) per axis as the snapnav protocol's queries.
+static void LeaveOneOut(const LocalizationEvalOptions& options, const std::function<void(const std::string&, bool)>& say,
+                 LocalizationEvalResult* result) {
+  const EvalMemory* grid = nullptr;
+  for (const auto& m : result->memories) {
+    if (m.name == "grid") grid = &m;
+  }
+  if (!grid) throw std::invalid_argument("the leave-one-out protocol needs the grid memory");
+  const auto& cells = grid->memory->cells();
+  std::mt19937_64 rng(options.seed + 43);
+  std::normal_distribution<double> noise(0.0, options.prediction_sigma_m);
+  std::vector<int> queries;
+  std::vector<Eigen::Vector2d> predicted;
+  for (int q = 0; q < static_cast<int>(cells.size()); q += options.leave_one_out_stride) {
+    queries.push_back(q);
+    const double dx = options.prediction_sigma_m > 0 ? noise(rng) : 0.0;
+    const double dy = options.prediction_sigma_m > 0 ? noise(rng) : 0.0;
+    predicted.push_back(Xy(cells[q].pose) + Eigen::Vector2d(dx, dy));
+    result->leave_one_out_queries.push_back(cells[q].pose);
+  }
+  struct Acc {
+    ConfigResult nearest, interp;
+    nav::LocalizerOptions lo;
+    std::vector<double> heading_errors;
+    double seconds = 0, candidates = 0;
+  };
+  std::vector<Acc> accs;
+  for (const auto& measure_name : options.measures) {
+    const auto variant = *ParseMeasureVariant(measure_name);
+    for (bool filter : options.filters) {
+      Acc a;
+      a.lo = options.localizer;
+      a.lo.measure.measure = variant.measure;
+      a.lo.measure.refinement = variant.refinement;
+      a.lo.filter.enabled = filter;
+      a.lo.estimate = nav::PlaceEstimate::kInterpolated;
+      for (auto* r : {&a.nearest, &a.interp}) {
+        r->memory = "grid";
+        r->measure = variant.name;
+        r->filter = filter;
+        r->cells = static_cast<int>(cells.size()) - 1;
+        r->cells_per_m2 = r->cells / result->area.area_m2();
+      }
+      a.nearest.estimate = nav::PlaceEstimate::kNearestCell;
+      a.interp.estimate = nav::PlaceEstimate::kInterpolated;
+      accs.push_back(std::move(a));
+    }
+  }
+  const auto t0 = Clock::now();
+  for (size_t k = 0; k < queries.size(); ++k) {
+    const int q = queries[k];
+    nav::PlaceCellMemory memory(options.view, options.camera.panorama, options.vocabulary);
+    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
+      if (i != q) memory.Add(cells[i].pose, cells[i].utime, cells[i].view);
+    }
+    memory.BuildIndex();
+    const nav::Pose2& truth = cells[q].pose;
+    for (auto& a : accs) {
+      const std::optional<nav::Pose2> pred =
+          a.lo.filter.enabled ? std::optional<nav::Pose2>(nav::Pose2{predicted[k].x(), predicted[k].y(), truth.theta_rad})
+                              : std::nullopt;
+      const auto tq = Clock::now();
+      const auto loc = memory.Localize(cells[q].view, pred, a.lo);
+      a.seconds += Seconds(tq);
+      Eigen::Vector2d near_xy = predicted[k], interp_xy = predicted[k];
+      double heading_error = kNaN;
+      if (loc) {
+        near_xy = Xy(memory.cell(loc->cell).pose);
+        interp_xy = Xy(loc->pose);
+        heading_error = nav::WrapAngle(loc->pose.theta_rad - truth.theta_rad);
+        a.candidates += loc->candidates;
+      } else {
+        ++a.nearest.failures;
+        ++a.interp.failures;
+      }
+      a.heading_errors.push_back(heading_error);
+      a.nearest.estimates.push_back(near_xy);
+      a.interp.estimates.push_back(interp_xy);
+      a.nearest.position_errors_m.push_back((near_xy - Xy(truth)).norm());
+      a.interp.position_errors_m.push_back((interp_xy - Xy(truth)).norm());
+    }
+    if (say && ((k + 1) % 10 == 0 || k + 1 == queries.size())) {
+      say("leave-one-out queries " + std::to_string(k + 1) + "/" + std::to_string(queries.size()), k + 1 != queries.size());
+    }
+  }
+  for (auto& a : accs) {
+    const int answered = static_cast<int>(queries.size()) - a.interp.failures;
+    for (auto* r : {&a.nearest, &a.interp}) {
+      r->errors = Summarize(r->position_errors_m, a.heading_errors);
+      r->ms_per_query = 1000 * a.seconds / queries.size();
+      r->mean_candidates = answered ? a.candidates / answered : 0;
+    }
+    if (say) {
+      say("leave-one-out " + a.interp.measure + (a.interp.filter ? " filter" : " no filter") + ": mean error " +
+              Fixed(a.interp.errors.mean_m, 3) + " m interpolated, " + Fixed(a.nearest.errors.mean_m, 3) + " m nearest",
+          false);
+    }
+    result->leave_one_out.push_back(std::move(a.nearest));
+    result->leave_one_out.push_back(std::move(a.interp));
+  }
+  // How far each query is from the nearest cell it may find: the other grid cells; for snapnav's
+  // test positions, every grid cell.
+  auto nearest = [&](const Eigen::Vector2d& p, int skip) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
+      if (i != skip) best = std::min(best, (Xy(cells[i].pose) - p).norm());
+    }
+    return best;
+  };
+  double sum = 0;
+  for (int q : queries) sum += nearest(Xy(cells[q].pose), q);
+  result->leave_one_out_nearest_cell_m = sum / queries.size();
+  sum = 0;
+  for (const auto& t : result->tests) sum += nearest(Xy(t.truth), -1);
+  result->tests_nearest_cell_m = result->tests.empty() ? 0 : sum / result->tests.size();
+  if (say) say("leave-one-out: " + std::to_string(queries.size()) + " queries in " + Fixed(Seconds(t0), 0) + " s", false);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -613,6 +746,54 @@ LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const L
       }
     }
   }
+  if (options.leave_one_out) LeaveOneOut(options, say, &result);
+  result.total_seconds = Seconds(t_start);
+  return result;
+}
+
+LocalizationEvalResult RunGridFolderLocalization(const std::string& name, const std::vector<nav::Pose2>& poses,
+                                                 const std::vector<cv::Mat>& panoramas, const cv::Mat& panorama_mask,
+                                                 const LocalizationEvalOptions& options,
+                                                 const std::function<void(const std::string&, bool)>& progress) {
+  options.Validate();
+  if (poses.size() != panoramas.size() || poses.size() < 2) {
+    throw std::invalid_argument("grid folder localization: at least 2 images, one pose each");
+  }
+  const auto t_start = Clock::now();
+  auto say = [&](const std::string& text, bool transient = false) {
+    if (progress) progress(text, transient);
+  };
+  LocalizationEvalResult result;
+  result.scene = name;
+  result.area.min = result.area.max = Xy(poses.front());
+  for (const auto& p : poses) {
+    result.area.min = result.area.min.cwiseMin(Xy(p));
+    result.area.max = result.area.max.cwiseMax(Xy(p));
+  }
+  EvalMemory m;
+  m.name = "grid";
+  m.description = "the grid folder " + name + ", " + std::to_string(poses.size()) + " images";
+  m.memory = std::make_unique<nav::PlaceCellMemory>(options.view, options.camera.panorama, options.vocabulary);
+  double extract_s = 0;
+  int64_t landmarks = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const auto t0 = Clock::now();
+    nav::PlaceView v = nav::MakePlaceView(panoramas[i], options.view, panorama_mask);
+    extract_s += Seconds(t0);
+    landmarks += v.landmarks.size();
+    m.memory->Add(poses[i], static_cast<int64_t>(i) * 2'000'000, std::move(v));
+    m.true_cell_poses.push_back(poses[i]);
+    if ((i + 1) % 10 == 0 || i + 1 == poses.size()) {
+      say("views " + std::to_string(i + 1) + "/" + std::to_string(poses.size()), i + 1 != poses.size());
+    }
+  }
+  m.explored_views = static_cast<int>(poses.size());
+  m.cells_per_m2 = result.area.area_m2() > 0 ? m.memory->size() / result.area.area_m2() : 0;
+  result.memories.push_back(std::move(m));
+  result.views_made = static_cast<int>(poses.size());
+  result.extract_ms_per_view = 1000 * extract_s / poses.size();
+  result.mean_landmarks = static_cast<double>(landmarks) / poses.size();
+  LeaveOneOut(options, say, &result);
   result.total_seconds = Seconds(t_start);
   return result;
 }
@@ -807,6 +988,36 @@ std::vector<std::string> WriteLocalizationOutputs(const LocalizationEvalResult& 
     }
     md << "| thesis' own figure (5.2.2, SIFT count measure, nearest cell) | 0.196 | | | | | |\n\n";
   }
+  if (!r.leave_one_out.empty()) {
+    // The protocols side by side: the same grid memory, the same views, the same configurations.
+    const ConfigResult* ldef = r.FindLeaveOneOut(dm, df, nav::PlaceEstimate::kInterpolated);
+    const ConfigResult* lnear = r.FindLeaveOneOut(dm, df, nav::PlaceEstimate::kNearestCell);
+    const ConfigResult* gdef = r.Find("grid", dm, df, nav::PlaceEstimate::kInterpolated);
+    const ConfigResult* gnear = r.Find("grid", dm, df, nav::PlaceEstimate::kNearestCell);
+    md << "## Protocols (thesis 5.2.2 and 4.4 beside ours)\n\n"
+       << "Grid memory, " << dm << (df ? ", filter on" : ", no filter") << ". snapnav: random off-grid test positions, "
+       << "the whole grid kept; leave-one-out (thesis 5.2.2, and on a 13x13 grid the 169 locations of 4.4): every "
+       << (o.leave_one_out_stride > 1 ? std::to_string(o.leave_one_out_stride) + "th " : "")
+       << "grid image a query, its own cell removed from the memory (vocabulary trained without it).\n\n"
+       << "| protocol | queries | mean distance to the nearest cell [m] | interpolated: mean error [m] | max | "
+          "nearest cell: mean error [m] | max |\n|---|---|---|---|---|---|---|\n";
+    auto row = [&](const std::string& name, size_t n, double nearest_m, const ConfigResult* a, const ConfigResult* b) {
+      md << "| " << name << " | " << n << " | " << Fixed(nearest_m, 3) << " | " << (a ? Fixed(a->errors.mean_m, 3) : "-")
+         << " | " << (a ? Fixed(a->errors.max_m, 3) : "-") << " | " << (b ? Fixed(b->errors.mean_m, 3) : "-") << " | "
+         << (b ? Fixed(b->errors.max_m, 3) : "-") << " |\n";
+    };
+    row("snapnav", r.tests.size(), r.tests_nearest_cell_m, gdef, gnear);
+    row("leave-one-out", r.leave_one_out_queries.size(), r.leave_one_out_nearest_cell_m, ldef, lnear);
+    md << "| thesis' own figure (5.2.2, SIFT count measure, nearest cell) | | | | | 0.196 | |\n\n"
+       << "Leave-one-out, every measure:\n\n| measure | filter | estimate | mean [m] | median | max | heading mean [deg] | "
+          "ms/query | n/a |\n|---|---|---|---|---|---|---|---|---|\n";
+    for (const auto& c : r.leave_one_out) {
+      md << "| " << c.measure << " | " << OnOff(c.filter) << " | " << EstimateName(c.estimate) << " | "
+         << Fixed(c.errors.mean_m, 3) << " | " << Fixed(c.errors.median_m, 3) << " | " << Fixed(c.errors.max_m, 3) << " | "
+         << Fixed(c.errors.mean_heading_deg, 1) << " | " << Fixed(c.ms_per_query, 1) << " | " << c.failures << " |\n";
+    }
+    md << "\n";
+  }
   md << "## Memories\n\n| memory | how | cells | cells/m^2 | views explored | bytes/cell | exploration [s] |\n"
      << "|---|---|---|---|---|---|---|\n";
   for (const auto& m : r.memories) {
@@ -889,10 +1100,68 @@ std::vector<std::string> WriteLocalizationOutputs(const LocalizationEvalResult& 
       << Num(c.errors.mean_heading_deg) << ",\n  \""
       << k << "_ms_per_query\": " << c.ms_per_query << ",\n  \"" << k << "_failures\": " << c.failures;
   }
+  if (!r.leave_one_out.empty()) {
+    j << ",\n  \"protocols\": [\"snapnav\", \"leave-one-out\"]"
+      << ",\n  \"snapnav_mean_nearest_cell_distance_m\": " << r.tests_nearest_cell_m
+      << ",\n  \"leave_one_out_queries\": " << r.leave_one_out_queries.size()
+      << ",\n  \"leave_one_out_mean_nearest_cell_distance_m\": " << r.leave_one_out_nearest_cell_m;
+    if (const auto* c = r.FindLeaveOneOut(dm, df, nav::PlaceEstimate::kInterpolated)) {
+      j << ",\n  \"leave_one_out_mean_localization_error_m\": " << c->errors.mean_m
+        << ",\n  \"leave_one_out_max_localization_error_m\": " << c->errors.max_m;
+    }
+    if (const auto* c = r.FindLeaveOneOut(dm, df, nav::PlaceEstimate::kNearestCell)) {
+      j << ",\n  \"leave_one_out_thesis_configuration_mean_localization_error_m\": " << c->errors.mean_m;
+    }
+    for (const auto& c : r.leave_one_out) {
+      const std::string k = "leave_one_out_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
+      j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
+        << ",\n  \"" << k << "_failures\": " << c.failures;
+    }
+  }
   j << ",\n  \"figures\": [";
   for (size_t i = 0; i < figures.size(); ++i) j << (i ? ", " : "") << JsonString(figures[i]);
   j << "]\n}\n";
   return figures;
+}
+
+void WriteGridFolderOutputs(const LocalizationEvalResult& r, const LocalizationEvalOptions& o, const std::string& out_dir,
+                            const std::string& options_text) {
+  fs::create_directories(out_dir);
+  const fs::path out(out_dir);
+  const ConfigResult* def = r.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kInterpolated);
+  const ConfigResult* near = r.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kNearestCell);
+  std::ostringstream md;
+  md << "# Place-cell localization: grid folder " << r.scene << "\n\n"
+     << "Leave-one-out (thesis 5.2.2): each of " << r.leave_one_out_queries.size() << " images a query against the "
+     << "others (its own removed; mean distance to the nearest other image " << Fixed(r.leave_one_out_nearest_cell_m, 3)
+     << " m). " << r.views_made << " views, " << Fixed(r.mean_landmarks, 0) << " landmarks each, MakePlaceView "
+     << Fixed(r.extract_ms_per_view, 1) << " ms per view. Run time " << Fixed(r.total_seconds, 0) << " s.\n\n"
+     << "| measure | filter | estimate | mean [m] | median | max | heading mean [deg] | ms/query | n/a |\n"
+     << "|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : r.leave_one_out) {
+    md << "| " << c.measure << " | " << OnOff(c.filter) << " | " << EstimateName(c.estimate) << " | "
+       << Fixed(c.errors.mean_m, 3) << " | " << Fixed(c.errors.median_m, 3) << " | " << Fixed(c.errors.max_m, 3) << " | "
+       << Fixed(c.errors.mean_heading_deg, 1) << " | " << Fixed(c.ms_per_query, 1) << " | " << c.failures << " |\n";
+  }
+  md << "| thesis' own figure (5.2.2, SIFT count measure, nearest cell) | | | 0.196 | | | | | |\n\n## Options\n\n```\n"
+     << options_text << "```\n";
+  std::ofstream(out / "report.md") << md.str();
+  std::ofstream j(out / "summary.json");
+  j << std::fixed << std::setprecision(4) << "{\n  \"grid\": " << JsonString(r.scene) << ",\n  \"images\": " << r.views_made
+    << ",\n  \"protocols\": [\"leave-one-out\"],\n  \"leave_one_out_queries\": " << r.leave_one_out_queries.size()
+    << ",\n  \"leave_one_out_mean_nearest_cell_distance_m\": " << r.leave_one_out_nearest_cell_m
+    << ",\n  \"prediction_sigma_m\": " << o.prediction_sigma_m << ",\n  \"seed\": " << o.seed;
+  if (def) {
+    j << ",\n  \"leave_one_out_mean_localization_error_m\": " << def->errors.mean_m
+      << ",\n  \"leave_one_out_max_localization_error_m\": " << def->errors.max_m;
+  }
+  if (near) j << ",\n  \"leave_one_out_thesis_configuration_mean_localization_error_m\": " << near->errors.mean_m;
+  for (const auto& c : r.leave_one_out) {
+    const std::string k = "leave_one_out_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
+    j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
+      << ",\n  \"" << k << "_failures\": " << c.failures;
+  }
+  j << ",\n  \"thesis_reported_mean_localization_error_m\": 0.1957\n}\n";
 }
 
 }  // namespace snapnav::eval

@@ -121,6 +121,11 @@ struct LocalizationEvalOptions {
   uint64_t seed = 1;
   std::string save_test_panoramas_dir;  // non-empty: the test positions' panoramas as test_N.png there
   std::string mask = "none";            // self-occlusion mask of the raw images (homing_eval.hpp UseMask): none | truth | FILE
+  // The thesis' protocol beside ours (5.2.2 and the 169 locations of 4.4): every grid image (every
+  // leave_one_out_stride-th) is a query against the grid memory with its own cell removed, so the
+  // nearest cell is one grid spacing away. Needs the grid memory.
+  bool leave_one_out = false;
+  int leave_one_out_stride = 1;
   void Validate() const;                // throws std::invalid_argument
 };
 
@@ -166,6 +171,12 @@ struct LocalizationEvalResult {
   std::vector<EvalMemory> memories;
   std::vector<EvalTest> tests;
   std::vector<ConfigResult> results;
+  // The leave-one-out protocol (options.leave_one_out): memory "grid", one result per measure x
+  // filter x estimate over leave_one_out_queries grid images.
+  std::vector<ConfigResult> leave_one_out;
+  std::vector<nav::Pose2> leave_one_out_queries;
+  double leave_one_out_nearest_cell_m = 0;  // mean distance of a query to the nearest cell left in the memory
+  double tests_nearest_cell_m = 0;          // ... of snapnav's test positions to the nearest grid cell
   int views_made = 0;
   double extract_ms_per_view = 0;   // MakePlaceView
   double render_ms_per_view = 0;    // render + unwrap
@@ -175,11 +186,24 @@ struct LocalizationEvalResult {
   // (the same with the nearest cell); nullptr when not evaluated.
   const ConfigResult* Find(const std::string& memory, const std::string& measure, bool filter,
                            nav::PlaceEstimate estimate) const;
+  const ConfigResult* FindLeaveOneOut(const std::string& measure, bool filter, nav::PlaceEstimate estimate) const;
 };
 
 // Renders, explores, localizes. `progress` gets one line of text per step (and "\r" updates).
 LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const LocalizationEvalOptions& options,
                                            const std::function<void(const std::string&, bool)>& progress = {});
+
+// A lab's own image grid (grid_folder.hpp): its images (as panoramas of options.camera.panorama,
+// with their mask) become the grid memory, and the leave-one-out protocol runs over them
+// (options.measures x options.filters). No rendering: options.camera's optics and the scene
+// options are not used.
+LocalizationEvalResult RunGridFolderLocalization(const std::string& name, const std::vector<nav::Pose2>& poses,
+                                                 const std::vector<cv::Mat>& panoramas, const cv::Mat& panorama_mask,
+                                                 const LocalizationEvalOptions& options,
+                                                 const std::function<void(const std::string&, bool)>& progress = {});
+// Its report.md and summary.json (leave_one_out_* keys as WriteLocalizationOutputs).
+void WriteGridFolderOutputs(const LocalizationEvalResult& result, const LocalizationEvalOptions& options,
+                            const std::string& out_dir, const std::string& options_text);
 
 // The target mean error of a scene (issue 6: indoor13 0.10 m, people11 0.15 m); nullopt for others.
 std::optional<double> TargetMeanErrorM(const std::string& scene);

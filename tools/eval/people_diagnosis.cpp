@@ -55,6 +55,7 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
   GridOptions grid;
   grid.seed = setup.seed;
   grid.input = setup.input;
+  grid.effects = setup.effects;
   GridOptions framed = grid;  // the people grid with its frames of a still robot, for the fused views
   framed.frames = frames;
   const Grid g = RenderScene(scene, framed, renderer,

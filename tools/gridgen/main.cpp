@@ -35,7 +35,8 @@ int Main(int argc, char** argv) {
   bool panorama = false;
   bool no_raw = false;
   glue::Flags flags("gridgen",
-                    "Renders a grid image database of a scene: OUT/images/<ix>_<iy>.png (raw omni images),\n"
+                    "Renders a grid image database of a scene: OUT/images/<ix>_<iy>.png (raw omni images) with\n"
+                    "their calibration OUT/camera.ini ([mirror], [panorama]),\n"
                     "OUT/panoramas/<ix>_<iy>.png with --panorama, OUT/positions.csv and OUT/grid.lcmlog.\n"
                     "Camera, mirror, panorama and image effects come from the sim config.");
   flags.AddString("config", &config_path, "sim config (camera, mirror, panorama, effects)");
@@ -60,6 +61,15 @@ int Main(int argc, char** argv) {
 
   fs::create_directories(fs::path(out_dir) / "images");
   if (panorama) fs::create_directories(fs::path(out_dir) / "panoramas");
+  if (!no_raw) {
+    // The raw images' calibration (the one their frames carry), so that the folder can be read
+    // back on its own (eval homing --grid, eval localization --grid).
+    std::ofstream camera(fs::path(out_dir) / "camera.ini");
+    camera << "; the calibration of images/ (gridgen, camera preset " << config.camera_preset << ")\n";
+    glue::PrintMirrorConfig(camera, config.camera.ReportedMirror());
+    camera << "\n";
+    glue::PrintPanoramaConfig(camera, config.camera.panorama);
+  }
   std::ofstream csv(fs::path(out_dir) / "positions.csv");
   csv << "file,ix,iy,x_m,y_m,heading_rad,utime\n" << std::setprecision(9);
   glue::LogWriter log((fs::path(out_dir) / "grid.lcmlog").string());

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# eval homing and eval localization take all of a --sim-config file or refuse it (issue 21):
+# [effects] change eval homing's figures (they were once silently ignored), and a changed key the
+# evaluations do not use ([laser] beams, [sim] scene) is refused naming file, line and key.
+set -euo pipefail
+BIN="$1"
+CONFIG="$2"
+OUT="$(mktemp -d)"
+trap 'rm -rf "$OUT"' EXIT
+sed 's/^beams = [0-9]*/beams = 100/' "$CONFIG/sim.ini" > "$OUT/laser.ini"
+sed 's/^scene = [a-z0-9_]*/scene = corridor/' "$CONFIG/sim.ini" > "$OUT/scene.ini"
+sed 's/^noise_sigma = [0-9.]*/noise_sigma = 40/; s/^blur_sigma_px = [0-9.]*/blur_sigma_px = 3/' "$CONFIG/sim.ini" > "$OUT/noisy.ini"
+grep -q '^beams = 100' "$OUT/laser.ini" && grep -q '^scene = corridor' "$OUT/scene.ini"
+grep -q '^noise_sigma = 40' "$OUT/noisy.ini" && grep -q '^blur_sigma_px = 3' "$OUT/noisy.ini"
+beams_line=$(grep -n '^beams = 100' "$OUT/laser.ini" | cut -d: -f1)
+scene_line=$(grep -n '^scene = corridor' "$OUT/scene.ini" | cut -d: -f1)
+
+refused() {  # TOOL FILE EXPECTED-TEXT: the refusal comes before any rendering
+  if "$BIN/$1" --sim-config "$2" --out "$OUT/refused" >"$OUT/stdout" 2>"$OUT/stderr"; then
+    echo "FAIL: $1 accepted $2"; exit 1
+  fi
+  grep -qF "$3" "$OUT/stderr" || { echo "FAIL: $1 did not say '$3':"; cat "$OUT/stderr"; exit 1; }
+  echo "ok: $1 refuses: $(cat "$OUT/stderr")"
+}
+refused eval-homing "$OUT/laser.ini" "laser.ini:$beams_line: [laser] beams = 100: eval homing does not use it"
+refused eval-homing "$OUT/scene.ini" "scene.ini:$scene_line: [sim] scene = corridor: eval homing does not use it"
+refused eval-localization "$OUT/laser.ini" "laser.ini:$beams_line: [laser] beams = 100: eval localization does not use it"
+
+# The shipped file and a file with other [effects] are taken; the effects change the figures.
+run() {  # NAME SIM-CONFIG
+  "$BIN/eval-homing" --scene indoor_objects11 --input panorama --quick --no-return --sim-config "$2" \
+    --out "$OUT/$1" >/dev/null 2>"$OUT/$1.log" || { cat "$OUT/$1.log"; exit 1; }
+}
+run clean "$CONFIG/sim.ini"
+run noisy "$OUT/noisy.ini"
+python3 - "$OUT/clean/summary.json" "$OUT/noisy/summary.json" <<'PY'
+import json, sys
+clean, noisy = (json.load(open(p)) for p in sys.argv[1:3])
+print(f"AAE shipped effects {clean['average_angular_error_deg']:.2f} deg, "
+      f"noise 40 + blur 3 px {noisy['average_angular_error_deg']:.2f} deg")
+assert clean["effects"]["noise_sigma"] == 0 and clean["effects"]["blur_sigma_px"] == 0, clean["effects"]
+assert noisy["effects"]["noise_sigma"] == 40 and noisy["effects"]["blur_sigma_px"] == 3, noisy["effects"]
+assert abs(noisy["average_angular_error_deg"] - clean["average_angular_error_deg"]) > 1.0, "the [effects] were not applied"
+PY
