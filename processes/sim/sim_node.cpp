@@ -80,6 +80,8 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
     throw glue::ConfigError(ini.origin() + ": [camera] " + e.what());
   }
   cam.optics.seed = c.seed ^ 0x0b71c5ULL;  // the sensor noise follows the seed
+  // The realistic camera compresses its own frames (an MJPEG camera) at the frames' quality.
+  if (cam.optics.enabled) cam.optics.jpeg_quality = c.jpeg_quality;
   c.effects.blur_sigma_px = ini.GetDouble("effects", "blur_sigma_px");
   c.effects.noise_sigma = ini.GetDouble("effects", "noise_sigma");
   c.effects.salt_pepper_fraction = ini.GetDouble("effects", "salt_pepper_fraction");
@@ -254,13 +256,27 @@ void SimNode::WaitForCommand() {
 void SimNode::PublishFrames() {
   const nav::Pose2& pose = world_.true_pose();
   auto publish = [&](const std::string& channel, bool raw) {
+    // A camera that compresses its own frames, published as JPEG with no [effects] on top: the
+    // frame carries the camera's bytes as an MJPEG camera's driver passes them on (no re-encoding).
+    const bool camera_jpeg = raw && config_.camera.optics.enabled && config_.camera.optics.jpeg_quality > 0 &&
+                             config_.encoding == omni_frame_t::JPEG && config_.effects.IsIdentity();
+    omni_frame_t f{};
     if (raw) {
-      renderer_.RenderOmni(pose, world_.people(), &image_);
+      renderer_.RenderOmni(pose, world_.people(), &image_, {cmd_linear_, cmd_angular_}, camera_jpeg ? &jpeg_ : nullptr);
     } else {
       renderer_.RenderPanorama(pose, world_.people(), &image_);
     }
-    nav::sim::ApplyImageEffects(config_.effects, effects_rng_, &image_);
-    omni_frame_t f = glue::ImageToFrame(image_, config_.encoding, config_.jpeg_quality);
+    if (camera_jpeg) {
+      f.width = image_.cols;
+      f.height = image_.rows;
+      f.row_stride = 0;
+      f.encoding = omni_frame_t::JPEG;
+      f.data = jpeg_;
+      f.data_size = static_cast<int32_t>(f.data.size());
+    } else {
+      nav::sim::ApplyImageEffects(config_.effects, effects_rng_, &image_);
+      f = glue::ImageToFrame(image_, config_.encoding, config_.jpeg_quality);
+    }
     f.utime = utime();
     f.sensor_name = "sim_omni";
     f.kind = raw ? omni_frame_t::RAW_OMNI : omni_frame_t::PANORAMA;

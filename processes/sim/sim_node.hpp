@@ -109,6 +109,7 @@ class SimNode {
   std::mt19937_64 effects_rng_;
   nav::MirrorModel reported_mirror_;  // the calibration the raw frames carry
   cv::Mat image_;
+  std::vector<uint8_t> jpeg_;  // the realistic camera's own JPEG of the last frame
   bool route_restarted_ = false;  // the route driver went on after the kidnapping
 };
 
