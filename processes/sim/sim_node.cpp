@@ -173,6 +173,14 @@ void SimConfig::Print(std::ostream& o) const {
     << " preset=" << camera_preset
     << " mirror=(" << camera.mirror.center_x_px << "," << camera.mirror.center_y_px << ") r="
     << camera.mirror.inner_radius_px << ".." << camera.mirror.outer_radius_px << "\n"
+    << (camera.optics.enabled
+            ? "camera optics (realistic): auto-exposure " + std::string(camera.optics.auto_exposure ? "on" : "off") +
+                  " (target grey " + std::to_string(static_cast<int>(camera.optics.exposure_target_grey)) + "), own JPEG quality " +
+                  std::to_string(camera.optics.jpeg_quality) + ", shutter " +
+                  std::to_string(static_cast<int>(std::lround(camera.optics.exposure_time_s * 1000))) +
+                  " ms (motion blur), calibration off by (" + std::to_string(camera.optics.calibration_error_x_px) + ", " +
+                  std::to_string(camera.optics.calibration_error_y_px) + ") px\n"
+            : std::string())
     << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
     << " salt_pepper=" << effects.salt_pepper_fraction << " gain=" << effects.gain << " offset=" << effects.offset << "\n"
     << "laser: rate_hz=" << laser_rate_hz << " beams=" << laser.beams << " range=" << laser.range_min_m << ".."

@@ -364,25 +364,26 @@ void OmniRenderer::ApplyMotionBlur(const CameraMotion& motion, cv::Mat* fine) {
   if (max_k == 0) return;
   const int ext = W + 2 * max_k;
   prefix_.resize(static_cast<size_t>(ext + 1) * 3);
-  std::vector<uint8_t> row_copy(static_cast<size_t>(W) * 3);
+  std::vector<int> k_wall(static_cast<size_t>(W));
+  for (int c = 0; c < W; ++c) k_wall[c] = std::min(max_k, half_width(c, column_depth_[c]));
+  std::vector<uint8_t> row_copy(static_cast<size_t>(ext) * 3);
   for (int r = 0; r < rows; ++r) {
     const double te = std::tan(fine_.ElevationOfRow(r));
     const double floor_d = te < 0 ? options_.height_m / -te : INFINITY;
     bool any = false;
     for (int c = 0; c < W; ++c) {
-      k[c] = std::min(max_k, half_width(c, std::min<double>(floor_d, column_depth_[c])));
+      k[c] = floor_d < column_depth_[c] ? std::min(max_k, half_width(c, floor_d)) : k_wall[c];
       any = any || k[c] > 0;
     }
     if (!any) continue;
     uint8_t* p = fine->ptr<uint8_t>(r);
-    std::copy(p, p + 3 * W, row_copy.begin());
-    // Running sums over the row extended by max_k columns at each side (bearings wrap around).
+    // The row extended by max_k columns at each side (bearings wrap around), and its running sums.
+    std::copy(p + 3 * (W - max_k), p + 3 * W, row_copy.begin());
+    std::copy(p, p + 3 * W, row_copy.begin() + 3 * max_k);
+    std::copy(p, p + 3 * max_k, row_copy.begin() + 3 * (max_k + W));
     int32_t* s = prefix_.data();
     s[0] = s[1] = s[2] = 0;
-    for (int i = 0; i < ext; ++i) {
-      const int c = ((i - max_k) % W + W) % W;
-      for (int ch = 0; ch < 3; ++ch) s[3 * (i + 1) + ch] = s[3 * i + ch] + row_copy[3 * c + ch];
-    }
+    for (int i = 0; i < 3 * ext; ++i) s[i + 3] = s[i] + row_copy[i];
     for (int c = 0; c < W; ++c) {
       if (k[c] == 0) continue;
       const int a = c + max_k - k[c], b = c + max_k + k[c] + 1;  // [a, b) in the extended row

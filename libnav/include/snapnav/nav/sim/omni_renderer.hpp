@@ -63,7 +63,7 @@ struct CameraOptics {
   double exposure_min = 0.5, exposure_max = 2.5;
   // The camera's own compression, as a USB camera's MJPEG stream [1..100; 0: none]: the image
   // carries JPEG's block and ringing artefacts (and the sim publishes the camera's bytes).
-  int jpeg_quality = 85;
+  int jpeg_quality = 90;
   // Motion blur: the shutter is open exposure_time_s x the auto-exposure's gain; each pixel is
   // smeared along the bearing by how far its scene point turns in that time (the robot's turn
   // rate, and its speed over the point's distance). 0: no blur.
