@@ -77,7 +77,7 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   try {
     cam.optics = nav::sim::CameraOpticsPreset(c.camera_preset);
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": [camera] " + e.what());
+    ini.FailKey("camera", "preset", e.what());
   }
   cam.optics.seed = c.seed ^ 0x0b71c5ULL;  // the sensor noise follows the seed
   // The realistic camera compresses its own frames (an MJPEG camera) at the frames' quality.
@@ -97,6 +97,12 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   c.laser.range_noise_m = ini.GetDouble("laser", "range_noise_m");
   c.laser.mount_height_m = ini.GetDouble("laser", "mount_height_m");
   c.laser.mount_x_m = ini.GetDouble("laser", "mount_x_m");
+  c.laser_preset = ini.GetString("laser", "preset");
+  try {
+    c.laser.faults = nav::sim::LaserFaultsPreset(c.laser_preset);
+  } catch (const std::invalid_argument& e) {
+    ini.FailKey("laser", "preset", e.what());
+  }
 
   c.odometry_rate_hz = ini.GetDouble("robot", "odometry_rate_hz");
   auto& d = c.drive_options;
@@ -184,7 +190,14 @@ void SimConfig::Print(std::ostream& o) const {
     << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
     << " salt_pepper=" << effects.salt_pepper_fraction << " gain=" << effects.gain << " offset=" << effects.offset << "\n"
     << "laser: rate_hz=" << laser_rate_hz << " beams=" << laser.beams << " range=" << laser.range_min_m << ".."
-    << laser.range_max_m << " noise_m=" << laser.range_noise_m << "\n"
+    << laser.range_max_m << " noise_m=" << laser.range_noise_m << " preset=" << laser_preset
+    << (laser.faults.enabled
+            ? " (range x" + std::to_string(laser.faults.range_scale) + " + " + std::to_string(laser.faults.range_bias_m) +
+                  " m, mixed pixels at edges over " + std::to_string(laser.faults.mixed_pixel_jump_m) +
+                  " m, no return from surfaces darker than grey " + std::to_string(static_cast<int>(laser.faults.dark_grey)) +
+                  ", people as legs)"
+            : std::string())
+    << "\n"
     << "robot: odometry_rate_hz=" << odometry_rate_hz << " heading_drift_deg_per_m="
     << drive_options.heading_drift_deg_per_m << " odometry_noise=" << drive_options.odometry_linear_noise_frac << ","
     << drive_options.odometry_angular_noise_frac << "\n"

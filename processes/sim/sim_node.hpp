@@ -43,6 +43,7 @@ struct SimConfig {
   int jpeg_quality = 90;
   nav::sim::OmniCameraOptions camera;  // camera.optics: the [camera] preset's (clean: none)
   std::string camera_preset = "clean";  // clean | realistic (docs/simulator.md)
+  std::string laser_preset = "clean";   // clean | realistic: laser.faults (docs/simulator.md)
   nav::sim::ImageEffectsOptions effects;
 
   double laser_rate_hz = 10;

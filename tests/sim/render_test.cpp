@@ -130,6 +130,81 @@ TEST(Laser, LowObjectsAreBelowTheScanPlane) {
   EXPECT_NEAR(world.Scan()[340], 4.9, 1e-4);  // sees the wall, not the box
 }
 
+TEST(Laser, TheRealisticLaserHasARealLasersFaults) {
+  EXPECT_FALSE(LaserFaultsPreset("clean").enabled);
+  EXPECT_THROW(LaserFaultsPreset("lidar"), std::invalid_argument);
+  LaserOptions clean;
+  clean.range_noise_m = 0;
+  LaserOptions real = clean;
+  real.faults = LaserFaultsPreset("realistic");
+  real.faults.dropout_probability = 0;
+  real.faults.mixed_pixel_probability = 1;
+  // Scale and bias: the wall 2.9 m ahead reads 2.9 x 1.006 + 0.012.
+  {
+    const Scene scene = RoomWithPost({-4, -4});
+    World w(scene, DriveOptions{}, real, 1);
+    w.SetTruePose(Pose2{2.0, 0, 0});
+    EXPECT_NEAR(w.Scan()[340], 2.9 * real.faults.range_scale + real.faults.range_bias_m, 1e-4);
+  }
+  // A black post absorbs the beam (no return: max range); the grey wall does not.
+  {
+    Scene scene = RoomWithPost({2.0, 0.0});
+    scene.textures.push_back(MakeTexture("black", cv::Mat(16, 16, CV_8UC3, cv::Scalar(10, 10, 10)), 1, 1));
+    scene.cylinders[0].texture = static_cast<int>(scene.textures.size()) - 1;
+    scene.cylinders[0].radius_m = 0.3;
+    real.faults.dark_dropout_probability = 1;
+    World w(scene, DriveOptions{}, real, 1);
+    w.SetTruePose(Pose2{0, 0, 0});
+    EXPECT_FLOAT_EQ(w.Scan()[340], static_cast<float>(real.range_max_m));
+    World c(scene, DriveOptions{}, clean, 1);
+    c.SetTruePose(Pose2{0, 0, 0});
+    EXPECT_NEAR(c.Scan()[340], 2.0 - 0.3 - 0.1, 1e-3);
+  }
+  // Mixed pixels: at the post's edge (1.6 m in front of a wall 3 m behind it) some beam reads in
+  // between, where the clean laser reads only the post or the wall.
+  {
+    const Scene scene = RoomWithPost({2.0, 0.0});
+    real.faults.dark_dropout_probability = 0;
+    World w(scene, DriveOptions{}, real, 1), c(scene, DriveOptions{}, clean, 1);
+    w.SetTruePose(Pose2{0, 0, 0});
+    c.SetTruePose(Pose2{0, 0, 0});
+    const auto rw = w.Scan(), rc = c.Scan();
+    auto between = [](const std::vector<float>& r) {
+      int n = 0;
+      for (int i = 300; i < 380; ++i) n += (r[i] > 2.1 && r[i] < 4.7);
+      return n;
+    };
+    EXPECT_EQ(between(rc), 0);
+    EXPECT_GE(between(rw), 1);
+  }
+  // People are legs: through the gap between a person's legs the laser sees the wall behind.
+  {
+    Scene scene = RoomWithPost({-4, -4});
+    scene.people.count = 1;
+    scene.people.area_min = {1.3, -0.01};  // walking along x: the legs side by side across the beams
+    scene.people.area_max = {1.7, 0.01};
+    scene.people.textures = {0};
+    scene.people.radius_m = 0.22;
+    DriveOptions d;
+    World w(scene, d, real, 3), c(scene, d, clean, 3);
+    w.SetTruePose(Pose2{0, 0, 0});
+    c.SetTruePose(Pose2{0, 0, 0});
+    const auto rw = w.Scan(), rc = c.Scan();
+    int body = 0, legs = 0, gap = 0;
+    for (int i = 300; i < 380; ++i) {
+      body += rc[i] < 1.6;
+      legs += rw[i] < 1.6;
+      gap += rw[i] > 4 && rc[i] < 1.6;
+    }
+    EXPECT_GT(body, legs);
+    EXPECT_GT(legs, 0);
+    EXPECT_GT(gap, 0);
+  }
+  LaserFaults bad = LaserFaultsPreset("realistic");
+  bad.leg_spacing_m = 0.05;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+}
+
 TEST(Robot, HeadingDriftPerMetreAndOdometryDoNotSeeIt) {
   const Scene scene = RoomWithPost({-4, -4});
   DriveOptions d;
