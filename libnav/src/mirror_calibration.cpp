@@ -565,23 +565,19 @@ cv::Mat SelfOcclusionMask(const std::vector<cv::Mat>& frames, const MirrorModel&
     throw std::invalid_argument("self-occlusion mask: need at least 3 frames (got " + std::to_string(frames.size()) +
                                 ")");
   const cv::Size size = frames.front().size();
-  cv::Mat sum(size, CV_64F, cv::Scalar(0)), sum2(size, CV_64F, cv::Scalar(0));
-  cv::Mat g, f;
+  std::vector<cv::Mat> grey;
+  grey.reserve(frames.size());
+  cv::Mat mean(size, CV_32F, cv::Scalar(0));
   for (const auto& frame : frames) {
     if (frame.size() != size) throw std::invalid_argument("self-occlusion mask: the frames differ in size");
-    g = ToGray(frame);
+    cv::Mat g = ToGray(frame), f;
     if (o.blur_sigma_px > 0) cv::GaussianBlur(g, g, {0, 0}, o.blur_sigma_px);
-    g.convertTo(f, CV_64F);
-    sum += f;
-    sum2 += f.mul(f);
+    g.convertTo(f, CV_32F);
+    mean += f;
+    grey.push_back(f);
   }
   const double n = static_cast<double>(frames.size());
-  cv::Mat mean = sum / n;
-  cv::Mat var = sum2 / n - mean.mul(mean);
-  cv::Mat sd;
-  cv::max(var, 0.0, var);
-  cv::sqrt(var, sd);
-  sd.convertTo(sd, CV_32F);
+  mean /= n;
   // The ring (a little inside its edges), the housing just outside the rim and the camera's reflection.
   cv::Mat ring(size, CV_8U, cv::Scalar(0)), reference(size, CV_8U, cv::Scalar(0));
   const double R = mirror.outer_radius_px, r = mirror.inner_radius_px;
@@ -594,6 +590,40 @@ cv::Mat SelfOcclusionMask(const std::vector<cv::Mat>& frames, const MirrorModel&
       if ((d >= R + 4 && d <= 1.12 * R + 4) || (d <= r - 4 && d >= 0.5 * r)) hp[x] = 255;
     }
   }
+  // A camera's auto-exposure scales every pixel of a frame, the robot's parts too: each frame is
+  // divided by its gain against the mean frame (the median ratio over the ring) first.
+  std::vector<double> gains;
+  std::vector<float> ratios;
+  for (const cv::Mat& f : grey) {
+    ratios.clear();
+    for (int y = 0; y < size.height; y += 3) {
+      const uint8_t* rp = ring.ptr<uint8_t>(y);
+      const float* fp = f.ptr<float>(y);
+      const float* mp = mean.ptr<float>(y);
+      for (int x = 0; x < size.width; x += 3) {
+        if (rp[x] && mp[x] > 10.f) ratios.push_back(fp[x] / mp[x]);
+      }
+    }
+    double gain = 1.0;
+    if (!ratios.empty()) {
+      std::nth_element(ratios.begin(), ratios.begin() + static_cast<std::ptrdiff_t>(ratios.size() / 2), ratios.end());
+      gain = std::clamp(static_cast<double>(ratios[ratios.size() / 2]), 0.1, 10.0);
+    }
+    gains.push_back(gain);
+  }
+  const double mean_gain = std::accumulate(gains.begin(), gains.end(), 0.0) / n;
+  cv::Mat sum(size, CV_64F, cv::Scalar(0)), sum2(size, CV_64F, cv::Scalar(0)), f;
+  for (size_t k = 0; k < grey.size(); ++k) {
+    grey[k].convertTo(f, CV_64F, mean_gain / gains[k]);
+    sum += f;
+    sum2 += f.mul(f);
+  }
+  cv::Mat mean64 = sum / n;
+  cv::Mat var = sum2 / n - mean64.mul(mean64);
+  cv::Mat sd;
+  cv::max(var, 0.0, var);
+  cv::sqrt(var, sd);
+  sd.convertTo(sd, CV_32F);
   auto median_of = [&](const cv::Mat& where) {
     std::vector<float> v;
     for (int y = 0; y < size.height; ++y) {
@@ -610,9 +640,11 @@ cv::Mat SelfOcclusionMask(const std::vector<cv::Mat>& frames, const MirrorModel&
   double noise = median_of(reference);
   const double scene = median_of(ring);
   if (noise < 0) noise = 1.0;
-  // 3 x the sensor noise, but well below how much the scene changes.
+  // 3 x the sensor noise, at least a fifth of how much the scene changes (a JPEG camera's blocks
+  // and ringing move a part's pixels with the scene beside it, while the flat housing the noise
+  // is measured on stays smooth), but well below the scene's changes.
   const double threshold =
-      o.max_std_grey > 0 ? o.max_std_grey : std::min(std::max(1.5, 3.0 * noise), std::max(1.5, 0.3 * scene));
+      o.max_std_grey > 0 ? o.max_std_grey : std::min(std::max({1.5, 3.0 * noise, 0.2 * scene}), std::max(1.5, 0.3 * scene));
   cv::Mat still = (sd < threshold) & ring;
   cv::morphologyEx(still, still, cv::MORPH_OPEN, cv::getStructuringElement(cv::MORPH_ELLIPSE, {3, 3}));
   const int ring_area = std::max(1, cv::countNonZero(ring));

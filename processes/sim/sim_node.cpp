@@ -77,9 +77,11 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   try {
     cam.optics = nav::sim::CameraOpticsPreset(c.camera_preset);
   } catch (const std::invalid_argument& e) {
-    throw glue::ConfigError(ini.origin() + ": [camera] " + e.what());
+    ini.FailKey("camera", "preset", e.what());
   }
   cam.optics.seed = c.seed ^ 0x0b71c5ULL;  // the sensor noise follows the seed
+  // The realistic camera compresses its own frames (an MJPEG camera) at the frames' quality.
+  if (cam.optics.enabled) cam.optics.jpeg_quality = c.jpeg_quality;
   c.effects.blur_sigma_px = ini.GetDouble("effects", "blur_sigma_px");
   c.effects.noise_sigma = ini.GetDouble("effects", "noise_sigma");
   c.effects.salt_pepper_fraction = ini.GetDouble("effects", "salt_pepper_fraction");
@@ -95,6 +97,12 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   c.laser.range_noise_m = ini.GetDouble("laser", "range_noise_m");
   c.laser.mount_height_m = ini.GetDouble("laser", "mount_height_m");
   c.laser.mount_x_m = ini.GetDouble("laser", "mount_x_m");
+  c.laser_preset = ini.GetString("laser", "preset");
+  try {
+    c.laser.faults = nav::sim::LaserFaultsPreset(c.laser_preset);
+  } catch (const std::invalid_argument& e) {
+    ini.FailKey("laser", "preset", e.what());
+  }
 
   c.odometry_rate_hz = ini.GetDouble("robot", "odometry_rate_hz");
   auto& d = c.drive_options;
@@ -171,10 +179,25 @@ void SimConfig::Print(std::ostream& o) const {
     << " preset=" << camera_preset
     << " mirror=(" << camera.mirror.center_x_px << "," << camera.mirror.center_y_px << ") r="
     << camera.mirror.inner_radius_px << ".." << camera.mirror.outer_radius_px << "\n"
+    << (camera.optics.enabled
+            ? "camera optics (realistic): auto-exposure " + std::string(camera.optics.auto_exposure ? "on" : "off") +
+                  " (target grey " + std::to_string(static_cast<int>(camera.optics.exposure_target_grey)) + "), own JPEG quality " +
+                  std::to_string(camera.optics.jpeg_quality) + ", shutter " +
+                  std::to_string(static_cast<int>(std::lround(camera.optics.exposure_time_s * 1000))) +
+                  " ms (motion blur), calibration off by (" + std::to_string(camera.optics.calibration_error_x_px) + ", " +
+                  std::to_string(camera.optics.calibration_error_y_px) + ") px\n"
+            : std::string())
     << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
     << " salt_pepper=" << effects.salt_pepper_fraction << " gain=" << effects.gain << " offset=" << effects.offset << "\n"
     << "laser: rate_hz=" << laser_rate_hz << " beams=" << laser.beams << " range=" << laser.range_min_m << ".."
-    << laser.range_max_m << " noise_m=" << laser.range_noise_m << "\n"
+    << laser.range_max_m << " noise_m=" << laser.range_noise_m << " preset=" << laser_preset
+    << (laser.faults.enabled
+            ? " (range x" + std::to_string(laser.faults.range_scale) + " + " + std::to_string(laser.faults.range_bias_m) +
+                  " m, mixed pixels at edges over " + std::to_string(laser.faults.mixed_pixel_jump_m) +
+                  " m, no return from surfaces darker than grey " + std::to_string(static_cast<int>(laser.faults.dark_grey)) +
+                  ", people as legs)"
+            : std::string())
+    << "\n"
     << "robot: odometry_rate_hz=" << odometry_rate_hz << " heading_drift_deg_per_m="
     << drive_options.heading_drift_deg_per_m << " odometry_noise=" << drive_options.odometry_linear_noise_frac << ","
     << drive_options.odometry_angular_noise_frac << "\n"
@@ -254,13 +277,27 @@ void SimNode::WaitForCommand() {
 void SimNode::PublishFrames() {
   const nav::Pose2& pose = world_.true_pose();
   auto publish = [&](const std::string& channel, bool raw) {
+    // A camera that compresses its own frames, published as JPEG with no [effects] on top: the
+    // frame carries the camera's bytes as an MJPEG camera's driver passes them on (no re-encoding).
+    const bool camera_jpeg = raw && config_.camera.optics.enabled && config_.camera.optics.jpeg_quality > 0 &&
+                             config_.encoding == omni_frame_t::JPEG && config_.effects.IsIdentity();
+    omni_frame_t f{};
     if (raw) {
-      renderer_.RenderOmni(pose, world_.people(), &image_);
+      renderer_.RenderOmni(pose, world_.people(), &image_, {cmd_linear_, cmd_angular_}, camera_jpeg ? &jpeg_ : nullptr);
     } else {
       renderer_.RenderPanorama(pose, world_.people(), &image_);
     }
-    nav::sim::ApplyImageEffects(config_.effects, effects_rng_, &image_);
-    omni_frame_t f = glue::ImageToFrame(image_, config_.encoding, config_.jpeg_quality);
+    if (camera_jpeg) {
+      f.width = image_.cols;
+      f.height = image_.rows;
+      f.row_stride = 0;
+      f.encoding = omni_frame_t::JPEG;
+      f.data = jpeg_;
+      f.data_size = static_cast<int32_t>(f.data.size());
+    } else {
+      nav::sim::ApplyImageEffects(config_.effects, effects_rng_, &image_);
+      f = glue::ImageToFrame(image_, config_.encoding, config_.jpeg_quality);
+    }
     f.utime = utime();
     f.sensor_name = "sim_omni";
     f.kind = raw ? omni_frame_t::RAW_OMNI : omni_frame_t::PANORAMA;

@@ -43,6 +43,7 @@ struct SimConfig {
   int jpeg_quality = 90;
   nav::sim::OmniCameraOptions camera;  // camera.optics: the [camera] preset's (clean: none)
   std::string camera_preset = "clean";  // clean | realistic (docs/simulator.md)
+  std::string laser_preset = "clean";   // clean | realistic: laser.faults (docs/simulator.md)
   nav::sim::ImageEffectsOptions effects;
 
   double laser_rate_hz = 10;
@@ -109,6 +110,7 @@ class SimNode {
   std::mt19937_64 effects_rng_;
   nav::MirrorModel reported_mirror_;  // the calibration the raw frames carry
   cv::Mat image_;
+  std::vector<uint8_t> jpeg_;  // the realistic camera's own JPEG of the last frame
   bool route_restarted_ = false;  // the route driver went on after the kidnapping
 };
 

@@ -2,6 +2,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "snapnav/nav/omni_geometry.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
@@ -126,6 +130,81 @@ TEST(Laser, LowObjectsAreBelowTheScanPlane) {
   EXPECT_NEAR(world.Scan()[340], 4.9, 1e-4);  // sees the wall, not the box
 }
 
+TEST(Laser, TheRealisticLaserHasARealLasersFaults) {
+  EXPECT_FALSE(LaserFaultsPreset("clean").enabled);
+  EXPECT_THROW(LaserFaultsPreset("lidar"), std::invalid_argument);
+  LaserOptions clean;
+  clean.range_noise_m = 0;
+  LaserOptions real = clean;
+  real.faults = LaserFaultsPreset("realistic");
+  real.faults.dropout_probability = 0;
+  real.faults.mixed_pixel_probability = 1;
+  // Scale and bias: the wall 2.9 m ahead reads 2.9 x 1.006 + 0.012.
+  {
+    const Scene scene = RoomWithPost({-4, -4});
+    World w(scene, DriveOptions{}, real, 1);
+    w.SetTruePose(Pose2{2.0, 0, 0});
+    EXPECT_NEAR(w.Scan()[340], 2.9 * real.faults.range_scale + real.faults.range_bias_m, 1e-4);
+  }
+  // A black post absorbs the beam (no return: max range); the grey wall does not.
+  {
+    Scene scene = RoomWithPost({2.0, 0.0});
+    scene.textures.push_back(MakeTexture("black", cv::Mat(16, 16, CV_8UC3, cv::Scalar(10, 10, 10)), 1, 1));
+    scene.cylinders[0].texture = static_cast<int>(scene.textures.size()) - 1;
+    scene.cylinders[0].radius_m = 0.3;
+    real.faults.dark_dropout_probability = 1;
+    World w(scene, DriveOptions{}, real, 1);
+    w.SetTruePose(Pose2{0, 0, 0});
+    EXPECT_FLOAT_EQ(w.Scan()[340], static_cast<float>(real.range_max_m));
+    World c(scene, DriveOptions{}, clean, 1);
+    c.SetTruePose(Pose2{0, 0, 0});
+    EXPECT_NEAR(c.Scan()[340], 2.0 - 0.3 - 0.1, 1e-3);
+  }
+  // Mixed pixels: at the post's edge (1.6 m in front of a wall 3 m behind it) some beam reads in
+  // between, where the clean laser reads only the post or the wall.
+  {
+    const Scene scene = RoomWithPost({2.0, 0.0});
+    real.faults.dark_dropout_probability = 0;
+    World w(scene, DriveOptions{}, real, 1), c(scene, DriveOptions{}, clean, 1);
+    w.SetTruePose(Pose2{0, 0, 0});
+    c.SetTruePose(Pose2{0, 0, 0});
+    const auto rw = w.Scan(), rc = c.Scan();
+    auto between = [](const std::vector<float>& r) {
+      int n = 0;
+      for (int i = 300; i < 380; ++i) n += (r[i] > 2.1 && r[i] < 4.7);
+      return n;
+    };
+    EXPECT_EQ(between(rc), 0);
+    EXPECT_GE(between(rw), 1);
+  }
+  // People are legs: through the gap between a person's legs the laser sees the wall behind.
+  {
+    Scene scene = RoomWithPost({-4, -4});
+    scene.people.count = 1;
+    scene.people.area_min = {1.3, -0.01};  // walking along x: the legs side by side across the beams
+    scene.people.area_max = {1.7, 0.01};
+    scene.people.textures = {0};
+    scene.people.radius_m = 0.22;
+    DriveOptions d;
+    World w(scene, d, real, 3), c(scene, d, clean, 3);
+    w.SetTruePose(Pose2{0, 0, 0});
+    c.SetTruePose(Pose2{0, 0, 0});
+    const auto rw = w.Scan(), rc = c.Scan();
+    int body = 0, legs = 0, gap = 0;
+    for (int i = 300; i < 380; ++i) {
+      body += rc[i] < 1.6;
+      legs += rw[i] < 1.6;
+      gap += rw[i] > 4 && rc[i] < 1.6;
+    }
+    EXPECT_GT(body, legs);
+    EXPECT_GT(legs, 0);
+    EXPECT_GT(gap, 0);
+  }
+  LaserFaults bad = LaserFaultsPreset("realistic");
+  bad.leg_spacing_m = 0.05;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+}
+
 TEST(Robot, HeadingDriftPerMetreAndOdometryDoNotSeeIt) {
   const Scene scene = RoomWithPost({-4, -4});
   DriveOptions d;
@@ -218,6 +297,9 @@ TEST(RealisticCamera, HousingReflectionVignettingPartsAndNoise) {
   OmniCameraOptions clean;
   OmniCameraOptions real = clean;
   real.optics = CameraOpticsPreset("realistic");
+  // The fixed optics alone here (the auto-exposure, JPEG and motion blur: the tests below).
+  real.optics.auto_exposure = false;
+  real.optics.jpeg_quality = 0;
   EXPECT_FALSE(CameraOpticsPreset("clean").enabled);
   EXPECT_THROW(CameraOpticsPreset("fancy"), std::invalid_argument);
   OmniRenderer rc(scene, clean), rr(scene, real);
@@ -288,6 +370,151 @@ TEST(RealisticCamera, TheWindowMovesWithTheRobotsHeading) {
   const double inside = brightness_at(heading, real.optics.window_bearing_rad * 180 / M_PI - heading * 180 / M_PI);
   const double outside = brightness_at(heading, real.optics.window_bearing_rad * 180 / M_PI - heading * 180 / M_PI + 90);
   EXPECT_GT(inside, 1.5 * outside);
+}
+
+// The realistic camera without sensor noise, parts or window: only the part under test differs.
+OmniCameraOptions QuietRealisticCamera() {
+  OmniCameraOptions real;
+  real.optics = CameraOpticsPreset("realistic");
+  real.optics.read_noise_grey = 0;
+  real.optics.shot_noise = 0;
+  real.optics.parts.clear();
+  real.optics.window_gain = 1.0;
+  real.optics.jpeg_quality = 0;
+  return real;
+}
+
+double Sharpness(const cv::Mat& image, const MirrorModel& m) {
+  // Mean absolute Laplacian over the mirror's ring (between the reflection and the rim).
+  cv::Mat grey, lap;
+  cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  cv::Laplacian(grey, lap, CV_32F);
+  cv::Mat ring(image.size(), CV_8U, cv::Scalar(0));
+  cv::circle(ring, {static_cast<int>(m.center_x_px), static_cast<int>(m.center_y_px)}, static_cast<int>(0.92 * m.outer_radius_px),
+             cv::Scalar(255), -1);
+  cv::circle(ring, {static_cast<int>(m.center_x_px), static_cast<int>(m.center_y_px)}, static_cast<int>(0.5 * m.outer_radius_px),
+             cv::Scalar(0), -1);
+  return cv::mean(cv::abs(lap), ring)[0];
+}
+
+TEST(RealisticCamera, AutoExposureDarkensTheImageWhenTheWindowIsInViewAndLags) {
+  const Scene scene = RoomWithPost({2.0, 0.5});
+  OmniCameraOptions dim = QuietRealisticCamera(), bright = QuietRealisticCamera();
+  bright.optics.window_gain = 6.0;
+  bright.optics.window_width_rad = 1.5;
+  OmniRenderer rd(scene, dim), rb(scene, bright);
+  cv::Mat a, b;
+  rd.RenderOmni({0, 0, 0}, {}, &a);
+  rb.RenderOmni({0, 0, 0}, {}, &b);
+  // A settled first frame; the window lowers the gain, and the wall opposite it gets darker.
+  EXPECT_GT(rd.exposure(), 1.0);
+  EXPECT_LT(rb.exposure(), 0.9 * rd.exposure());
+  const MirrorModel& m = dim.mirror;
+  const double opposite = bright.optics.window_bearing_rad + M_PI;  // the robot at heading 0
+  const auto px = MirrorPixel(m, opposite, 5 * M_PI / 180);
+  ASSERT_TRUE(px.has_value());
+  const cv::Rect patch(static_cast<int>(px->x()) - 3, static_cast<int>(px->y()) - 3, 7, 7);
+  EXPECT_LT(cv::mean(b(patch))[1], 0.9 * cv::mean(a(patch))[1]);
+  // The clean camera and a camera without auto-exposure keep gain 1.
+  OmniCameraOptions fixed = QuietRealisticCamera();
+  fixed.optics.auto_exposure = false;
+  OmniRenderer rf(scene, fixed);
+  rf.RenderOmni({0, 0, 0}, {}, &a);
+  EXPECT_EQ(rf.exposure(), 1.0);
+  // It lags: someone dark steps up to the robot, and the camera moves half the way (in log,
+  // exposure_rate 0.5) from its gain to the new view's settled gain, not at once.
+  Scene with_dark = scene;
+  with_dark.textures.push_back(MakeTexture("dark", cv::Mat(16, 16, CV_8UC3, cv::Scalar(20, 20, 20)), 1, 1));
+  Cylinder person;
+  person.center = {0.45, 0};
+  person.radius_m = 0.25;
+  person.height_m = 1.8;
+  person.texture = static_cast<int>(with_dark.textures.size()) - 1;
+  OmniRenderer turning(with_dark, dim);
+  turning.RenderOmni({0, 0, 0}, {}, &a);
+  const double before = turning.exposure();
+  turning.RenderOmni({0, 0, 0}, {person}, &a);
+  const double after = turning.exposure();
+  OmniRenderer fresh(with_dark, dim);
+  fresh.RenderOmni({0, 0, 0}, {person}, &a);
+  EXPECT_GT(fresh.exposure(), 1.05 * before);
+  // Halfway in log between the previous gain and the new view's settled gain.
+  EXPECT_NEAR(std::log(after), 0.5 * (std::log(before) + std::log(fresh.exposure())), 1e-6);
+}
+
+TEST(RealisticCamera, CompressesItsOwnFramesAsJpeg) {
+  const Scene scene = RoomWithPost({2.0, 0.5});
+  OmniCameraOptions raw = QuietRealisticCamera(), jpeg = QuietRealisticCamera();
+  jpeg.optics.jpeg_quality = 60;
+  OmniRenderer rr(scene, raw), rj(scene, jpeg);
+  cv::Mat a, b, c;
+  rr.RenderOmni({0, 0, 0.3}, {}, &a);
+  rj.RenderOmni({0, 0, 0.3}, {}, &b);
+  // Artefacts: small but not nothing.
+  cv::Mat diff;
+  cv::absdiff(a, b, diff);
+  const double mean = cv::mean(diff)[1];
+  EXPECT_GT(mean, 0.3);
+  EXPECT_LT(mean, 6.0);
+  // The camera's bytes, when asked for: a JPEG of the image before compression, which decodes to the frame.
+  std::vector<uint8_t> bytes;
+  OmniRenderer rj2(scene, jpeg);
+  rj2.RenderOmni({0, 0, 0.3}, {}, &c, {}, &bytes);
+  ASSERT_GT(bytes.size(), 1000u);
+  EXPECT_EQ(bytes[0], 0xff);
+  EXPECT_EQ(bytes[1], 0xd8);
+  EXPECT_EQ(cv::norm(a, c, cv::NORM_INF), 0);
+  const cv::Mat decoded = cv::imdecode(bytes, cv::IMREAD_COLOR);
+  EXPECT_EQ(cv::norm(decoded, b, cv::NORM_INF), 0);
+  // No compression: no bytes.
+  rr.RenderOmni({0, 0, 0.3}, {}, &c, {}, &bytes);
+  EXPECT_TRUE(bytes.empty());
+}
+
+TEST(RealisticCamera, MotionBlurGrowsWithTheTurnRateAndSpeed) {
+  // Checkered walls and floor: edges everywhere for the blur to smear.
+  Scene scene = RoomWithPost({2.0, 0.5});
+  cv::Mat checker(64, 64, CV_8UC3);
+  for (int y = 0; y < 64; ++y) {
+    for (int x = 0; x < 64; ++x) checker.at<cv::Vec3b>(y, x) = ((x / 8 + y / 8) % 2) ? cv::Vec3b(200, 200, 200) : cv::Vec3b(40, 40, 40);
+  }
+  scene.textures[0] = MakeTexture("checker", checker, 0.4, 0.4);
+  scene.floor_texture = 0;
+  const OmniCameraOptions real = QuietRealisticCamera();
+  const MirrorModel& m = real.mirror;
+  auto sharpness = [&](CameraMotion motion) {
+    OmniRenderer r(scene, real);
+    cv::Mat img;
+    r.RenderOmni({0.1, -0.2, 0.3}, {}, &img, motion);
+    return Sharpness(img, m);
+  };
+  const double still = sharpness({});
+  const double slow_turn = sharpness({0, 0.3});
+  const double fast_turn = sharpness({0, 1.5});
+  const double driving = sharpness({0.5, 0});
+  EXPECT_LT(slow_turn, still);
+  EXPECT_LT(fast_turn, 0.8 * slow_turn);
+  EXPECT_LT(driving, still);
+  // No shutter time: no blur.
+  OmniCameraOptions instant = real;
+  instant.optics.exposure_time_s = 0;
+  OmniRenderer r(scene, instant), s(scene, real);
+  cv::Mat a, b;
+  r.RenderOmni({0.1, -0.2, 0.3}, {}, &a, {0.5, 1.5});
+  s.RenderOmni({0.1, -0.2, 0.3}, {}, &b);
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0);
+}
+
+TEST(RealisticCamera, NewOpticsOptionsAreValidated) {
+  for (auto change : std::vector<std::function<void(CameraOptics*)>>{
+           [](CameraOptics* o) { o->exposure_target_grey = 0; }, [](CameraOptics* o) { o->exposure_rate = 0; },
+           [](CameraOptics* o) { o->exposure_min = 1.5; }, [](CameraOptics* o) { o->exposure_max = 0.5; },
+           [](CameraOptics* o) { o->jpeg_quality = 101; }, [](CameraOptics* o) { o->exposure_time_s = -0.01; }}) {
+    CameraOptics o = CameraOpticsPreset("realistic");
+    EXPECT_NO_THROW(o.Validate());
+    change(&o);
+    EXPECT_THROW(o.Validate(), std::invalid_argument);
+  }
 }
 
 }  // namespace

@@ -408,5 +408,74 @@ TEST(SimConfigFile, EveryRefusedNumberNamesFileLineAndKey) {
             0);
 }
 
+// The realistic sensors on the bus: the camera's own JPEG with its (slightly wrong) calibration,
+// the same bytes for the same seed, and the faulty laser.
+TEST(SimNode, RealisticSensorsPublishTheCamerasJpegAndAFaultyScan) {
+  auto run = [](uint64_t seed) {
+    glue::Bus bus("memq://");
+    glue::IniFile ini = glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini");
+    ini.Set("camera", "preset", "realistic", "test");
+    ini.Set("laser", "preset", "realistic", "test");
+    auto config = SimConfig::FromIni(ini, "R1_");
+    config.seed = seed;
+    config.duration_s = 0.5;
+    const auto scene = LoadSceneFile(SceneFilePath("people11"));
+    std::vector<omni_frame_t> raw;
+    std::vector<laser_scan_t> scans;
+    bus.Subscribe<omni_frame_t>("R1_OMNI_FRAME", [&](const omni_frame_t& m) { raw.push_back(m); });
+    bus.Subscribe<laser_scan_t>("R1_LASER_SCAN", [&](const laser_scan_t& m) { scans.push_back(m); });
+    SimNode node(bus, config, scene);
+    while (node.Step()) {
+      while (bus.HandleOnce(0)) {
+      }
+    }
+    return std::make_pair(raw, scans);
+  };
+  const auto [raw, scans] = run(5);
+  ASSERT_EQ(raw.size(), 5u);
+  ASSERT_EQ(scans.size(), 5u);
+  for (const auto& f : raw) {
+    EXPECT_EQ(f.encoding, omni_frame_t::JPEG);
+    const cv::Mat img = glue::FrameToImage(f);
+    EXPECT_EQ(img.cols, 640);
+    EXPECT_EQ(img.rows, 480);
+    EXPECT_NE(f.mirror_center_x_px, 320.f);  // the calibration a real camera has: off by a few pixels
+  }
+  const auto [again, scans_again] = run(5);
+  EXPECT_EQ(raw[4].data, again[4].data);
+  EXPECT_EQ(scans[4].ranges_m, scans_again[4].ranges_m);
+}
+
+// A preset that does not exist: the error names the file, the line and the key.
+TEST(SimConfigFile, UnknownPresetsNameFileLineAndKey) {
+  const std::string path = SNAPNAV_CONFIG_DIR "/sim.ini";
+  for (const std::string section : {"camera", "laser"}) {
+    glue::IniFile ini = glue::IniFile::Load(path);
+    ini.Set(section, "preset", "fancy", "test");
+    try {
+      SimConfig::FromIni(ini, "");
+      FAIL() << "no error for [" << section << "] preset = fancy";
+    } catch (const glue::ConfigError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(path + ":" + std::to_string(ini.KeyLine(section, "preset")) + ": [" + section + "] preset"),
+                std::string::npos)
+          << what;
+      EXPECT_NE(what.find("expected clean or realistic"), std::string::npos) << what;
+    }
+  }
+  // The realistic presets load, and take the frames' JPEG quality.
+  glue::IniFile ini = glue::IniFile::Load(path);
+  ini.Set("camera", "preset", "realistic", "test");
+  ini.Set("laser", "preset", "realistic", "test");
+  const SimConfig c = SimConfig::FromIni(ini, "");
+  EXPECT_TRUE(c.camera.optics.enabled);
+  EXPECT_EQ(c.camera.optics.jpeg_quality, c.jpeg_quality);
+  EXPECT_TRUE(c.laser.faults.enabled);
+  std::ostringstream printed;
+  c.Print(printed);
+  EXPECT_NE(printed.str().find("auto-exposure on"), std::string::npos) << printed.str();
+  EXPECT_NE(printed.str().find("people as legs"), std::string::npos) << printed.str();
+}
+
 }  // namespace
 }  // namespace snapnav::processes

@@ -1,7 +1,9 @@
 // gridgen: renders an image database over a scene's grid (thesis Appendix A):
-// one image per grid position at one heading (plus optional random headings),
+// one image per grid position at a random heading (or one given heading; plus optional extra
+// random headings),
 // as a folder of PNGs (one file per grid cell), a CSV of positions and
 // headings, and an LCM log of the same frames with their ground-truth poses.
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -29,7 +31,7 @@ int Main(int argc, char** argv) {
   std::string config_path = SNAPNAV_CONFIG_DIR "/sim.ini";
   std::string scene_name = "indoor13";
   std::string out_dir;
-  double heading_deg = 0;
+  std::string heading_text = "random";
   int random_headings = 0;
   int seed = 1;
   bool panorama = false;
@@ -42,7 +44,9 @@ int Main(int argc, char** argv) {
   flags.AddString("config", &config_path, "sim config (camera, mirror, panorama, effects)");
   flags.AddString("scene", &scene_name, "scene name or file");
   flags.AddString("out", &out_dir, "output folder (required)");
-  flags.AddDouble("heading-deg", &heading_deg, "robot heading at every grid position [deg]");
+  flags.AddString("heading-deg", &heading_text,
+                  "robot heading at every grid position [deg], or random: each position its own (seeded), as a "
+                  "robot placed by hand stands");
   flags.AddInt("random-headings", &random_headings, "extra images per position at random headings");
   flags.AddInt("seed", &seed, "seed for random headings and image effects");
   flags.AddBool("panorama", &panorama, "also write panoramas rendered directly");
@@ -51,6 +55,19 @@ int Main(int argc, char** argv) {
   if (out_dir.empty()) throw glue::FlagError("--out DIR is required");
   if (no_raw && !panorama) throw glue::FlagError("--no-raw needs --panorama");
   if (random_headings < 0) throw glue::FlagError("--random-headings must be >= 0");
+  const bool heading_random = heading_text == "random";
+  double heading_deg = 0;
+  if (!heading_random) {
+    size_t used = 0;
+    try {
+      heading_deg = std::stod(heading_text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != heading_text.size() || !std::isfinite(heading_deg)) {
+      throw glue::FlagError("--heading-deg: '" + heading_text + "' is neither a number of degrees nor random");
+    }
+  }
 
   auto config = processes::SimConfig::FromIni(glue::IniFile::Load(config_path), "");
   const auto scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
@@ -82,7 +99,7 @@ int Main(int argc, char** argv) {
     for (int ix = 0; ix < scene.grid.nx; ++ix) {
       const Eigen::Vector2d p = scene.grid.Position(ix, iy);
       for (int k = 0; k < per_cell; ++k) {
-        const double heading = k == 0 ? heading_deg * M_PI / 180 : random_heading(rng);
+        const double heading = (k == 0 && !heading_random) ? heading_deg * M_PI / 180 : random_heading(rng);
         const nav::Pose2 pose{p.x(), p.y(), heading};
         const std::string stem = std::to_string(ix) + "_" + std::to_string(iy) + (k ? "_r" + std::to_string(k) : "");
         const int64_t utime = config.start_utime + static_cast<int64_t>(done) * 100000;

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 namespace snapnav::nav::sim {
@@ -89,6 +90,15 @@ void CameraOptics::Validate() const {
   for (double e : {calibration_error_x_px, calibration_error_y_px, calibration_error_radius_px}) {
     if (!std::isfinite(e) || std::abs(e) > 50) throw std::invalid_argument("optics: calibration errors must be within 50 px");
   }
+  if (!(exposure_target_grey > 0 && exposure_target_grey < 255)) {
+    throw std::invalid_argument("optics: exposure_target_grey must be in (0, 255)");
+  }
+  if (!(exposure_rate > 0 && exposure_rate <= 1)) throw std::invalid_argument("optics: exposure_rate must be in (0, 1]");
+  if (!(exposure_min > 0 && exposure_min <= 1 && exposure_max >= 1 && exposure_max <= 16)) {
+    throw std::invalid_argument("optics: the exposure range needs 0 < exposure_min <= 1 <= exposure_max <= 16");
+  }
+  if (jpeg_quality < 0 || jpeg_quality > 100) throw std::invalid_argument("optics: jpeg_quality must be in 0..100 (0: none)");
+  if (!(exposure_time_s >= 0 && exposure_time_s <= 0.5)) throw std::invalid_argument("optics: exposure_time_s must be in [0, 0.5]");
 }
 
 CameraOptics CameraOpticsPreset(const std::string& name) {
@@ -260,6 +270,16 @@ void OmniRenderer::BuildOptics() {
       }
     }
   }
+  // The fine panorama's rows that reach a pixel the camera shows (not under its own reflection),
+  // with two rows to spare for the bilinear remap: the rest is not rendered.
+  float lowest_row = 0;
+  for (int y = 0; y < H; ++y) {
+    for (int x = 0; x < W; ++x) {
+      const double r = std::hypot(x - m.center_x_px, y - m.center_y_px);
+      if (std::clamp(Rl - r + 0.5, 0.0, 1.0) < 1.0) lowest_row = std::max(lowest_row, map_y_.at<float>(y, x));
+    }
+  }
+  render_rows_ = std::min(fine_.height_px, static_cast<int>(std::ceil(lowest_row)) + 3);
   // Sensor noise: a table of standard normal samples indexed by a fast generator, scaled per grey level.
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<float> normal(0.f, 1.f);
@@ -295,8 +315,87 @@ void OmniRenderer::ApplyWindow(const Pose2& robot, cv::Mat* fine) const {
   }
 }
 
+void OmniRenderer::MeterExposure(const cv::Mat& fine) {
+  const CameraOptics& o = options_.optics;
+  if (!o.auto_exposure) {
+    exposure_ = 1.0;
+    return;
+  }
+  // Mean grey of the visible rows, every 4th pixel of every 4th row, weighted by the cast.
+  const int rows = render_rows_ > 0 ? render_rows_ : fine.rows;
+  uint64_t sum[3] = {0, 0, 0};
+  uint64_t n = 0;
+  for (int r = 0; r < rows; r += 4) {
+    const uint8_t* p = fine.ptr<uint8_t>(r);
+    for (int c = 0; c < fine.cols; c += 4) {
+      sum[0] += p[3 * c];
+      sum[1] += p[3 * c + 1];
+      sum[2] += p[3 * c + 2];
+      ++n;
+    }
+  }
+  const double mean = n == 0 ? o.exposure_target_grey
+                             : (o.colour_gain_b * sum[0] + o.colour_gain_g * sum[1] + o.colour_gain_r * sum[2]) /
+                                   (3.0 * static_cast<double>(n)) * (1.0 - 0.5 * o.vignetting);
+  const double ideal = std::clamp(o.exposure_target_grey / std::max(1.0, mean), o.exposure_min, o.exposure_max);
+  exposure_ = exposure_settled_ ? std::exp(std::log(exposure_) + o.exposure_rate * (std::log(ideal) - std::log(exposure_)))
+                                : ideal;
+  exposure_ = std::clamp(exposure_, o.exposure_min, o.exposure_max);
+  exposure_settled_ = true;
+}
+
+void OmniRenderer::ApplyMotionBlur(const CameraMotion& motion, cv::Mat* fine) {
+  const CameraOptics& o = options_.optics;
+  const double shutter_s = o.exposure_time_s * exposure_;
+  if (shutter_s <= 0 || (motion.linear_mps == 0 && motion.angular_radps == 0)) return;
+  const int W = fine_.width_px, rows = render_rows_ > 0 ? render_rows_ : fine->rows;
+  const double cols_per_rad = W / (2 * M_PI);
+  // Half-widths of the box per column (above the horizon) and per row (the floor, nearer).
+  std::vector<int> k(static_cast<size_t>(W));
+  std::vector<double> sin_b(static_cast<size_t>(W));
+  for (int c = 0; c < W; ++c) sin_b[c] = std::sin(fine_.BearingOfColumn(c));
+  auto half_width = [&](int c, double depth_m) {
+    const double rate = motion.linear_mps * sin_b[c] / std::max(0.05, depth_m) - motion.angular_radps;
+    return static_cast<int>(0.5 * std::abs(rate) * shutter_s * cols_per_rad + 0.5);
+  };
+  int max_k = 0;
+  for (int c = 0; c < W; ++c) max_k = std::max(max_k, half_width(c, 0.05 + options_.height_m));
+  max_k = std::min(max_k, W / 2 - 1);
+  if (max_k == 0) return;
+  const int ext = W + 2 * max_k;
+  prefix_.resize(static_cast<size_t>(ext + 1) * 3);
+  std::vector<int> k_wall(static_cast<size_t>(W));
+  for (int c = 0; c < W; ++c) k_wall[c] = std::min(max_k, half_width(c, column_depth_[c]));
+  std::vector<uint8_t> row_copy(static_cast<size_t>(ext) * 3);
+  for (int r = 0; r < rows; ++r) {
+    const double te = std::tan(fine_.ElevationOfRow(r));
+    const double floor_d = te < 0 ? options_.height_m / -te : INFINITY;
+    bool any = false;
+    for (int c = 0; c < W; ++c) {
+      k[c] = floor_d < column_depth_[c] ? std::min(max_k, half_width(c, floor_d)) : k_wall[c];
+      any = any || k[c] > 0;
+    }
+    if (!any) continue;
+    uint8_t* p = fine->ptr<uint8_t>(r);
+    // The row extended by max_k columns at each side (bearings wrap around), and its running sums.
+    std::copy(p + 3 * (W - max_k), p + 3 * W, row_copy.begin());
+    std::copy(p, p + 3 * W, row_copy.begin() + 3 * max_k);
+    std::copy(p, p + 3 * max_k, row_copy.begin() + 3 * (max_k + W));
+    int32_t* s = prefix_.data();
+    s[0] = s[1] = s[2] = 0;
+    for (int i = 0; i < 3 * ext; ++i) s[i + 3] = s[i] + row_copy[i];
+    for (int c = 0; c < W; ++c) {
+      if (k[c] == 0) continue;
+      const int a = c + max_k - k[c], b = c + max_k + k[c] + 1;  // [a, b) in the extended row
+      const int n = b - a;
+      for (int ch = 0; ch < 3; ++ch) p[3 * c + ch] = static_cast<uint8_t>((s[3 * b + ch] - s[3 * a + ch] + n / 2) / n);
+    }
+  }
+}
+
 void OmniRenderer::ApplyOptics(cv::Mat* image) {
   const int W = image->cols, H = image->rows;
+  const uint32_t e = static_cast<uint32_t>(std::lround(exposure_ * 256));  // Q8
   const uint16_t* gain = optics_gain_.data();
   const uint16_t* offset = optics_offset_.data();
   const float* table = noise_table_.data();
@@ -307,7 +406,8 @@ void OmniRenderer::ApplyOptics(cv::Mat* image) {
     uint8_t* p = image->ptr<uint8_t>(y);
     const size_t base = static_cast<size_t>(y) * W * 3;
     for (int i = 0; i < W * 3; ++i) {
-      const int v = std::min(255, static_cast<int>((p[i] * gain[base + i] + 2 * offset[base + i] + 128) >> 8));
+      const int v = std::min<int>(
+          255, static_cast<int>(((static_cast<uint32_t>(p[i]) * gain[base + i] + 2u * offset[base + i]) * e + 32768u) >> 16));
       if (left == 0) {
         // xorshift64*: four 16-bit table indices per draw.
         state ^= state >> 12;
@@ -337,21 +437,42 @@ void OmniRenderer::RenderPanorama(const Pose2& robot, const std::vector<Cylinder
   Render(options_.panorama, robot, people, out);
 }
 
-void OmniRenderer::RenderOmni(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out) {
+void OmniRenderer::RenderOmni(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out,
+                              const CameraMotion& motion, std::vector<uint8_t>* jpeg) {
+  if (jpeg) jpeg->clear();
   // The fine panorama has one extra column, a copy of column 0, so bilinear sampling
   // is seamless at the bearing seam; the buffer is reused from frame to frame.
   fine_image_.create(fine_.height_px, fine_.width_px + 1, CV_8UC3);
   cv::Mat body = fine_image_.colRange(0, fine_.width_px);
-  Render(fine_, robot, people, &body);
-  if (options_.optics.enabled) ApplyWindow(robot, &body);
+  const CameraOptics& o = options_.optics;
+  if (!o.enabled) {
+    Render(fine_, robot, people, &body);
+  } else {
+    // Rows under the camera's own reflection are never seen: not rendered.
+    Render(fine_, robot, people, &body, render_rows_, &column_depth_);
+    if (render_rows_ < fine_.height_px) body.rowRange(render_rows_, fine_.height_px).setTo(cv::Scalar::all(0));
+    ApplyWindow(robot, &body);
+    MeterExposure(body);
+    ApplyMotionBlur(motion, &body);
+  }
   fine_image_.col(0).copyTo(fine_image_.col(fine_.width_px));
   cv::remap(fine_image_, *out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(16, 16, 16));
-  if (options_.optics.enabled) ApplyOptics(out);
+  if (!o.enabled) return;
+  ApplyOptics(out);
+  if (o.jpeg_quality > 0) {
+    std::vector<uint8_t>& bytes = jpeg ? *jpeg : jpeg_;
+    if (!cv::imencode(".jpg", *out, bytes, {cv::IMWRITE_JPEG_QUALITY, o.jpeg_quality}) || bytes.empty()) {
+      throw std::runtime_error("the simulated camera could not JPEG-encode its frame");
+    }
+    if (!jpeg) cv::imdecode(bytes, cv::IMREAD_COLOR, out);
+  }
 }
 
 void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const std::vector<Cylinder>& people,
-                          cv::Mat* out) const {
+                          cv::Mat* out, int rows, std::vector<float>* depth) const {
   out->create(model.height_px, model.width_px, CV_8UC3);
+  const int row_end = rows < 0 ? model.height_px : std::min(rows, model.height_px);
+  if (depth) depth->assign(static_cast<size_t>(model.width_px), 1e3f);
   const Eigen::Vector2d eye = robot.Transform({options_.offset_x_m, 0.0});
   const double cam_z = options_.height_m;
   const double ceiling = scene_.ceiling_height_m;
@@ -364,7 +485,8 @@ void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const 
     const double world_bearing = robot.theta_rad + model.BearingOfColumn(c);
     const Eigen::Vector2d dir(std::cos(world_bearing), std::sin(world_bearing));
     CastRay(scene_, people, eye, dir, -1.0, &hits);
-    for (int r = 0; r < model.height_px; ++r) {
+    if (depth && !hits.empty()) (*depth)[c] = static_cast<float>(hits.front().distance_m);
+    for (int r = 0; r < row_end; ++r) {
       const double te = tan_e[r];
       const double floor_d = te < 0 ? cam_z / -te : INFINITY;
       const double ceil_d = (te > 0 && ceiling > 0) ? (ceiling - cam_z) / te : INFINITY;

@@ -36,11 +36,39 @@ void LaserOptions::Validate() const {
   }
   if (!(range_noise_m >= 0)) throw std::invalid_argument("laser: range_noise_m must be >= 0");
   if (!(mount_height_m >= 0)) throw std::invalid_argument("laser: mount_height_m must be >= 0");
+  faults.Validate();
+}
+
+void LaserFaults::Validate() const {
+  if (!enabled) return;
+  auto probability = [](double p) { return p >= 0 && p <= 1; };
+  if (!(range_scale > 0.9 && range_scale < 1.1)) throw std::invalid_argument("laser faults: range_scale must be in (0.9, 1.1)");
+  if (!(std::abs(range_bias_m) <= 0.2)) throw std::invalid_argument("laser faults: range_bias_m must be within 0.2 m");
+  if (!(mixed_pixel_jump_m > 0)) throw std::invalid_argument("laser faults: mixed_pixel_jump_m must be positive");
+  if (!probability(mixed_pixel_probability) || !probability(dark_dropout_probability) || !probability(dropout_probability)) {
+    throw std::invalid_argument("laser faults: probabilities must be in [0, 1]");
+  }
+  if (!(dark_grey >= 0 && dark_grey <= 255)) throw std::invalid_argument("laser faults: dark_grey must be in 0..255");
+  if (!(leg_radius_m > 0) || !(leg_spacing_m >= 2 * leg_radius_m)) {
+    throw std::invalid_argument("laser faults: legs need a positive radius and a spacing of at least two radii");
+  }
+}
+
+LaserFaults LaserFaultsPreset(const std::string& name) {
+  LaserFaults f;
+  if (name == "clean") return f;
+  if (name != "realistic") throw std::invalid_argument("laser preset '" + name + "': expected clean or realistic");
+  f.enabled = true;
+  return f;
 }
 
 World::World(const Scene& scene, const DriveOptions& drive, const LaserOptions& laser, uint64_t seed)
     : scene_(scene), drive_(drive), laser_(laser), rng_(seed) {
   scene_.Validate();
+  for (const Texture& t : scene_.textures) {
+    const cv::Scalar m = cv::mean(t.levels.back());
+    texture_grey_.push_back((m[0] + m[1] + m[2]) / 3.0);
+  }
   drive_.Validate();
   laser_.Validate();
   true_pose_ = {scene.start_pose.x(), scene.start_pose.y(), scene.start_pose.z()};
@@ -176,13 +204,64 @@ std::vector<float> World::Scan() {
   const Eigen::Vector2d origin = true_pose_.Transform({laser_.mount_x_m, 0});
   const double inc = laser_.AngleIncrement();
   std::normal_distribution<double> noise(0.0, laser_.range_noise_m);
+  const LaserFaults& f = laser_.faults;
+  if (!f.enabled) {
+    for (int i = 0; i < laser_.beams; ++i) {
+      const double a = true_pose_.theta_rad + laser_.angle_min_rad + i * inc;
+      const auto hit = NearestHit(scene_, people_, origin, {std::cos(a), std::sin(a)}, laser_.mount_height_m);
+      double r = laser_.range_max_m;
+      if (hit && hit->distance_m < laser_.range_max_m) {
+        r = std::clamp(hit->distance_m + (laser_.range_noise_m > 0 ? noise(rng_) : 0.0), laser_.range_min_m,
+                       laser_.range_max_m);
+      }
+      ranges[i] = static_cast<float>(r);
+    }
+    return ranges;
+  }
+  // A real laser: people are two legs at the scan height (across their way), dark surfaces absorb
+  // the beam, a beam across a depth edge returns a mixed range, every range is off by a scale and a bias.
+  std::vector<Cylinder> legs;
+  const std::vector<Cylinder>* obstacles = &people_;
+  if (f.legs) {
+    for (size_t k = 0; k < people_.size(); ++k) {
+      const Cylinder& p = people_[k];
+      Eigen::Vector2d way = k < people_goals_.size() ? Eigen::Vector2d(people_goals_[k] - p.center) : Eigen::Vector2d(1, 0);
+      if (way.norm() < 1e-6) way = {1, 0};
+      const Eigen::Vector2d across = Eigen::Vector2d(-way.y(), way.x()).normalized() * (0.5 * f.leg_spacing_m);
+      for (double side : {-1.0, 1.0}) {
+        Cylinder leg = p;
+        leg.center = p.center + side * across;
+        leg.radius_m = f.leg_radius_m;
+        legs.push_back(leg);
+      }
+    }
+    obstacles = &legs;
+  }
+  std::vector<double> truth(static_cast<size_t>(laser_.beams), INFINITY);
+  std::vector<bool> absorbed(static_cast<size_t>(laser_.beams), false);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int i = 0; i < laser_.beams; ++i) {
     const double a = true_pose_.theta_rad + laser_.angle_min_rad + i * inc;
-    const auto hit = NearestHit(scene_, people_, origin, {std::cos(a), std::sin(a)}, laser_.mount_height_m);
+    const auto hit = NearestHit(scene_, *obstacles, origin, {std::cos(a), std::sin(a)}, laser_.mount_height_m);
+    if (!hit) continue;
+    truth[i] = hit->distance_m;
+    const double grey = hit->texture >= 0 && hit->texture < static_cast<int>(texture_grey_.size()) ? texture_grey_[hit->texture] : 128;
+    absorbed[i] = (grey < f.dark_grey && u(rng_) < f.dark_dropout_probability) || u(rng_) < f.dropout_probability;
+  }
+  std::vector<double> measured = truth;
+  for (int i = 0; i + 1 < laser_.beams; ++i) {
+    const double a = truth[i], b = truth[i + 1];
+    if (!std::isfinite(a) || !std::isfinite(b) || std::abs(a - b) < f.mixed_pixel_jump_m) continue;
+    if (u(rng_) >= f.mixed_pixel_probability) continue;
+    const int far = a > b ? i : i + 1;
+    const double near_r = std::min(a, b), far_r = std::max(a, b);
+    measured[far] = near_r + u(rng_) * (far_r - near_r);
+  }
+  for (int i = 0; i < laser_.beams; ++i) {
     double r = laser_.range_max_m;
-    if (hit && hit->distance_m < laser_.range_max_m) {
-      r = std::clamp(hit->distance_m + (laser_.range_noise_m > 0 ? noise(rng_) : 0.0), laser_.range_min_m,
-                     laser_.range_max_m);
+    if (!absorbed[i] && measured[i] < laser_.range_max_m) {
+      r = std::clamp(f.range_scale * measured[i] + f.range_bias_m + (laser_.range_noise_m > 0 ? noise(rng_) : 0.0),
+                     laser_.range_min_m, laser_.range_max_m);
     }
     ranges[i] = static_cast<float>(r);
   }

@@ -53,12 +53,33 @@ struct CameraOptics {
   double calibration_error_x_px = 1.6;
   double calibration_error_y_px = -1.1;
   double calibration_error_radius_px = -1.3;
+  // Auto-exposure: the camera meters the mean grey of what the mirror shows and moves its gain a
+  // share `exposure_rate` of the way (in log) to the gain that gives exposure_target_grey, each
+  // frame (1: at once; the first frame starts settled), within [exposure_min, exposure_max]: a
+  // bright window in view darkens the rest of the image, and it lags a turn by a few frames.
+  bool auto_exposure = true;
+  double exposure_target_grey = 100;
+  double exposure_rate = 0.5;
+  double exposure_min = 0.5, exposure_max = 2.5;
+  // The camera's own compression, as a USB camera's MJPEG stream [1..100; 0: none]: the image
+  // carries JPEG's block and ringing artefacts (and the sim publishes the camera's bytes).
+  int jpeg_quality = 90;
+  // Motion blur: the shutter is open exposure_time_s x the auto-exposure's gain; each pixel is
+  // smeared along the bearing by how far its scene point turns in that time (the robot's turn
+  // rate, and its speed over the point's distance). 0: no blur.
+  double exposure_time_s = 0.02;
   uint64_t seed = 1;                // sensor noise
   void Validate() const;            // throws std::invalid_argument
 };
 // The shipped presets: "clean" (no optics) and "realistic" (the values above with three struts
 // and a cable). Throws std::invalid_argument on another name.
 CameraOptics CameraOpticsPreset(const std::string& name);
+
+// The robot's motion while a frame is exposed (motion blur; ignored by the clean camera).
+struct CameraMotion {
+  double linear_mps = 0;
+  double angular_radps = 0;
+};
 
 struct OmniCameraOptions {
   double height_m = 0.55;   // optical centre above the floor [m]
@@ -83,6 +104,9 @@ struct ImageEffectsOptions {
   double gain = 1.0;               // illumination: out = gain * in + offset
   double offset = 0.0;             // [grey levels]
   void Validate() const;
+  bool IsIdentity() const {        // changes no pixel
+    return blur_sigma_px == 0 && noise_sigma == 0 && salt_pepper_fraction == 0 && gain == 1.0 && offset == 0.0;
+  }
 };
 void ApplyImageEffects(const ImageEffectsOptions& options, std::mt19937_64& rng, cv::Mat* image);
 
@@ -93,8 +117,14 @@ class OmniRenderer {
   // Panorama (CV_8UC3, options.panorama size) seen from robot pose `robot`; `people` are extra cylinders.
   void RenderPanorama(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out) const;
   // Raw catadioptric image (CV_8UC3, omni_width_px x omni_height_px), with the optics when enabled
-  // (each call draws new sensor noise).
-  void RenderOmni(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out);
+  // (each call draws new sensor noise, moves the auto-exposure and blurs by `motion`). With the
+  // camera's own JPEG (optics.jpeg_quality > 0), `out` is the decoded JPEG; when `jpeg` is given,
+  // the camera's JPEG bytes go there and `out` is the image before compression (no decode: a
+  // process that publishes the camera's bytes); `jpeg` is cleared when the camera does not compress.
+  void RenderOmni(const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out,
+                  const CameraMotion& motion = {}, std::vector<uint8_t>* jpeg = nullptr);
+  // The auto-exposure's gain of the last frame (1 for the clean camera).
+  double exposure() const { return exposure_; }
   // The pixels of the robot's own parts in the raw image (image_mask.hpp's convention: 0 = a
   // part, 255 = usable; every pixel the parts cover by at least 2 %), the truth a calibration's mask
   // estimates. All usable for the clean camera.
@@ -103,7 +133,12 @@ class OmniRenderer {
   const OmniCameraOptions& options() const { return options_; }
 
  private:
-  void Render(const PanoramaModel& model, const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out) const;
+  // Rows [0, rows) of the panorama (rows < 0: all); `depth`, when given, gets each column's nearest
+  // surface distance [m].
+  void Render(const PanoramaModel& model, const Pose2& robot, const std::vector<Cylinder>& people, cv::Mat* out,
+              int rows = -1, std::vector<float>* depth = nullptr) const;
+  void MeterExposure(const cv::Mat& fine);
+  void ApplyMotionBlur(const CameraMotion& motion, cv::Mat* fine);
   void BuildOptics();
   void ApplyWindow(const Pose2& robot, cv::Mat* fine) const;
   void ApplyOptics(cv::Mat* image);
@@ -120,6 +155,12 @@ class OmniRenderer {
   std::vector<float> noise_table_;   // standard normal samples
   std::array<float, 256> noise_sigma_{};  // sigma per grey level
   uint64_t noise_state_ = 0;
+  int render_rows_ = -1;             // fine panorama rows that reach a visible pixel (the rest is under the lens)
+  double exposure_ = 1.0;
+  bool exposure_settled_ = false;    // false until the first frame
+  std::vector<float> column_depth_;  // nearest surface per fine column [m] (motion blur)
+  std::vector<int32_t> prefix_;      // motion blur's running sums
+  std::vector<uint8_t> jpeg_;
 };
 
 }  // namespace snapnav::nav::sim

@@ -4,6 +4,7 @@
 // people. Time is a parameter (sim time), randomness comes from one seeded engine.
 
 #include <random>
+#include <string>
 #include <vector>
 
 #include "snapnav/nav/pose2.hpp"
@@ -28,6 +29,24 @@ struct DriveOptions {
   void Validate() const;
 };
 
+// A real laser's faults (the `realistic` laser preset; the clean laser has none).
+struct LaserFaults {
+  bool enabled = false;
+  double range_scale = 1.006;             // every return is range_scale x the true range + range_bias_m
+  double range_bias_m = 0.012;
+  double mixed_pixel_jump_m = 0.25;       // at a depth edge deeper than this, the beam on the far side...
+  double mixed_pixel_probability = 0.5;   // ...returns a range between the two surfaces with this probability
+  double dark_grey = 45;                  // surfaces darker than this (their texture's mean grey) absorb...
+  double dark_dropout_probability = 0.6;  // ...the beam: no return, with this probability
+  double dropout_probability = 0.003;     // a beam without a return anywhere
+  bool legs = true;                       // people are two legs at the scan height, not one body
+  double leg_radius_m = 0.06;
+  double leg_spacing_m = 0.24;            // between the legs' centres
+  void Validate() const;                  // throws std::invalid_argument
+};
+// "clean" (no faults) or "realistic" (the values above). Throws std::invalid_argument on another name.
+LaserFaults LaserFaultsPreset(const std::string& name);
+
 struct LaserOptions {
   int beams = 681;                     // Hokuyo URG-04LX
   double angle_min_rad = -2.0943951;   // -120 deg
@@ -37,6 +56,7 @@ struct LaserOptions {
   double range_noise_m = 0.01;         // std. dev. of Gaussian range noise
   double mount_height_m = 0.3;         // scan plane height: lower objects are not seen
   double mount_x_m = 0.1;              // position on the robot, forward
+  LaserFaults faults;                  // clean by default
   void Validate() const;
   double AngleIncrement() const { return (angle_max_rad - angle_min_rad) / (beams - 1); }
 };
@@ -101,6 +121,7 @@ class World {
   int collisions_ = 0;
   std::vector<Cylinder> people_;
   std::vector<Eigen::Vector2d> people_goals_;
+  std::vector<double> texture_grey_;  // mean grey of each scene texture (the laser's dark surfaces)
   KidnapOptions kidnap_;
   bool kidnapped_ = false;
   double kidnapped_at_s_ = 0;
