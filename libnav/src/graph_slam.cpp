@@ -324,17 +324,26 @@ void GraphSlam::ApplyJob(GraphSlamUpdate* u) {
 }
 
 int GraphSlam::ReusableKeyframe(const Pose2& pose) const {
-  int best = -1;
-  double best_d = options_.keyframe_reuse_m;
+  std::vector<std::pair<double, int>> near;  // (distance, keyframe)
   for (int k = 0; k < graph_.nodes(); ++k) {
     if (k == last_keyframe_) continue;
     const Pose2& q = graph_.pose(k);
     const double d = std::hypot(q.x_m - pose.x_m, q.y_m - pose.y_m);
-    if (d > best_d || std::abs(WrapAngle(q.theta_rad - pose.theta_rad)) > options_.keyframe_reuse_rad) continue;
-    best = k;
-    best_d = d;
+    if (d > options_.keyframe_reuse_m || std::abs(WrapAngle(q.theta_rad - pose.theta_rad)) > options_.keyframe_reuse_rad) {
+      continue;
+    }
+    near.push_back({d, k});
   }
-  return best;
+  if (near.empty()) return -1;
+  std::sort(near.begin(), near.end());
+  // Only where the graph knows the keyframe's position relative to the last one (as a closure may
+  // join alone: loop_confident_sigma_m); where it does not (drift since the last closure), a new
+  // keyframe joins and the loop search runs.
+  const std::vector<Eigen::Matrix3d> from_last = graph_.RelativeCovariances(last_keyframe_);
+  for (const auto& [d, k] : near) {
+    if (MaxPositionSigma(from_last[static_cast<size_t>(k)]) <= options_.loop_confident_sigma_m) return k;
+  }
+  return -1;
 }
 
 void GraphSlam::NoteClosure(const LoopClosure& c) {

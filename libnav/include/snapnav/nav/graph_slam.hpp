@@ -51,8 +51,9 @@ struct GraphSlamOptions {
   // Memory that grows with the area, not with time: where a new keyframe is due but the scan's
   // pose (in the graph) lies within keyframe_reuse_m and keyframe_reuse_rad of an existing
   // keyframe, and the front end's match of the scan against its map (those keyframes' points) was
-  // accepted, no keyframe joins: the scan's pose is kept relative to that keyframe instead, and the
-  // next keyframe's edge starts from it. New keyframes then lie at least keyframe_reuse_m from all
+  // accepted, and the graph knows that keyframe's position relative to the last keyframe to
+  // loop_confident_sigma_m (no drift since: not a loop yet to close), no keyframe joins: the scan's
+  // pose is kept relative to that keyframe instead, and the next keyframe's edge starts from it. New keyframes then lie at least keyframe_reuse_m from all
   // others (as the graph placed them), so their number is bounded by the area driven (0: off).
   double keyframe_reuse_m = 0;
   double keyframe_reuse_rad = 30 * kRadPerDeg;
