@@ -273,6 +273,16 @@ void GraphSlam::RunJob() {
       SearchLoops(kf);
       if (optimize_due_ || (unoptimized_closures_ > 0 && unoptimized_closures_ >= options_.optimize_every)) Optimize();
     }
+    if (job_.optimized) {
+      // The front end's map at the optimized poses, in case the correction calls for it (ApplyJob).
+      const int n0 = job_.nodes_at_start;
+      const double travel = job_.keyframes[static_cast<size_t>(n0 - 1)]->travel_m;
+      const double min_travel =
+          options_.local_map_m > 0 ? travel - options_.local_map_m : -std::numeric_limits<double>::infinity();
+      PointGridMap map = LaserSlam::MakeMap(front_options_);
+      AddKeyframesToMap(job_.graph, job_.keyframes, 0, n0 - 1, min_travel, &map);
+      job_.front_map = std::move(map);
+    }
   } catch (...) {
     job_.error = std::current_exception();
   }
@@ -296,6 +306,7 @@ void GraphSlam::ApplyJob(GraphSlamUpdate* u) {
   const Pose2 before = pose();
   PoseGraph g = std::move(job_.graph);
   const int n0 = job_.nodes_at_start;
+  const bool same_nodes = graph_.nodes() == n0;
   std::vector<Pose2> correction(static_cast<size_t>(graph_.nodes()));
   for (int n = 0; n < n0; ++n) correction[static_cast<size_t>(n)] = g.pose(n).Compose(graph_.pose(n).Inverse());
   for (size_t e = static_cast<size_t>(job_.edges_at_start); e < graph_.edges().size(); ++e) {
@@ -319,8 +330,16 @@ void GraphSlam::ApplyJob(GraphSlamUpdate* u) {
   last_correction_m_ = u->correction_m;
   last_correction_rad_ = u->correction_rad;
   if (u->correction_m >= options_.frontend_reset_m || u->correction_rad >= options_.frontend_reset_rad) {
-    RebuildFrontEndMap();
+    // The worker's map of the keyframes it knew, the ones that joined since added here. (With
+    // local_map_m its travel window is the last known keyframe's: rebuilt from scratch when
+    // keyframes joined since.)
+    if (job_.front_map && (same_nodes || options_.local_map_m <= 0)) {
+      RebuildFrontEndMap(std::move(job_.front_map), n0);
+    } else {
+      RebuildFrontEndMap();
+    }
   }
+  job_.front_map.reset();
 }
 
 int GraphSlam::ReusableKeyframe(const Pose2& pose) const {
@@ -394,7 +413,7 @@ void GraphSlam::AddKeyframe(const std::vector<Eigen::Vector2d>& points, GraphSla
   u->anchor_relative = {};
 }
 
-void GraphSlam::RebuildFrontEndMap() {
+void GraphSlam::RebuildFrontEndMap(std::optional<PointGridMap> prebuilt, int prebuilt_nodes) {
   // The front end moves into the graph's frame (its pose with every correction), then its map is
   // the keyframes' points at their optimized poses (the newest first: theirs are kept where two meet).
   const Pose2 now = pose();
@@ -403,20 +422,27 @@ void GraphSlam::RebuildFrontEndMap() {
   last_posterior_ = front_.covariance();
   last_scan_front_ = front_.scan_pose();
   last_keyframe_front_ = graph_.pose(last_keyframe_);
-  std::vector<Eigen::Vector2d> points, normals;
-  for (int k = last_keyframe_; k >= 0; --k) {
-    const Keyframe& kf = *keyframes_[static_cast<size_t>(k)];
-    if (options_.local_map_m > 0 && kf.travel_m < travel_m_ - options_.local_map_m) break;
-    const Pose2& p = graph_.pose(k);
+  const double min_travel =
+      options_.local_map_m > 0 ? travel_m_ - options_.local_map_m : -std::numeric_limits<double>::infinity();
+  PointGridMap map = prebuilt ? std::move(*prebuilt) : LaserSlam::MakeMap(front_options_);
+  AddKeyframesToMap(graph_, keyframes_, prebuilt ? prebuilt_nodes : 0, graph_.nodes() - 1, min_travel, &map);
+  front_.ResetMap(std::move(map));
+  map_built_travel_m_ = travel_m_;
+}
+
+void GraphSlam::AddKeyframesToMap(const PoseGraph& g, const Keyframes& ks, int first, int last, double min_travel_m,
+                                  PointGridMap* map) const {
+  for (int k = last; k >= first; --k) {
+    const Keyframe& kf = *ks[static_cast<size_t>(k)];
+    if (kf.travel_m < min_travel_m) continue;
+    const Pose2& p = g.pose(k);
     const double c = std::cos(p.theta_rad), s = std::sin(p.theta_rad);
     for (size_t i = 0; i < kf.points.size(); ++i) {
-      points.push_back(p.Transform(kf.points[i]));
       const Eigen::Vector2d& n = kf.normals[i];
-      normals.emplace_back(c * n.x() - s * n.y(), s * n.x() + c * n.y());
+      LaserSlam::AddMapPoint(front_options_, p.Transform(kf.points[i]), {c * n.x() - s * n.y(), s * n.x() + c * n.y()},
+                             map);
     }
   }
-  front_.ResetMap(points, normals);
-  map_built_travel_m_ = travel_m_;
 }
 
 const GraphSlam::Submap& GraphSlam::SubmapAt(int keyframe) {

@@ -246,6 +246,9 @@ class GraphSlam {
     int loop_candidates = 0, loop_accepted = 0, loop_rejected = 0, optimizer_iterations = 0;
     bool optimized = false;
     bool closures_changed = false;
+    // After an optimization: the front end's map of the keyframes the job knew at their optimized
+    // poses (built on the worker; the scan thread adds the keyframes that joined since, if it takes it).
+    std::optional<PointGridMap> front_map;
     std::exception_ptr error;
   };
   void StartJob();
@@ -270,7 +273,13 @@ class GraphSlam {
                              const std::vector<Eigen::Matrix3d>& from_new);
   const Submap& SubmapAt(int keyframe);
   bool PairConsistent(const LoopClosure& a, const LoopClosure& b) const;
-  void RebuildFrontEndMap();
+  // The front end moved into the graph's frame, its map rebuilt from the optimized keyframes (or
+  // `prebuilt`, the map of keyframes 0 .. prebuilt_nodes - 1, with the others added).
+  void RebuildFrontEndMap(std::optional<PointGridMap> prebuilt = std::nullopt, int prebuilt_nodes = 0);
+  // Adds the points of keyframes last, last - 1, ..., first (at g's poses; those with travel_m of at
+  // least min_travel_m) to the map, as LaserSlam::ResetMap adds them.
+  void AddKeyframesToMap(const PoseGraph& g, const Keyframes& ks, int first, int last, double min_travel_m,
+                         PointGridMap* map) const;
   void Optimize();
 
   LaserSlamOptions front_options_;
