@@ -495,7 +495,7 @@ LapCounts DriveLaps(int laps, const GraphSlamOptions& options) {
 TEST(GraphSlam, KeyframeReuseKeepsTheGraphBoundedInOneRoom) {
   GraphSlamOptions o = TestGraphOptions();
   o.keyframe_reuse_m = 0.3;
-  o.loop_async = true;  // (as shipped)
+  o.loop_async = true;  // (as a live robot would run it)
   const LapCounts reuse = DriveLaps(8, o);
   ASSERT_EQ(reuse.keyframes.size(), 8u);
   std::string counts;

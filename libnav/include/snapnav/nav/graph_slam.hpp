@@ -128,7 +128,7 @@ struct GraphSlamOptions {
   int optimize_every = 20;
   // The loop search and optimization on a worker thread, their result applied loop_async_scans
   // scans after the job started (see above); false: inside BackEnd, applied at once.
-  bool loop_async = true;
+  bool loop_async = false;
   int loop_async_scans = 10;
   void Validate() const;  // throws std::invalid_argument
 };
