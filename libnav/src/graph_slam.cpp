@@ -51,6 +51,8 @@ void GraphSlamOptions::Validate() const {
   const auto fraction = [](double v) { return v >= 0 && v <= 1; };
   require(positive(keyframe_distance_m), "keyframe_distance_m", "must be > 0");
   require(positive(keyframe_angle_rad), "keyframe_angle_deg", "must be > 0");
+  require(nonneg(keyframe_reuse_m), "keyframe_reuse_m", "must be >= 0");
+  require(nonneg(keyframe_reuse_rad), "keyframe_reuse_deg", "must be >= 0");
   require(nonneg(edge_sigma_xy_m), "edge_sigma_xy_m", "must be >= 0");
   require(nonneg(edge_sigma_xy_per_m), "edge_sigma_xy_per_m", "must be >= 0");
   require(nonneg(edge_sigma_theta_rad), "edge_sigma_theta_deg", "must be >= 0");
@@ -100,6 +102,7 @@ void GraphSlamOptions::Validate() const {
   require(nonneg(optimize_min_m), "optimize_min_m", "must be >= 0");
   require(nonneg(optimize_min_rad), "optimize_min_deg", "must be >= 0");
   require(optimize_every >= 1, "optimize_every", "must be >= 1");
+  require(loop_async_scans >= 1, "loop_async_scans", "must be >= 1");
 }
 
 const char* LoopOutcomeName(LoopOutcome o) {
@@ -119,6 +122,10 @@ GraphSlam::GraphSlam(const LaserSlamOptions& front_end, const GraphSlamOptions& 
     : front_options_(front_end), options_(options), front_(front_end, start), start_(start) {
   options_.Validate();
   last_posterior_ = front_.covariance();
+}
+
+GraphSlam::~GraphSlam() {
+  if (worker_.joinable()) worker_.join();
 }
 
 GraphSlamUpdate GraphSlam::Update(const std::vector<Eigen::Vector2d>& points_robot, int64_t utime) {
@@ -187,6 +194,20 @@ GraphSlamUpdate GraphSlam::AfterFrontEnd(const LaserSlamUpdate& front_update,
     u.keyframe = std::hypot(d.x_m, d.y_m) >= options_.keyframe_distance_m ||
                  std::abs(d.theta_rad) >= options_.keyframe_angle_rad;
   }
+  if (u.keyframe && last_keyframe_ >= 0 && options_.keyframe_reuse_m > 0 &&
+      front_update.outcome == MatchOutcome::kAccepted) {
+    const int j = ReusableKeyframe(ToGraph(sp));
+    if (j >= 0) {
+      // The scan's pose kept relative to keyframe j from now on: the front end's frame pose of j
+      // such that ToGraph stays as it was (no jump), the uncertainty relative to it that of a new keyframe.
+      last_keyframe_front_ = last_keyframe_front_.Compose(graph_.pose(last_keyframe_).Between(graph_.pose(j)));
+      last_keyframe_ = j;
+      relative_covariance_.setZero();
+      u.keyframe = false;
+      u.reused_keyframe = true;
+      ++keyframe_reuses_;
+    }
+  }
   if (u.keyframe) {
     pending_points_ = points_robot;
     u.anchor_keyframe = graph_.nodes();
@@ -201,23 +222,147 @@ GraphSlamUpdate GraphSlam::AfterFrontEnd(const LaserSlamUpdate& front_update,
 void GraphSlam::BackEnd(GraphSlamUpdate* u) {
   if (!pending_front_) throw std::logic_error("graph slam: BackEnd without FrontEnd");
   pending_front_ = false;
-  if (!u->keyframe) return;
-  AddKeyframe(pending_points_, u);
-  pending_points_.clear();
-  const int kf = last_keyframe_;
-  if (options_.local_map_m > 0 && travel_m_ - map_built_travel_m_ >= 0.5 * options_.local_map_m) {
-    RebuildFrontEndMap();
+  // A job that ran loop_async_scans scans is applied now (waiting for the worker if it is not done).
+  if (job_running_ && ++job_scans_ >= options_.loop_async_scans) ApplyJob(u);
+  if (u->keyframe) {
+    AddKeyframe(pending_points_, u);
+    pending_points_.clear();
+    if (options_.local_map_m > 0 && travel_m_ - map_built_travel_m_ >= 0.5 * options_.local_map_m) {
+      RebuildFrontEndMap();
+    }
+    todo_.push_back(last_keyframe_);
   }
-  // Pending closures that waited too long.
-  while (!pending_.empty() &&
-         closures_[static_cast<size_t>(pending_.front())].to_keyframe + options_.loop_pending_keyframes < kf) {
-    closures_[static_cast<size_t>(pending_.front())].outcome = LoopOutcome::kExpired;
-    ++loop_rejected_;
-    ++u->loop_rejected;
-    pending_.pop_front();
+  if (job_running_ || todo_.empty()) return;
+  StartJob();
+  if (!options_.loop_async) {
+    RunJob();
+    ApplyJob(u);
   }
-  SearchLoops(kf, u);
-  if (optimize_due_ || (unoptimized_closures_ > 0 && unoptimized_closures_ >= options_.optimize_every)) Optimize(u);
+}
+
+GraphSlamUpdate GraphSlam::Flush() {
+  GraphSlamUpdate u;
+  if (job_running_) ApplyJob(&u);
+  return u;
+}
+
+void GraphSlam::StartJob() {
+  job_ = Job{};
+  job_.graph = graph_;
+  job_.keyframes = keyframes_;
+  job_.todo.swap(todo_);
+  job_.nodes_at_start = graph_.nodes();
+  job_.edges_at_start = static_cast<int>(graph_.edges().size());
+  job_running_ = true;
+  job_scans_ = 0;
+  if (options_.loop_async) worker_ = std::thread([this] { RunJob(); });
+}
+
+void GraphSlam::RunJob() {
+  try {
+    for (const int kf : job_.todo) {
+      // Pending closures that waited too long.
+      while (!pending_.empty() &&
+             closures_[static_cast<size_t>(pending_.front())].to_keyframe + options_.loop_pending_keyframes < kf) {
+        closures_[static_cast<size_t>(pending_.front())].outcome = LoopOutcome::kExpired;
+        ++loop_rejected_;
+        ++job_.loop_rejected;
+        job_.closures_changed = true;
+        pending_.pop_front();
+      }
+      SearchLoops(kf);
+      if (optimize_due_ || (unoptimized_closures_ > 0 && unoptimized_closures_ >= options_.optimize_every)) Optimize();
+    }
+    if (job_.optimized) {
+      // The front end's map at the optimized poses, in case the correction calls for it (ApplyJob).
+      const int n0 = job_.nodes_at_start;
+      const double travel = job_.keyframes[static_cast<size_t>(n0 - 1)]->travel_m;
+      const double min_travel =
+          options_.local_map_m > 0 ? travel - options_.local_map_m : -std::numeric_limits<double>::infinity();
+      PointGridMap map = LaserSlam::MakeMap(front_options_);
+      AddKeyframesToMap(job_.graph, job_.keyframes, 0, n0 - 1, min_travel, &map);
+      job_.front_map = std::move(map);
+    }
+  } catch (...) {
+    job_.error = std::current_exception();
+  }
+}
+
+void GraphSlam::ApplyJob(GraphSlamUpdate* u) {
+  if (worker_.joinable()) worker_.join();
+  job_running_ = false;
+  if (job_.error) std::rethrow_exception(job_.error);
+  u->loop_candidates += job_.loop_candidates;
+  u->loop_accepted += job_.loop_accepted;
+  u->loop_rejected += job_.loop_rejected;
+  u->optimizer_iterations += job_.optimizer_iterations;
+  if (job_.closures_changed) shown_.closures = closures_;
+  shown_.loop_accepted = loop_accepted_;
+  shown_.loop_rejected = loop_rejected_;
+  shown_.optimizations = optimizations_;
+  if (job_.loop_accepted == 0 && !job_.optimized) return;  // the graph is as it was
+  // The job's graph, then the keyframes that joined since (and their edges): each follows the
+  // correction of the keyframe its edge comes from (the one before it, or a reused one).
+  const Pose2 before = pose();
+  PoseGraph g = std::move(job_.graph);
+  const int n0 = job_.nodes_at_start;
+  const bool same_nodes = graph_.nodes() == n0;
+  std::vector<Pose2> correction(static_cast<size_t>(graph_.nodes()));
+  for (int n = 0; n < n0; ++n) correction[static_cast<size_t>(n)] = g.pose(n).Compose(graph_.pose(n).Inverse());
+  for (size_t e = static_cast<size_t>(job_.edges_at_start); e < graph_.edges().size(); ++e) {
+    const PoseGraphEdge& edge = graph_.edges()[e];  // (only odometry edges join the live graph: from < to)
+    if (edge.to >= n0) correction[static_cast<size_t>(edge.to)] = correction[static_cast<size_t>(edge.from)];
+  }
+  for (int n = n0; n < graph_.nodes(); ++n) g.AddNode(correction[static_cast<size_t>(n)].Compose(graph_.pose(n)));
+  for (size_t e = static_cast<size_t>(job_.edges_at_start); e < graph_.edges().size(); ++e) {
+    const PoseGraphEdge& edge = graph_.edges()[e];
+    const int index = g.AddEdge(edge.from, edge.to, edge.mean, edge.information, edge.kind);
+    if (!edge.enabled) g.SetEnabled(index, false);
+  }
+  graph_ = std::move(g);
+  if (!job_.optimized) return;
+  ++graph_version_;
+  const Pose2 after = pose();
+  u->corrected = true;
+  u->correction_m = std::hypot(after.x_m - before.x_m, after.y_m - before.y_m);
+  u->correction_rad = std::abs(WrapAngle(after.theta_rad - before.theta_rad));
+  ++corrections_;
+  last_correction_m_ = u->correction_m;
+  last_correction_rad_ = u->correction_rad;
+  if (u->correction_m >= options_.frontend_reset_m || u->correction_rad >= options_.frontend_reset_rad) {
+    // The worker's map of the keyframes it knew, the ones that joined since added here. (With
+    // local_map_m its travel window is the last known keyframe's: rebuilt from scratch when
+    // keyframes joined since.)
+    if (job_.front_map && (same_nodes || options_.local_map_m <= 0)) {
+      RebuildFrontEndMap(std::move(job_.front_map), n0);
+    } else {
+      RebuildFrontEndMap();
+    }
+  }
+  job_.front_map.reset();
+}
+
+int GraphSlam::ReusableKeyframe(const Pose2& pose) const {
+  std::vector<std::pair<double, int>> near;  // (distance, keyframe)
+  for (int k = 0; k < graph_.nodes(); ++k) {
+    if (k == last_keyframe_) continue;
+    const Pose2& q = graph_.pose(k);
+    const double d = std::hypot(q.x_m - pose.x_m, q.y_m - pose.y_m);
+    if (d > options_.keyframe_reuse_m || std::abs(WrapAngle(q.theta_rad - pose.theta_rad)) > options_.keyframe_reuse_rad) {
+      continue;
+    }
+    near.push_back({d, k});
+  }
+  if (near.empty()) return -1;
+  std::sort(near.begin(), near.end());
+  // Only where the graph knows the keyframe's position relative to the last one (as a closure may
+  // join alone: loop_confident_sigma_m); where it does not (drift since the last closure), a new
+  // keyframe joins and the loop search runs.
+  const std::vector<Eigen::Matrix3d> from_last = graph_.RelativeCovariances(last_keyframe_);
+  for (const auto& [d, k] : near) {
+    if (MaxPositionSigma(from_last[static_cast<size_t>(k)]) <= options_.loop_confident_sigma_m) return k;
+  }
+  return -1;
 }
 
 void GraphSlam::NoteClosure(const LoopClosure& c) {
@@ -260,7 +405,7 @@ void GraphSlam::AddKeyframe(const std::vector<Eigen::Vector2d>& points, GraphSla
     id = graph_.AddNode(graph_.pose(last_keyframe_).Compose(mean));
     graph_.AddEdge(last_keyframe_, id, mean, ToFrameInformation(mean, cov), PoseGraphEdgeKind::kOdometry);
   }
-  keyframes_.push_back(std::move(k));
+  keyframes_.push_back(std::make_shared<const Keyframe>(std::move(k)));
   relative_covariance_.setZero();
   last_keyframe_ = id;
   last_keyframe_front_ = sp;
@@ -268,7 +413,7 @@ void GraphSlam::AddKeyframe(const std::vector<Eigen::Vector2d>& points, GraphSla
   u->anchor_relative = {};
 }
 
-void GraphSlam::RebuildFrontEndMap() {
+void GraphSlam::RebuildFrontEndMap(std::optional<PointGridMap> prebuilt, int prebuilt_nodes) {
   // The front end moves into the graph's frame (its pose with every correction), then its map is
   // the keyframes' points at their optimized poses (the newest first: theirs are kept where two meet).
   const Pose2 now = pose();
@@ -277,53 +422,60 @@ void GraphSlam::RebuildFrontEndMap() {
   last_posterior_ = front_.covariance();
   last_scan_front_ = front_.scan_pose();
   last_keyframe_front_ = graph_.pose(last_keyframe_);
-  std::vector<Eigen::Vector2d> points, normals;
-  for (int k = last_keyframe_; k >= 0; --k) {
-    const Keyframe& kf = keyframes_[static_cast<size_t>(k)];
-    if (options_.local_map_m > 0 && kf.travel_m < travel_m_ - options_.local_map_m) break;
-    const Pose2& p = graph_.pose(k);
+  const double min_travel =
+      options_.local_map_m > 0 ? travel_m_ - options_.local_map_m : -std::numeric_limits<double>::infinity();
+  PointGridMap map = prebuilt ? std::move(*prebuilt) : LaserSlam::MakeMap(front_options_);
+  AddKeyframesToMap(graph_, keyframes_, prebuilt ? prebuilt_nodes : 0, graph_.nodes() - 1, min_travel, &map);
+  front_.ResetMap(std::move(map));
+  map_built_travel_m_ = travel_m_;
+}
+
+void GraphSlam::AddKeyframesToMap(const PoseGraph& g, const Keyframes& ks, int first, int last, double min_travel_m,
+                                  PointGridMap* map) const {
+  for (int k = last; k >= first; --k) {
+    const Keyframe& kf = *ks[static_cast<size_t>(k)];
+    if (kf.travel_m < min_travel_m) continue;
+    const Pose2& p = g.pose(k);
     const double c = std::cos(p.theta_rad), s = std::sin(p.theta_rad);
     for (size_t i = 0; i < kf.points.size(); ++i) {
-      points.push_back(p.Transform(kf.points[i]));
       const Eigen::Vector2d& n = kf.normals[i];
-      normals.emplace_back(c * n.x() - s * n.y(), s * n.x() + c * n.y());
+      LaserSlam::AddMapPoint(front_options_, p.Transform(kf.points[i]), {c * n.x() - s * n.y(), s * n.x() + c * n.y()},
+                             map);
     }
   }
-  front_.ResetMap(points, normals);
-  map_built_travel_m_ = travel_m_;
 }
 
 const GraphSlam::Submap& GraphSlam::SubmapAt(int keyframe) {
   Submap& s = submaps_[keyframe];
-  const Pose2 origin = graph_.pose(keyframe);
-  if (s.pyramid && s.version != graph_version_) {
+  const Pose2 origin = job_.graph.pose(keyframe);
+  if (s.pyramid && s.version != loop_version_) {
     // An optimization since: the submap stands if its keyframes kept their poses relative to the
     // centre (within half a cell and 0.2 degrees).
     bool kept = true;
     for (const auto& [k, rel] : s.members) {
-      const Pose2 now = origin.Between(graph_.pose(k));
+      const Pose2 now = origin.Between(job_.graph.pose(k));
       if (std::hypot(now.x_m - rel.x_m, now.y_m - rel.y_m) > 0.5 * options_.loop_search.cell_m ||
           std::abs(WrapAngle(now.theta_rad - rel.theta_rad)) > 0.2 * kRadPerDeg) {
         kept = false;
         break;
       }
     }
-    if (kept) s.version = graph_version_;
+    if (kept) s.version = loop_version_;
   }
-  if (s.version == graph_version_ && s.pyramid) return s;
+  if (s.version == loop_version_ && s.pyramid) return s;
   s.members.clear();
-  const Keyframe& centre = keyframes_[static_cast<size_t>(keyframe)];
+  const Keyframe& centre = (*job_.keyframes[static_cast<size_t>(keyframe)]);
   std::vector<Eigen::Vector2d> points, normals, search;
   const double range2 = options_.loop_max_range_m * options_.loop_max_range_m;
   std::vector<Eigen::Matrix3d> from_centre;
-  if (options_.loop_submap_sigma_m > 0) from_centre = graph_.RelativeCovariances(keyframe);
-  for (int k = 0; k < graph_.nodes(); ++k) {
-    const Keyframe& kf = keyframes_[static_cast<size_t>(k)];
+  if (options_.loop_submap_sigma_m > 0) from_centre = job_.graph.RelativeCovariances(keyframe);
+  for (int k = 0; k < job_.graph.nodes(); ++k) {
+    const Keyframe& kf = (*job_.keyframes[static_cast<size_t>(k)]);
     if (std::abs(kf.travel_m - centre.travel_m) > options_.loop_submap_m) continue;
     if (!from_centre.empty() && MaxPositionSigma(from_centre[static_cast<size_t>(k)]) > options_.loop_submap_sigma_m) {
       continue;
     }
-    const Pose2 rel = origin.Between(graph_.pose(k));
+    const Pose2 rel = origin.Between(job_.graph.pose(k));
     s.members.push_back({k, rel});
     const double c = std::cos(rel.theta_rad), sn = std::sin(rel.theta_rad);
     std::vector<Eigen::Vector2d> in_range;
@@ -344,7 +496,7 @@ const GraphSlam::Submap& GraphSlam::SubmapAt(int keyframe) {
   for (size_t i = 0; i < points.size(); ++i) s.map->Add(points[i], normals[i]);
   s.pyramid = std::make_unique<LikelihoodPyramid>(DecimatePoints(search, 0.5 * options_.loop_search.cell_m),
                                                   options_.loop_search, 0.0);
-  s.version = graph_version_;
+  s.version = loop_version_;
   // Keep the cache small: at most 64 submaps, those of older versions first out.
   while (submaps_.size() > 64) {
     auto oldest = submaps_.begin();
@@ -366,20 +518,20 @@ MatcherOptions GraphSlam::LoopIcpOptions() const {
 
 GraphSlam::Query GraphSlam::MakeQuery(int kf) const {
   Query q;
-  const Keyframe& now = keyframes_[static_cast<size_t>(kf)];
+  const Keyframe& now = (*job_.keyframes[static_cast<size_t>(kf)]);
   if (options_.loop_query_m <= 0) {
     q.search = now.search_points;
     q.points = now.points;
     q.normals = now.normals;
     return q;
   }
-  const Pose2 origin = graph_.pose(kf);
+  const Pose2 origin = job_.graph.pose(kf);
   const double range2 = options_.loop_max_range_m * options_.loop_max_range_m;
   std::vector<Eigen::Vector2d> near, points, normals;
   for (int k = kf; k >= 0; --k) {
-    const Keyframe& kk = keyframes_[static_cast<size_t>(k)];
+    const Keyframe& kk = (*job_.keyframes[static_cast<size_t>(k)]);
     if (kk.travel_m < now.travel_m - options_.loop_query_m) break;
-    const Pose2 rel = origin.Between(graph_.pose(k));
+    const Pose2 rel = origin.Between(job_.graph.pose(k));
     const double c = std::cos(rel.theta_rad), sn = std::sin(rel.theta_rad);
     for (size_t i = 0; i < kk.points.size(); ++i) {
       const Eigen::Vector2d p = rel.Transform(kk.points[i]);
@@ -408,9 +560,9 @@ LoopClosure GraphSlam::MatchCandidate(int old_kf, int kf, const Query& query,
   LoopClosure c;
   c.from_keyframe = old_kf;
   c.to_keyframe = kf;
-  c.from_scan = keyframes_[static_cast<size_t>(old_kf)].scan;
-  c.to_scan = keyframes_[static_cast<size_t>(kf)].scan;
-  const Pose2 r_old = graph_.pose(kf).Between(graph_.pose(old_kf));  // old in the new one's frame
+  c.from_scan = (*job_.keyframes[static_cast<size_t>(old_kf)]).scan;
+  c.to_scan = (*job_.keyframes[static_cast<size_t>(kf)]).scan;
+  const Pose2 r_old = job_.graph.pose(kf).Between(job_.graph.pose(old_kf));  // old in the new one's frame
   c.predicted = r_old.Inverse();
   const Eigen::Matrix3d predicted_cov = InverseCovariance(r_old, from_new[static_cast<size_t>(old_kf)]);
   c.graph_sigma_m = MaxPositionSigma(predicted_cov);
@@ -458,16 +610,16 @@ LoopClosure GraphSlam::MatchCandidate(int old_kf, int kf, const Query& query,
 bool GraphSlam::PairConsistent(const LoopClosure& a, const LoopClosure& b) const {
   // The cycle a.to -> a.from (closure a) -> b.from (graph) -> b.to (closure b) against the graph's
   // a.to -> b.to.
-  const Pose2 g_from = graph_.pose(a.from_keyframe).Between(graph_.pose(b.from_keyframe));
-  const Pose2 g_to = graph_.pose(a.to_keyframe).Between(graph_.pose(b.to_keyframe));
+  const Pose2 g_from = job_.graph.pose(a.from_keyframe).Between(job_.graph.pose(b.from_keyframe));
+  const Pose2 g_to = job_.graph.pose(a.to_keyframe).Between(job_.graph.pose(b.to_keyframe));
   const Pose2 cycle = a.relative.Inverse().Compose(g_from).Compose(b.relative);
   const Eigen::Vector3d e = Difference(cycle, g_to);
   // Covariances, each turned into a.to's axes (first order; lever arms of the short graph parts left out).
-  const auto from_a_from = graph_.RelativeCovariances(a.from_keyframe);
-  const auto from_a_to = graph_.RelativeCovariances(a.to_keyframe);
-  const double th_a_to = graph_.pose(a.to_keyframe).theta_rad;
-  const double th_a_from = graph_.pose(a.from_keyframe).theta_rad;
-  const double th_b_from = graph_.pose(b.from_keyframe).theta_rad;
+  const auto from_a_from = job_.graph.RelativeCovariances(a.from_keyframe);
+  const auto from_a_to = job_.graph.RelativeCovariances(a.to_keyframe);
+  const double th_a_to = job_.graph.pose(a.to_keyframe).theta_rad;
+  const double th_a_from = job_.graph.pose(a.from_keyframe).theta_rad;
+  const double th_b_from = job_.graph.pose(b.from_keyframe).theta_rad;
   Eigen::Matrix3d s = RotateCovariance(a.covariance, th_a_from - th_a_to);
   s += RotateCovariance(b.covariance, th_b_from - th_a_to);
   s += RotateCovariance(from_a_from[static_cast<size_t>(b.from_keyframe)], th_a_from - th_a_to);
@@ -476,16 +628,16 @@ bool GraphSlam::PairConsistent(const LoopClosure& a, const LoopClosure& b) const
   return e.dot(s.inverse() * e) <= options_.loop_gate_mahalanobis2;
 }
 
-void GraphSlam::SearchLoops(int kf, GraphSlamUpdate* u) {
+void GraphSlam::SearchLoops(int kf) {
   if (options_.loop_candidates == 0) return;
-  const Keyframe& now = keyframes_[static_cast<size_t>(kf)];
+  const Keyframe& now = (*job_.keyframes[static_cast<size_t>(kf)]);
   if (now.travel_m < options_.loop_min_travel_m || now.search_points.empty()) return;
   const auto turning = [&](const Keyframe& k) {
     return options_.loop_max_turn_rate_rad_s > 0 && k.turn_rate_rad_s > options_.loop_max_turn_rate_rad_s;
   };
   if (turning(now)) return;
-  const std::vector<Eigen::Matrix3d> from_new = graph_.RelativeCovariances(kf);
-  const Pose2 p = graph_.pose(kf);
+  const std::vector<Eigen::Matrix3d> from_new = job_.graph.RelativeCovariances(kf);
+  const Pose2 p = job_.graph.pose(kf);
   // Candidates: old keyframes within reach; of each run of consecutive ones (one place), the nearest.
   struct Candidate {
     int keyframe;
@@ -494,12 +646,12 @@ void GraphSlam::SearchLoops(int kf, GraphSlamUpdate* u) {
   std::vector<Candidate> best_of_runs;
   int run_end = -2;
   for (int i = 0; i < kf; ++i) {
-    const Keyframe& old = keyframes_[static_cast<size_t>(i)];
+    const Keyframe& old = (*job_.keyframes[static_cast<size_t>(i)]);
     if (old.travel_m > now.travel_m - options_.loop_min_travel_m) break;
     if (turning(old)) continue;
     const double sigma = MaxPositionSigma(from_new[static_cast<size_t>(i)]);
     if (!std::isfinite(sigma)) continue;
-    const Pose2& q = graph_.pose(i);
+    const Pose2& q = job_.graph.pose(i);
     const double d = std::hypot(q.x_m - p.x_m, q.y_m - p.y_m);
     const double reach =
         options_.loop_distance_m + std::min(options_.loop_search_sigmas * sigma, options_.loop_window_max_m);
@@ -520,7 +672,8 @@ void GraphSlam::SearchLoops(int kf, GraphSlamUpdate* u) {
   const Query query = MakeQuery(kf);
   for (const Candidate& cand : best_of_runs) {
     LoopClosure c = MatchCandidate(cand.keyframe, kf, query, from_new);
-    ++u->loop_candidates;
+    ++job_.loop_candidates;
+    job_.closures_changed = true;
     const int index = static_cast<int>(closures_.size());
     if (c.outcome == LoopOutcome::kPending) {
       // A second, independent closure (from another keyframe) that agrees confirms both.
@@ -528,11 +681,11 @@ void GraphSlam::SearchLoops(int kf, GraphSlamUpdate* u) {
         LoopClosure& other = closures_[static_cast<size_t>(*it)];
         if (other.to_keyframe == kf || !PairConsistent(other, c)) continue;
         other.outcome = LoopOutcome::kAccepted;
-        other.edge = graph_.AddEdge(other.from_keyframe, other.to_keyframe, other.relative,
+        other.edge = job_.graph.AddEdge(other.from_keyframe, other.to_keyframe, other.relative,
                                     ToFrameInformation(other.relative, other.covariance),
                                     PoseGraphEdgeKind::kLoopClosure);
         ++loop_accepted_;
-        ++u->loop_accepted;
+        ++job_.loop_accepted;
         NoteClosure(other);
         pending_.erase(it);
         c.outcome = LoopOutcome::kAccepted;
@@ -540,50 +693,41 @@ void GraphSlam::SearchLoops(int kf, GraphSlamUpdate* u) {
       }
     }
     if (c.outcome == LoopOutcome::kAccepted) {
-      c.edge = graph_.AddEdge(c.from_keyframe, c.to_keyframe, c.relative, ToFrameInformation(c.relative, c.covariance),
+      c.edge = job_.graph.AddEdge(c.from_keyframe, c.to_keyframe, c.relative, ToFrameInformation(c.relative, c.covariance),
                               PoseGraphEdgeKind::kLoopClosure);
       ++loop_accepted_;
-      ++u->loop_accepted;
+      ++job_.loop_accepted;
       NoteClosure(c);
     } else if (c.outcome == LoopOutcome::kPending) {
       pending_.push_back(index);
     } else {
       ++loop_rejected_;
-      ++u->loop_rejected;
+      ++job_.loop_rejected;
     }
     closures_.push_back(c);
   }
 }
 
-void GraphSlam::Optimize(GraphSlamUpdate* u) {
-  const Pose2 before = pose();
+void GraphSlam::Optimize() {
   PoseGraphOptimizeOptions o;
   o.max_iterations = options_.optimizer_iterations;
   o.closure_chi2_max = options_.closure_chi2_max;
-  const PoseGraphOptimizeResult r = graph_.Optimize(o);
+  const PoseGraphOptimizeResult r = job_.graph.Optimize(o);
   ++optimizations_;
   unoptimized_closures_ = 0;
   optimize_due_ = false;
-  ++graph_version_;
-  u->optimizer_iterations += r.iterations;
+  ++loop_version_;
+  job_.optimized = true;
+  job_.optimizer_iterations += r.iterations;
   for (const int edge : r.switched_off) {
     for (LoopClosure& c : closures_) {
       if (c.edge != edge || c.outcome != LoopOutcome::kAccepted) continue;
       c.outcome = LoopOutcome::kSwitchedOff;
       --loop_accepted_;
       ++loop_rejected_;
-      ++u->loop_rejected;
+      ++job_.loop_rejected;
+      job_.closures_changed = true;
     }
-  }
-  const Pose2 after = pose();
-  u->corrected = true;
-  u->correction_m = std::hypot(after.x_m - before.x_m, after.y_m - before.y_m);
-  u->correction_rad = std::abs(WrapAngle(after.theta_rad - before.theta_rad));
-  ++corrections_;
-  last_correction_m_ = u->correction_m;
-  last_correction_rad_ = u->correction_rad;
-  if (u->correction_m >= options_.frontend_reset_m || u->correction_rad >= options_.frontend_reset_rad) {
-    RebuildFrontEndMap();
   }
 }
 
@@ -591,7 +735,7 @@ std::vector<Eigen::Vector2d> GraphSlam::MapPoints(double cell_m) const {
   std::vector<Eigen::Vector2d> points;
   for (int k = 0; k < graph_.nodes(); ++k) {
     const Pose2& p = graph_.pose(k);
-    for (const Eigen::Vector2d& q : keyframes_[static_cast<size_t>(k)].points) points.push_back(p.Transform(q));
+    for (const Eigen::Vector2d& q : keyframes_[static_cast<size_t>(k)]->points) points.push_back(p.Transform(q));
   }
   return DecimatePoints(points, cell_m);
 }
@@ -606,7 +750,7 @@ const std::vector<Eigen::Vector2d>& GraphSlam::Map() const {
   const double cell = front_options_.map_resolution_m;
   for (; map_keyframes_ < graph_.nodes(); ++map_keyframes_) {
     const Pose2& p = graph_.pose(map_keyframes_);
-    for (const Eigen::Vector2d& q : keyframes_[static_cast<size_t>(map_keyframes_)].points) {
+    for (const Eigen::Vector2d& q : keyframes_[static_cast<size_t>(map_keyframes_)]->points) {
       const Eigen::Vector2d w = p.Transform(q);
       const auto cx = static_cast<int64_t>(std::floor(w.x() / cell));
       const auto cy = static_cast<int64_t>(std::floor(w.y() / cell));

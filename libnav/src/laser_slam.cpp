@@ -112,11 +112,14 @@ PointGridMap LaserSlam::MakeMap(const LaserSlamOptions& options) {
 void LaserSlam::ResetMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals) {
   if (normals.size() != points.size()) throw std::invalid_argument("laser slam: ResetMap needs a normal per point");
   map_ = MakeMap(options_);
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!points[i].allFinite()) continue;
-    if (map_.size() > 0 && map_.HasPointWithin(points[i], options_.add_distance_m)) continue;
-    map_.Add(points[i], normals[i]);
-  }
+  for (size_t i = 0; i < points.size(); ++i) AddMapPoint(options_, points[i], normals[i], &map_);
+}
+
+void LaserSlam::AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
+                            PointGridMap* map) {
+  if (!p.allFinite()) return;
+  if (map->size() > 0 && map->HasPointWithin(p, options.add_distance_m)) return;
+  map->Add(p, normal);
 }
 
 LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {

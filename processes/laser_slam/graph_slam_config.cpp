@@ -30,6 +30,8 @@ nav::GraphSlamOptions ReadGraphSlamOptions(const glue::IniFile& ini, const std::
   const auto deg = [&](const char* key) { return ini.GetDouble(s, key) / kDegPerRad; };
   o.keyframe_distance_m = ini.GetDouble(s, "graph_keyframe_distance_m");
   o.keyframe_angle_rad = deg("graph_keyframe_angle_deg");
+  o.keyframe_reuse_m = ini.GetDouble(s, "graph_keyframe_reuse_m");
+  o.keyframe_reuse_rad = deg("graph_keyframe_reuse_deg");
   o.edge_sigma_xy_m = ini.GetDouble(s, "graph_edge_sigma_xy_m");
   o.edge_sigma_xy_per_m = ini.GetDouble(s, "graph_edge_sigma_xy_per_m");
   o.edge_sigma_theta_rad = deg("graph_edge_sigma_theta_deg");
@@ -72,6 +74,8 @@ nav::GraphSlamOptions ReadGraphSlamOptions(const glue::IniFile& ini, const std::
   o.optimize_min_m = ini.GetDouble(s, "graph_optimize_min_m");
   o.optimize_min_rad = deg("graph_optimize_min_deg");
   o.optimize_every = ini.GetInt(s, "graph_optimize_every");
+  o.loop_async = ini.GetBool(s, "graph_loop_async");
+  o.loop_async_scans = ini.GetInt(s, "graph_loop_async_scans");
   ini.Check([&o] { o.Validate(); });
   return o;
 }
@@ -79,6 +83,8 @@ nav::GraphSlamOptions ReadGraphSlamOptions(const glue::IniFile& ini, const std::
 void PrintGraphSlamOptions(std::ostream& out, const nav::GraphSlamOptions& o) {
   out << "graph_keyframe_distance_m = " << o.keyframe_distance_m
       << "\ngraph_keyframe_angle_deg = " << o.keyframe_angle_rad * kDegPerRad
+      << "\ngraph_keyframe_reuse_m = " << o.keyframe_reuse_m
+      << "\ngraph_keyframe_reuse_deg = " << o.keyframe_reuse_rad * kDegPerRad
       << "\ngraph_edge_sigma_xy_m = " << o.edge_sigma_xy_m << "\ngraph_edge_sigma_xy_per_m = " << o.edge_sigma_xy_per_m
       << "\ngraph_edge_sigma_theta_deg = " << o.edge_sigma_theta_rad * kDegPerRad
       << "\ngraph_edge_sigma_theta_deg_per_m = " << o.edge_sigma_theta_per_m * kDegPerRad
@@ -108,7 +114,8 @@ void PrintGraphSlamOptions(std::ostream& out, const nav::GraphSlamOptions& o) {
       << "\ngraph_optimizer_iterations = " << o.optimizer_iterations
       << "\ngraph_closure_chi2_max = " << o.closure_chi2_max << "\ngraph_optimize_min_m = " << o.optimize_min_m
       << "\ngraph_optimize_min_deg = " << o.optimize_min_rad * kDegPerRad << "\ngraph_optimize_every = " << o.optimize_every
-      << "\n";
+      << "\ngraph_loop_async = " << (o.loop_async ? "true" : "false")
+      << "\ngraph_loop_async_scans = " << o.loop_async_scans << "\n";
 }
 
 }  // namespace snapnav::processes

@@ -39,11 +39,7 @@ void GridConfig::Print(std::ostream& out) const {
 }
 
 GridPublisher::GridPublisher(glue::Bus& bus, const GridConfig& config, std::string source, glue::HandlerProblems& problems)
-    : bus_(bus), config_(config), source_(std::move(source)), problems_(problems), builder_([&] {
-        nav::OccupancyGridOptions o = config.grid;
-        o.max_cells = GridConfig::kMaxCells;
-        return o;
-      }()) {
+    : bus_(bus), config_(config), source_(std::move(source)), problems_(problems), builder_(BuilderOptions()) {
   if (!config_.request_channel.empty()) bus_.Subscribe(config_.request_channel, &GridPublisher::OnRequest, this);
 }
 
@@ -55,9 +51,39 @@ void GridPublisher::AddScan(const laser_scan_t& msg, const nav::Pose2& robot_pos
   }
   const auto t0 = std::chrono::steady_clock::now();
   const int64_t too_large = builder_.too_large();
-  if (builder_.Insert(glue::GridScanOf(msg, robot_pose))) last_inserted_ = robot_pose;
+  if (builder_.Insert(glue::GridScanOf(msg, robot_pose))) {
+    last_inserted_ = robot_pose;
+    ++added_;
+  }
   if (builder_.too_large() > too_large) problems_.Skip("grid too large", "a scan at (" + std::to_string(robot_pose.x_m) + ", " + std::to_string(robot_pose.y_m) + ") would grow the grid beyond " + std::to_string(GridConfig::kMaxCells) + " cells", false);
   insert_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+nav::OccupancyGridOptions GridPublisher::BuilderOptions() const {
+  nav::OccupancyGridOptions o = config_.grid;
+  o.max_cells = GridConfig::kMaxCells;
+  return o;
+}
+
+void GridPublisher::AddKeyframeScan(int keyframe, const laser_scan_t& msg) {
+  if (fixed_ || msg.nranges < 2) return;
+  keyframe_scans_[keyframe] = glue::GridScanOf(msg, {});
+}
+
+void GridPublisher::Rebuild() {
+  rebuild_due_ = false;
+  if (!keyframe_poses_) return;
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<nav::Pose2> poses = keyframe_poses_();
+  nav::OccupancyGridBuilder rebuilt(BuilderOptions());
+  for (auto& [k, scan] : keyframe_scans_) {
+    if (k < 0 || static_cast<size_t>(k) >= poses.size()) continue;
+    scan.robot_pose = poses[static_cast<size_t>(k)];
+    rebuilt.Insert(scan);
+  }
+  builder_ = std::move(rebuilt);
+  ++rebuilds_;
+  last_rebuild_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 void GridPublisher::SetFixed(const nav::OccupancyCells& cells) { fixed_ = cells; }
@@ -65,7 +91,7 @@ void GridPublisher::SetFixed(const nav::OccupancyCells& cells) { fixed_ = cells;
 void GridPublisher::AfterScan(int64_t utime) {
   last_utime_ = std::max(last_utime_, utime);
   if (first_utime_ == 0) first_utime_ = utime;
-  const bool have = fixed_ || builder_.inserted() > 0;
+  const bool have = fixed_ || added_ > 0;
   if (!have) return;
   if (pending_request_) {
     Publish(utime);
@@ -81,12 +107,13 @@ void GridPublisher::OnRequest(const map_request_t& msg) {
     (void)msg;
     ++requests_;
     pending_request_ = true;
-    if (fixed_ || builder_.inserted() > 0) Publish(last_utime_ > 0 ? last_utime_ : msg.utime);
+    if (fixed_ || added_ > 0) Publish(last_utime_ > 0 ? last_utime_ : msg.utime);
   });
 }
 
 void GridPublisher::Publish(int64_t utime) {
   if (config_.channel.empty()) return;
+  if (!fixed_ && rebuild_due_) Rebuild();
   const nav::OccupancyCells cells = fixed_ ? *fixed_ : builder_.Cells();
   bus_.Publish(config_.channel, glue::ToOccupancyGridMsg(cells, utime, "map", source_));
   ++published_;
@@ -96,7 +123,12 @@ void GridPublisher::Publish(int64_t utime) {
 
 void GridPublisher::Report(std::ostream& out) const {
   out << source_.substr(0, source_.find(':')) << " grid: " << published_ << " published on " << config_.channel << " ("
-      << requests_ << " requests), " << builder_.inserted() << " scans inserted (mean " << mean_insert_ms() << " ms)\n";
+      << requests_ << " requests), " << added_ << " scans inserted (mean " << mean_insert_ms() << " ms)";
+  if (rebuilds_ > 0 || !keyframe_scans_.empty()) {
+    out << ", rebuilt from " << keyframe_scans_.size() << " keyframe scans after corrections " << rebuilds_
+        << " times (last " << last_rebuild_ms_ << " ms)";
+  }
+  out << "\n";
 }
 
 }  // namespace snapnav::processes

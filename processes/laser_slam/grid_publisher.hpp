@@ -4,8 +4,16 @@
 // published as occupancy_grid_t every `every_s` of message time and whenever a map_request_t
 // arrives on the request channel (map-export --live). In --mode localize the fixed map is
 // published instead (SetFixed).
+//
+// With the graph back end the grid follows the graph's corrections: the keyframes' scans are kept
+// (AddKeyframeScan), and after a correction (Corrected) the grid is rebuilt from them at the
+// optimized keyframe poses before it is next published (once per publication at most, however
+// many corrections came between), the scans inserted since then added at their live poses.
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
+#include <map>
+#include <vector>
 #include <optional>
 #include <string>
 
@@ -42,6 +50,15 @@ class GridPublisher {
 
   // A scan the SLAM mapped with, at its pose: inserted if it moved enough since the last one.
   void AddScan(const laser_scan_t& msg, const nav::Pose2& robot_pose);
+  // The graph back end: the scan of keyframe `keyframe` (kept for rebuilding), and a correction
+  // of the graph: before the next publication the grid is rebuilt from the kept scans, each at
+  // keyframe_poses()[its keyframe] (the graph's optimized poses then).
+  void SetKeyframePoses(std::function<std::vector<nav::Pose2>()> keyframe_poses) { keyframe_poses_ = std::move(keyframe_poses); }
+  void AddKeyframeScan(int keyframe, const laser_scan_t& msg);
+  void Corrected() { rebuild_due_ = !keyframe_scans_.empty(); }
+  int64_t rebuilds() const { return rebuilds_; }
+  double last_rebuild_ms() const { return last_rebuild_ms_; }
+  size_t keyframe_scans() const { return keyframe_scans_.size(); }
   // A fixed map (--mode localize): published as it is; AddScan is then ignored.
   void SetFixed(const nav::OccupancyCells& cells);
   // After a scan: publishes if every_s passed since the last grid (or since the first scan).
@@ -49,13 +66,15 @@ class GridPublisher {
 
   int64_t published() const { return published_; }
   int64_t requests() const { return requests_; }
-  int64_t inserted() const { return builder_.inserted(); }
+  int64_t inserted() const { return added_; }  // scans AddScan inserted
   double mean_insert_ms() const { return inserted() > 0 ? insert_ms_ / static_cast<double>(inserted()) : 0.0; }
   void Report(std::ostream& out) const;
 
  private:
   void OnRequest(const map_request_t& msg);
   void Publish(int64_t utime);
+  void Rebuild();
+  nav::OccupancyGridOptions BuilderOptions() const;
 
   glue::Bus& bus_;
   GridConfig config_;
@@ -68,6 +87,12 @@ class GridPublisher {
   bool pending_request_ = false;
   int64_t published_ = 0, requests_ = 0;
   double insert_ms_ = 0;
+  int64_t added_ = 0;
+  std::function<std::vector<nav::Pose2>()> keyframe_poses_;
+  std::map<int, nav::GridScan> keyframe_scans_;  // robot_pose unset: taken from keyframe_poses_ when rebuilt
+  bool rebuild_due_ = false;
+  int64_t rebuilds_ = 0;
+  double last_rebuild_ms_ = 0;
 };
 
 }  // namespace snapnav::processes

@@ -178,7 +178,12 @@ LaserSlamNode::LaserSlamNode(glue::Bus& bus, const LaserSlamConfig& config)
   config_.graph.Validate();
   bus_.Subscribe(config_.odometry_channel, &LaserSlamNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   bus_.Subscribe(config_.scan_channel, &LaserSlamNode::OnScan, this);
-  if (!config_.grid.channel.empty()) grid_.emplace(bus_, config_.grid, "laser_slam", problems_);
+  if (!config_.grid.channel.empty()) {
+    grid_.emplace(bus_, config_.grid, "laser_slam", problems_);
+    if (config_.backend == SlamBackend::kGraph) {
+      grid_->SetKeyframePoses([this] { return graph_ ? graph_->graph().poses() : std::vector<nav::Pose2>{}; });
+    }
+  }
 }
 
 // Nothing leaves a handler: inputs are checked before libnav sees them, and anything else
@@ -248,6 +253,12 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
       const nav::GraphSlamUpdate g = graph_->Update(points, msg.utime);
       update = g.front_end;
       if (g.corrected) last_correction_utime_ = msg.utime;
+      if (grid_) {
+        // The live grid follows the graph: the keyframes' scans kept, the grid rebuilt from them at
+        // the optimized poses after a correction (GridPublisher).
+        if (g.keyframe) grid_->AddKeyframeScan(g.anchor_keyframe, msg);
+        if (g.corrected) grid_->Corrected();
+      }
     } else {
       update = slam_->Update(points, msg.utime);
     }

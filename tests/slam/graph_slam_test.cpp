@@ -2,7 +2,9 @@
 // switched-off closures, the branch-and-bound loop matcher, and GraphSlam on ray-cast worlds.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <map>
 #include <string>
 #include <random>
@@ -112,6 +114,8 @@ struct RunResult {
   int64_t candidates = 0, accepted = 0, rejected = 0, corrections = 0;
   std::vector<LoopClosure> closures;
   std::vector<int64_t> keyframe_scans;
+  std::vector<size_t> corrected_scans;  // indices of the scans whose update applied an optimization
+  std::vector<size_t> job_scans;        // ... and after whose update a job was running (loop_async)
 };
 
 RunResult RunGraphSlam(const std::vector<Segment>& world, const std::vector<Pose2>& path,
@@ -127,10 +131,13 @@ RunResult RunGraphSlam(const std::vector<Segment>& world, const std::vector<Pose
       dr = dr.Compose(odometry[i - 1]);
     }
     const GraphSlamUpdate u = slam.Update(Scan(world, path[i], &rng));
+    if (u.corrected) r.corrected_scans.push_back(i);
+    if (slam.job_running()) r.job_scans.push_back(i);
     anchors.push_back({u.anchor_keyframe, u.anchor_relative});
     r.live.push_back(slam.scan_pose());
     r.dead_reckoning.push_back(dr);
   }
+  slam.Flush();
   for (const auto& [k, rel] : anchors) r.optimized.push_back(slam.OptimizedPose(k, rel));
   r.candidates = slam.loop_candidates();
   r.accepted = slam.loop_accepted();
@@ -401,6 +408,116 @@ TEST(GraphSlam, WithTheRobustFrontEndTheLoopStaysClosed) {
   }
 }
 
+// The loop search and optimization on the worker thread (loop_async): the loop is closed as well,
+// every result joins exactly loop_async_scans scans after its job started (never in the scan that
+// started it), and two runs give the same poses to the bit: what the worker's speed decides is
+// only whether the scan thread waits, not what it gets.
+TEST(GraphSlam, OffTheScanThreadTheLoopIsClosedTheSameOnEveryRun) {
+  std::mt19937 rng(5);
+  const std::vector<Segment> world = LoopWorld();
+  const std::vector<Pose2> path = SquarePath(2);
+  const std::vector<Pose2> odometry = DriftingOdometry(path, &rng);
+  GraphSlamOptions o = TestGraphOptions();
+  o.loop_async = true;
+  o.loop_async_scans = 5;
+  const RunResult a = RunGraphSlam(world, path, odometry, DeadReckoningFrontEnd(), o);
+  const RunResult b = RunGraphSlam(world, path, odometry, DeadReckoningFrontEnd(), o);
+  GraphSlamOptions sync = TestGraphOptions();
+  sync.loop_async = false;
+  const RunResult inside = RunGraphSlam(world, path, odometry, DeadReckoningFrontEnd(), sync);
+  EXPECT_TRUE(inside.job_scans.empty()) << "without loop_async no job outlives its scan";
+  EXPECT_FALSE(a.job_scans.empty());
+  ASSERT_EQ(a.optimized.size(), b.optimized.size());
+  for (size_t i = 0; i < a.optimized.size(); ++i) {
+    ASSERT_EQ(a.optimized[i].x_m, b.optimized[i].x_m) << "scan " << i;
+    ASSERT_EQ(a.optimized[i].y_m, b.optimized[i].y_m) << "scan " << i;
+    ASSERT_EQ(a.live[i].theta_rad, b.live[i].theta_rad) << "scan " << i;
+  }
+  EXPECT_EQ(a.corrected_scans, b.corrected_scans);
+  EXPECT_EQ(a.accepted, b.accepted);
+  EXPECT_GE(a.accepted, 5);
+  EXPECT_GE(a.corrections, 1);
+  // Each correction joins 5 scans after its job started: the 4 scans before it ran with the job.
+  for (const size_t c : a.corrected_scans) {
+    ASSERT_GE(c, 5u);
+    for (size_t k = c - 4; k < c; ++k) {
+      EXPECT_TRUE(std::find(a.job_scans.begin(), a.job_scans.end(), k) != a.job_scans.end())
+          << "scan " << k << " before the correction at " << c;
+    }
+  }
+  const double dr = Rmse(a.dead_reckoning, path);
+  EXPECT_LT(Rmse(a.optimized, path), 0.2) << "inside the scan's update: " << Rmse(inside.optimized, path);
+  EXPECT_LT(Rmse(a.optimized, path), 0.15 * dr);
+  for (const LoopClosure& c : a.closures) {
+    if (c.outcome == LoopOutcome::kAccepted) {
+      EXPECT_TRUE(ClosureIsRight(c, path));
+    }
+  }
+  EXPECT_LT(std::hypot(a.live.back().x_m - path.back().x_m, a.live.back().y_m - path.back().y_m), 0.3);
+}
+
+// Laps of one room for a long time (8 laps, 350 m): with keyframe reuse the graph stops growing
+// once the room is mapped (keyframes and map points plateau after the second lap) while the
+// trajectory stays on the truth; without it, it grows with every lap.
+struct LapCounts {
+  std::vector<int> keyframes;      // after each lap
+  std::vector<size_t> map_points;  // ...
+  double rmse_m = 0;
+  int64_t reuses = 0;
+};
+
+LapCounts DriveLaps(int laps, const GraphSlamOptions& options) {
+  std::mt19937 rng(12);
+  const std::vector<Segment> world = LoopWorld();
+  const std::vector<Pose2> path = SquarePath(laps);
+  const std::vector<Pose2> odometry = DriftingOdometry(path, &rng);
+  GraphSlam slam(LaserSlamOptions{}, options, path.front());
+  LapCounts c;
+  std::vector<std::pair<int, Pose2>> anchors;
+  const size_t per_lap = (path.size() - 1) / static_cast<size_t>(laps);
+  for (size_t i = 0; i < path.size(); ++i) {
+    if (i > 0) slam.Predict(odometry[i - 1]);
+    const GraphSlamUpdate u = slam.Update(Scan(world, path[i], &rng));
+    anchors.push_back({u.anchor_keyframe, u.anchor_relative});
+    if (i > 0 && i % per_lap == 0) {
+      c.keyframes.push_back(slam.keyframes());
+      c.map_points.push_back(slam.Map().size());
+    }
+  }
+  slam.Flush();
+  std::vector<Pose2> optimized;
+  for (const auto& [k, rel] : anchors) optimized.push_back(slam.OptimizedPose(k, rel));
+  c.rmse_m = Rmse(optimized, path);
+  c.reuses = slam.keyframe_reuses();
+  return c;
+}
+
+TEST(GraphSlam, KeyframeReuseKeepsTheGraphBoundedInOneRoom) {
+  GraphSlamOptions o = TestGraphOptions();
+  o.keyframe_reuse_m = 0.3;
+  o.loop_async = true;  // (as a live robot would run it)
+  const LapCounts reuse = DriveLaps(8, o);
+  ASSERT_EQ(reuse.keyframes.size(), 8u);
+  std::string counts;
+  for (size_t i = 0; i < reuse.keyframes.size(); ++i) {
+    counts += std::to_string(reuse.keyframes[i]) + "/" + std::to_string(reuse.map_points[i]) + " ";
+  }
+  std::cout << "8 laps with keyframe reuse: keyframes/map points after each lap " << counts << "; " << reuse.reuses
+            << " reuses, RMSE " << reuse.rmse_m << " m\n";
+  EXPECT_LE(reuse.keyframes.back(), reuse.keyframes[1] + 10) << "keyframes/map points per lap: " << counts;
+  EXPECT_LE(reuse.map_points.back(), reuse.map_points[1] + reuse.map_points[1] / 10) << counts;
+  EXPECT_GT(reuse.reuses, 300) << counts;
+  EXPECT_LT(reuse.rmse_m, 0.1) << counts;
+  // Without reuse every lap adds its keyframes.
+  o.keyframe_reuse_m = 0;
+  const LapCounts grow = DriveLaps(4, o);
+  ASSERT_EQ(grow.keyframes.size(), 4u);
+  std::cout << "4 laps without: keyframes after each lap " << grow.keyframes[0] << " " << grow.keyframes[1] << " "
+            << grow.keyframes[2] << " " << grow.keyframes[3] << ", RMSE " << grow.rmse_m << " m\n";
+  EXPECT_GE(grow.keyframes[3], grow.keyframes[1] + 100) << "without reuse";
+  EXPECT_EQ(grow.reuses, 0);
+}
+
 // Two parallel corridors 3 m apart (a U: out along one, back along the other) with their boxes at
 // different places: the old keyframes of the first lie within the search reach of the second's, the
 // corridors' shape is the same, but the places differ: no closure.
@@ -475,6 +592,9 @@ TEST(GraphSlamOptions, InvalidValuesAreRejected) {
   o = {};
   o.loop_max_ambiguity = 0;
   EXPECT_THROW(GraphSlam(LaserSlamOptions{}, o), std::invalid_argument);
+  o = {};
+  o.loop_async_scans = 0;
+  EXPECT_THROW(o.Validate(), std::invalid_argument);
   EXPECT_NO_THROW(GraphSlamOptions{}.Validate());
   EXPECT_STREQ(LoopOutcomeName(LoopOutcome::kSwitchedOff), "switched_off");
 }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "snapnav/glue/bus.hpp"
+#include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
 #include "snapnav/glue/occupancy_grid_msg.hpp"
 #include "snapnav/map_request_t.hpp"
@@ -311,6 +312,11 @@ TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
   }
   EXPECT_EQ(off_wall, 0);
   EXPECT_EQ(node.internal_errors(), 0);
+  // The live grid keeps every keyframe's scan and was rebuilt from them after the corrections
+  // (at its publications: every 5 s of message time).
+  ASSERT_NE(node.grid(), nullptr);
+  EXPECT_EQ(node.grid()->keyframe_scans(), static_cast<size_t>(graph.keyframes()));
+  if (graph.corrections() > 0) EXPECT_GE(node.grid()->rebuilds(), 1);
   // The EKF's status has the graph's fields at zero.
   glue::Bus bus2("memq://");
   LaserSlamNode ekf(bus2, TestConfig("LS8_"));
@@ -538,6 +544,104 @@ TEST(LaserSlamNode, PublishesAnOccupancyGridOfTheRoomAndOneOnRequest) {
   EXPECT_GE(covered, 0.95 * samples);
   EXPECT_GE(c.at(mx, my), 0);
   EXPECT_LE(c.at(mx, my), 19);
+}
+
+// Occupied cells of a grid message: how many, and how many lie more than 0.1 m off the room's walls
+// (a doubled wall: scans inserted at poses the graph has since corrected).
+struct GridWalls {
+  int occupied = 0, off_walls = 0;
+};
+GridWalls CountWalls(const occupancy_grid_t& g) {
+  const nav::OccupancyCells c = glue::FromOccupancyGridMsg(g);
+  GridWalls w;
+  for (int y = 0; y < c.height; ++y) {
+    for (int x = 0; x < c.width; ++x) {
+      if (c.at(x, y) < 65) continue;
+      const double wx = c.origin_x_m + (x + 0.5) * c.resolution_m, wy = c.origin_y_m + (y + 0.5) * c.resolution_m;
+      ++w.occupied;
+      w.off_walls += std::min({std::abs(wx), std::abs(wx - kRoom), std::abs(wy), std::abs(wy - kRoom)}) > 0.1;
+    }
+  }
+  return w;
+}
+
+// The live grid follows the graph's corrections: scans inserted at drifting live poses double the
+// walls; once the graph corrects its keyframes (here: to the truth), the grid published next is
+// rebuilt from the keyframes' scans at the corrected poses, the walls single again; the scans
+// inserted afterwards join it at their live poses.
+TEST(GridPublisher, AfterACorrectionTheGridIsRebuiltFromTheKeyframesWithoutDoubledWalls) {
+  glue::Bus bus("memq://");
+  GridConfig config = TestConfig("GR_").grid;
+  config.every_s = 0;  // on request only
+  glue::HandlerProblems problems(bus, "test");
+  GridPublisher grid(bus, config, "laser_slam", problems);
+  std::vector<nav::Pose2> keyframe_poses;  // what the "graph" says
+  grid.SetKeyframePoses([&] { return keyframe_poses; });
+  std::vector<occupancy_grid_t> grids;
+  bus.Subscribe<occupancy_grid_t>("GR_LASER_SLAM_GRID", [&](const occupancy_grid_t& g) { grids.push_back(g); });
+  const auto request = [&](int64_t utime) {
+    map_request_t r{};
+    r.utime = utime;
+    r.requester = "test";
+    bus.Publish("GR_LASER_SLAM_GRID_REQUEST", r);
+    Drain(bus);
+  };
+  constexpr double kRadius = 1.5, kStep = 0.05;
+  const double turn = kStep / kRadius;
+  const nav::Pose2 delta{kRadius * std::sin(turn), kRadius * (1 - std::cos(turn)), turn};
+  const nav::Pose2 drifting{1.02 * delta.x_m, 1.02 * delta.y_m, delta.theta_rad + 0.003};  // the live pose's steps
+  std::mt19937 rng(4);
+  nav::Pose2 truth{kRoom / 2, kRoom / 2 - kRadius, 0.0}, live = truth;
+  const int64_t t0 = 1'700'000'000'000'000;
+  int64_t utime = t0;
+  for (int k = 0; k <= 250; ++k) {  // 1.3 laps: the live pose 0.75 rad and ~0.5 m off at the end
+    utime = t0 + k * 100'000;
+    if (k > 0) {
+      truth = truth.Compose(delta);
+      live = live.Compose(drifting);
+    }
+    const laser_scan_t scan = Scan(utime, CastRoom(truth, &rng));
+    grid.AddScan(scan, live);
+    if (k % 10 == 0) {  // a keyframe every 0.5 m
+      grid.AddKeyframeScan(static_cast<int>(keyframe_poses.size()), scan);
+      keyframe_poses.push_back(live);
+    }
+    grid.AfterScan(utime);
+  }
+  request(utime);
+  ASSERT_EQ(grids.size(), 1u);
+  const GridWalls before = CountWalls(grids.back());
+  // The correction: the graph's keyframes on the truth.
+  nav::Pose2 t{kRoom / 2, kRoom / 2 - kRadius, 0.0};
+  for (size_t i = 0; i < keyframe_poses.size(); ++i) {
+    keyframe_poses[i] = t;
+    for (int j = 0; j < 10; ++j) t = t.Compose(delta);
+  }
+  grid.Corrected();
+  request(utime);
+  ASSERT_EQ(grids.size(), 2u);
+  EXPECT_EQ(grid.rebuilds(), 1);
+  EXPECT_EQ(grid.keyframe_scans(), keyframe_poses.size());
+  const GridWalls after = CountWalls(grids.back());
+  // More scans after the correction, at the (now corrected) live pose: they join the rebuilt grid.
+  live = truth;
+  for (int k = 1; k <= 20; ++k) {
+    truth = truth.Compose(delta);
+    live = live.Compose(delta);
+    grid.AddScan(Scan(utime + k * 100'000, CastRoom(truth, &rng)), live);
+  }
+  request(utime + 20 * 100'000);
+  ASSERT_EQ(grids.size(), 3u);
+  EXPECT_EQ(grid.rebuilds(), 1) << "no correction since: no rebuild";
+  const GridWalls later = CountWalls(grids.back());
+  std::cout << "live grid: drifting " << before.off_walls << " of " << before.occupied
+            << " occupied cells off the walls; rebuilt after the correction " << after.off_walls << " of "
+            << after.occupied << " (" << grid.last_rebuild_ms() << " ms); 20 scans later " << later.off_walls
+            << " of " << later.occupied << "\n";
+  EXPECT_GT(before.off_walls, before.occupied / 4) << "the drifting grid doubles the walls";
+  EXPECT_GT(after.occupied, 300);
+  EXPECT_LE(after.off_walls, after.occupied / 50);
+  EXPECT_LE(later.off_walls, later.occupied / 50);
 }
 
 // The shipped config/laser_slam.ini loads and holds libnav's defaults.

@@ -13,6 +13,8 @@
 // and point; the classic config's figures beside them), >= 500 scans/s at 681 beams on one core
 // (the snapnav script pins it with taskset -c 0). Writes bench.json and bench.md into --out.
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -122,6 +124,14 @@ int Main(int argc, char** argv) {
   flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options our laser SLAM runs");
   std::vector<std::string> sets;
   flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE");
+  std::vector<std::string> graph_logs;
+  flags.AddStringList("graph-log", &graph_logs,
+                      "an LCM log (scans and odometry, as log-import writes it; e.g. a suite run's NAME/log.lcmlog)\n"
+                      "on which the graph back end is timed too, inside the scan's update and off it");
+  double graph_speed = 4;
+  flags.AddDouble("graph-speed", &graph_speed,
+                  "the graph back end, inside the scan's update and off it (graph_loop_async), is timed with the scans paced at this\n"
+                  "many times the log's rate (its worker needs the time between scans a live run gives it)");
   if (!flags.Parse(argc, argv)) return 0;
   config.overrides = sets;
   const nav::LaserSlamOptions slam_options = eval::LoadLaserSlamOptions(config);
@@ -131,6 +141,10 @@ int Main(int argc, char** argv) {
   eval::PrintLaserSlamOptions(std::cerr, slam_options);
   if (runs < 1 || icp_runs < 1) throw glue::FlagError("--runs and --icp-runs must be >= 1");
   if (!(sim_duration_s > 0)) throw glue::FlagError("--sim-duration-s must be positive");
+  if (!(graph_speed > 0)) throw glue::FlagError("--graph-speed must be positive");
+  for (const std::string& g : graph_logs) {
+    if (!fs::is_regular_file(g)) throw glue::FlagError("--graph-log " + g + ": no such file");
+  }
   if (!fs::is_regular_file(rawlog)) {
     throw glue::FlagError("rawlog " + rawlog + ": no such file" +
                           (rawlog == eval::kMalagaLoopRawlog ? " (install Debian's mrpt-common)" : ""));
@@ -310,30 +324,58 @@ int Main(int argc, char** argv) {
   // keyframes, the loop search, the optimizations) timed apart, on the Malaga loop (its loop is
   // closed) and on the simulated 10 Hz scans; the share of one core at 10 Hz scans (goal <= 0.5).
   const eval::SlamBackendChoice backend = eval::LoadSlamBackend(config);
+  // Each log twice, the scans paced at --graph-speed times the log's rate: the loop search and
+  // optimization inside the scan's update (graph_loop_async = false: the work, timed apart; the core
+  // share from it), and on the worker thread (the scan thread's time per scan: p99, max).
   struct GraphTiming {
-    std::vector<double> front_ms, back_ms, back_max_ms;
-    eval::GraphSlamRun last;
+    std::vector<double> front_ms, back_ms, back_max_ms, sync_p99, sync_max, async_back_ms, async_p99, async_max;
+    eval::GraphSlamRun last, last_async;
     double front = 0, back = 0, back_max = 0, core_share_10hz = 0;
+    double scan_p99_sync = 0, scan_max_sync = 0, back_async = 0, scan_p99_async = 0, scan_max_async = 0;
   };
+  nav::GraphSlamOptions graph_sync = backend.options, graph_async = backend.options;
+  graph_sync.loop_async = false;
+  graph_async.loop_async = true;
   const auto time_graph = [&](const eval::SlamLog& l, const std::string& what) {
     GraphTiming t;
     for (int r = 0; r < runs; ++r) {
-      t.last = eval::RunGraphSlam(l, slam_options, backend.options);
+      t.last = eval::RunGraphSlam(l, slam_options, graph_sync, graph_speed);
       t.front_ms.push_back(t.last.front_ms_per_scan());
       t.back_ms.push_back(t.last.back_ms_per_scan());
       t.back_max_ms.push_back(t.last.back_max_ms);
+      t.sync_p99.push_back(t.last.scan_p99_ms());
+      t.sync_max.push_back(t.last.scan_max_ms());
       std::cerr << "bench-slam: graph back end on " << what << " run " << r + 1 << "/" << runs << ": "
                 << Fixed(t.front_ms.back(), 3) << " + " << Fixed(t.back_ms.back(), 3) << " ms/scan (slowest back end "
                 << Fixed(t.back_max_ms.back(), 1) << " ms), " << t.last.loop_accepted << " closures\n";
+      t.last_async = eval::RunGraphSlam(l, slam_options, graph_async, graph_speed);
+      t.async_back_ms.push_back(t.last_async.back_ms_per_scan());
+      t.async_p99.push_back(t.last_async.scan_p99_ms());
+      t.async_max.push_back(t.last_async.scan_max_ms());
+      std::cerr << "bench-slam: ... off the scan thread at " << Fixed(graph_speed, 1) << "x the log's rate: scan thread p99 "
+                << Fixed(t.async_p99.back(), 2) << " ms, max " << Fixed(t.async_max.back(), 1) << " ms (inside: p99 "
+                << Fixed(t.sync_p99.back(), 2) << ", max " << Fixed(t.sync_max.back(), 1) << "), "
+                << t.last_async.loop_accepted << " closures\n";
     }
     t.front = Median(t.front_ms);
     t.back = Median(t.back_ms);
     t.back_max = Median(t.back_max_ms);
     t.core_share_10hz = (t.front + t.back) / 100.0;
+    t.scan_p99_sync = Median(t.sync_p99);
+    t.scan_max_sync = Median(t.sync_max);
+    t.back_async = Median(t.async_back_ms);
+    t.scan_p99_async = Median(t.async_p99);
+    t.scan_max_async = Median(t.async_max);
     return t;
   };
   const GraphTiming graph_malaga = time_graph(log, "the Malaga loop");
   const GraphTiming graph_sim = time_graph(sim.log, std::to_string(sim.log.beams) + "-beam scans");
+  std::vector<std::pair<std::string, GraphTiming>> graph_more;
+  for (const std::string& g : graph_logs) {
+    const eval::SlamLog gl = eval::LoadSlamLog(g, false);
+    const std::string name = fs::path(g).parent_path().filename().string() + "/" + fs::path(g).filename().string();
+    graph_more.emplace_back(name, time_graph(gl, name));
+  }
   constexpr double kGoalCoreShare = 0.5;
   const bool graph_met = graph_malaga.core_share_10hz <= kGoalCoreShare && graph_sim.core_share_10hz <= kGoalCoreShare;
 
@@ -372,13 +414,21 @@ int Main(int argc, char** argv) {
          << " ms/scan = " << Fixed(sim_scans_per_s, 0) << " scans/s (" << sim.log.scans << " simulated scans in '"
          << sim.scene_name << "', median of " << runs << " runs); goal >= " << Fixed(kGoalScansPerSecond, 0) << ": "
          << mark(rate_met) << "\n";
-  for (const auto& [what, t] : {std::pair<std::string, const GraphTiming*>{"Malaga loop", &graph_malaga},
-                                {std::to_string(sim.log.beams) + "-beam scans", &graph_sim}}) {
+  std::vector<std::pair<std::string, const GraphTiming*>> graph_all = {
+      {"Malaga loop", &graph_malaga}, {std::to_string(sim.log.beams) + "-beam scans", &graph_sim}};
+  for (const auto& [name, t] : graph_more) graph_all.emplace_back(name, &t);
+  for (const auto& [what, t] : graph_all) {
     report << "  graph back end, " << std::left << std::setw(16) << what << std::right << " front end "
            << Fixed(t->front, 3) << " + back end " << Fixed(t->back, 3) << " ms/scan (slowest back end "
            << Fixed(t->back_max, 1) << " ms; " << t->last.keyframes << " keyframes, " << t->last.loop_accepted
            << " closures, " << t->last.corrections << " corrections): " << Fixed(100 * t->core_share_10hz, 1)
            << " % of a core at 10 Hz\n";
+  }
+  for (const auto& [what, t] : graph_all) {
+    report << "  scan thread, " << std::left << std::setw(19) << what << std::right << " loop search inside: p99 "
+           << Fixed(t->scan_p99_sync, 2) << " ms, max " << Fixed(t->scan_max_sync, 1) << " ms; off it ("
+           << Fixed(graph_speed, 1) << "x the log's rate): p99 " << Fixed(t->scan_p99_async, 2) << " ms, max "
+           << Fixed(t->scan_max_async, 1) << " ms (" << t->last_async.loop_accepted << " closures)\n";
   }
   report << "  graph back end at 10 Hz: goal <= " << Fixed(100 * kGoalCoreShare, 0) << " % of a core: " << mark(graph_met)
          << "\n";
@@ -425,6 +475,16 @@ int Main(int argc, char** argv) {
        << ",\n  \"graph_sim_back_max_ms\": " << graph_sim.back_max
        << ",\n  \"graph_sim_core_share_10hz\": " << graph_sim.core_share_10hz
        << ",\n  \"graph_core_share_goal_met\": " << (graph_met ? "true" : "false")
+       << ",\n  \"graph_async_speed\": " << graph_speed;
+  for (const auto& [what, t] : graph_all) {
+    std::string key = what;
+    for (char& c : key) c = std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::tolower(c)) : '_';
+    json << ",\n  \"graph_" << key << "_scan_p99_ms_sync\": " << t->scan_p99_sync << ",\n  \"graph_" << key
+         << "_scan_max_ms_sync\": " << t->scan_max_sync << ",\n  \"graph_" << key
+         << "_scan_p99_ms_async\": " << t->scan_p99_async << ",\n  \"graph_" << key
+         << "_scan_max_ms_async\": " << t->scan_max_async;
+  }
+  json
        << ",\n  \"goal_baseline\": \"every_scan\""
        << ",\n  \"goal_time_ratio_met\": " << (ratio_met ? "true" : "false")
        << ",\n  \"goal_rms_difference_met\": " << (rms_met ? "true" : "false")

@@ -1,10 +1,12 @@
 #include "slam_graph.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
 #include <optional>
 #include <sstream>
+#include <thread>
 
 #include "snapnav/nav/dead_reckoning.hpp"
 
@@ -40,17 +42,28 @@ std::optional<std::pair<double, double>> ClosureError(const nav::LoopClosure& c,
 
 }  // namespace
 
-GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front_end, const nav::GraphSlamOptions& graph) {
+GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front_end, const nav::GraphSlamOptions& graph,
+                          double speed) {
   nav::GraphSlam slam(front_end, graph);
   nav::DeadReckoning dr({});
   GraphSlamRun r;
   r.run.slam.reserve(static_cast<size_t>(log.scans));
   std::vector<std::pair<int, nav::Pose2>> anchors;
+  std::optional<int64_t> first_utime;
+  Clock::time_point started;
   for (const SlamStep& step : log.steps) {
     if (!step.is_scan) {
       slam.Predict(step.odometry_delta, step.utime);
       dr.AddOdometry(step.odometry_delta);
       continue;
+    }
+    if (speed > 0) {
+      if (!first_utime) {
+        first_utime = step.utime;
+        started = Clock::now();
+      }
+      std::this_thread::sleep_until(started + std::chrono::microseconds(static_cast<int64_t>(
+                                                  static_cast<double>(step.utime - *first_utime) / speed)));
     }
     const auto t0 = Clock::now();
     nav::GraphSlamUpdate u = slam.FrontEnd(step.points, step.utime);
@@ -61,6 +74,7 @@ GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front
     const double back = std::chrono::duration<double>(t2 - t1).count();
     r.back_seconds += back;
     r.back_max_ms = std::max(r.back_max_ms, 1000 * back);
+    r.scan_ms.push_back(1000 * std::chrono::duration<double>(t2 - t0).count());
     if (u.corrected) r.largest_correction_m = std::max(r.largest_correction_m, u.correction_m);
     r.run.updates.push_back(u.front_end);
     r.run.utime.push_back(step.utime);
@@ -68,6 +82,12 @@ GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front
     r.live.push_back(slam.scan_pose());
     r.run.dead_reckoning.push_back(dr.pose());
     anchors.push_back({u.anchor_keyframe, u.anchor_relative});
+  }
+  {
+    const auto t0 = Clock::now();
+    const nav::GraphSlamUpdate u = slam.Flush();
+    r.back_seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+    if (u.corrected) r.largest_correction_m = std::max(r.largest_correction_m, u.correction_m);
   }
   for (const auto& [k, rel] : anchors) r.run.slam.push_back(slam.OptimizedPose(k, rel));
   r.run.update_seconds = r.front_seconds + r.back_seconds;
@@ -78,6 +98,18 @@ GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front
   r.loop_accepted = slam.loop_accepted();
   r.loop_rejected = slam.loop_rejected();
   return r;
+}
+
+double GraphSlamRun::scan_p99_ms() const {
+  if (scan_ms.empty()) return 0;
+  std::vector<double> v = scan_ms;
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::ceil(0.99 * static_cast<double>(v.size()))) - 1);
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+double GraphSlamRun::scan_max_ms() const {
+  return scan_ms.empty() ? 0 : *std::max_element(scan_ms.begin(), scan_ms.end());
 }
 
 ClosureCheck CheckClosures(const GraphSlamRun& run, const Reference& reference, double max_error_m,

@@ -20,6 +20,11 @@ struct GraphSlamRun {
   double front_seconds = 0;       // in GraphSlam::FrontEnd (the robust front end, the keyframe decision)
   double back_seconds = 0;        // in GraphSlam::BackEnd (graph, loop search, optimization)
   double back_max_ms = 0;         // the slowest scan's back end
+  // The scan thread's time per scan (FrontEnd + BackEnd: with graph_loop_async the back end only
+  // adds keyframes, starts jobs and applies them, waiting for the worker if it is not done) [ms].
+  std::vector<double> scan_ms;
+  double scan_p99_ms() const;
+  double scan_max_ms() const;
   std::vector<nav::LoopClosure> closures;
   int keyframes = 0;
   int64_t corrections = 0, loop_accepted = 0, loop_rejected = 0;
@@ -28,8 +33,13 @@ struct GraphSlamRun {
   double back_ms_per_scan() const { return run.slam.empty() ? 0 : 1000 * back_seconds / static_cast<double>(run.slam.size()); }
 };
 
-// Runs dead reckoning and the graph back end in lockstep over the log; run.map is the optimized map.
-GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front_end, const nav::GraphSlamOptions& graph);
+// Runs dead reckoning and the graph back end in lockstep over the log; run.map is the optimized map
+// (with graph.loop_async, the last job applied at the end: GraphSlam::Flush).
+// speed > 0: the scans paced at speed times the log's rate (each handed over no earlier than its
+// time since the first scan / speed, as a live run at that rate; the outputs are the same); 0: as
+// fast as possible.
+GraphSlamRun RunGraphSlam(const SlamLog& log, const nav::LaserSlamOptions& front_end, const nav::GraphSlamOptions& graph,
+                          double speed = 0);
 
 // The loop closures of a run against a reference.
 struct ClosureCheck {

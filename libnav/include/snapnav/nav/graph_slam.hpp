@@ -17,11 +17,22 @@
 //
 // Bounded work per scan: at most loop_candidates searches per keyframe (the nearest distinct
 // places), one optimization per keyframe. No wall clock: the caller times FrontEnd and BackEnd.
+//
+// Off the scan thread (loop_async): the loop search and the optimization of a keyframe run as a
+// job on a worker thread of GraphSlam's own, on a copy of the graph (the keyframes' scans shared,
+// immutable); the scan thread only adds keyframes. The job's result (its closures, the optimized
+// poses) joins the live graph exactly loop_async_scans scans after the job started (keyframes that
+// joined meanwhile follow their predecessor's correction rigidly and are searched by the next job),
+// whether the worker finished early or not (then, and only then, the scan thread waits for it): the
+// outputs depend on the scans alone, not on the machine's speed, so a replay is reproducible.
+// Without loop_async the job runs inside BackEnd and its result joins at once (as before).
 #include <cstdint>
 #include <deque>
+#include <exception>
 #include <map>
 #include <memory>
 #include <optional>
+#include <thread>
 #include <unordered_set>
 #include <vector>
 
@@ -37,6 +48,15 @@ struct GraphSlamOptions {
   // Keyframes: a new one when the front end moved this far, or turned this much, since the last.
   double keyframe_distance_m = 0.5;
   double keyframe_angle_rad = 15 * kRadPerDeg;
+  // Memory that grows with the area, not with time: where a new keyframe is due but the scan's
+  // pose (in the graph) lies within keyframe_reuse_m and keyframe_reuse_rad of an existing
+  // keyframe, and the front end's match of the scan against its map (those keyframes' points) was
+  // accepted, and the graph knows that keyframe's position relative to the last keyframe to
+  // loop_confident_sigma_m (no drift since: not a loop yet to close), no keyframe joins: the scan's
+  // pose is kept relative to that keyframe instead, and the next keyframe's edge starts from it. New keyframes then lie at least keyframe_reuse_m from all
+  // others (as the graph placed them), so their number is bounded by the area driven (0: off).
+  double keyframe_reuse_m = 0;
+  double keyframe_reuse_rad = 30 * kRadPerDeg;
   // The edge between consecutive keyframes: the front end's motion; its covariance the front end's
   // uncertainty relative to the keyframe before (its prediction noise since, narrowed by each
   // accepted match's measurement covariance) plus this much per edge and per metre of the edge's
@@ -106,6 +126,10 @@ struct GraphSlamOptions {
   double optimize_min_m = 0.05;
   double optimize_min_rad = 0.5 * kRadPerDeg;
   int optimize_every = 20;
+  // The loop search and optimization on a worker thread, their result applied loop_async_scans
+  // scans after the job started (see above); false: inside BackEnd, applied at once.
+  bool loop_async = false;
+  int loop_async_scans = 10;
   void Validate() const;  // throws std::invalid_argument
 };
 
@@ -136,6 +160,7 @@ struct LoopClosure {
 struct GraphSlamUpdate {
   LaserSlamUpdate front_end;
   bool keyframe = false;           // this scan made a keyframe
+  bool reused_keyframe = false;    // a keyframe was due, an existing one near the scan taken instead (keyframe_reuse_m)
   int anchor_keyframe = -1;        // the keyframe the scan's pose is kept relative to (-1: none yet)
   Pose2 anchor_relative;           // the scan's pose in the anchor keyframe's frame
   int loop_candidates = 0;         // searches this scan
@@ -149,6 +174,9 @@ struct GraphSlamUpdate {
 class GraphSlam {
  public:
   GraphSlam(const LaserSlamOptions& front_end, const GraphSlamOptions& options, const Pose2& start = {});
+  ~GraphSlam();  // waits for the worker's job, if one runs
+  GraphSlam(const GraphSlam&) = delete;
+  GraphSlam& operator=(const GraphSlam&) = delete;
 
   // As LaserSlam's.
   void Predict(const Pose2& odometry_delta) { front_.Predict(odometry_delta); }
@@ -160,6 +188,10 @@ class GraphSlam {
   GraphSlamUpdate FrontEnd(const std::vector<Eigen::Vector2d>& points_robot, int64_t utime);
   GraphSlamUpdate FrontEnd(const std::vector<Eigen::Vector2d>& points_robot);
   void BackEnd(GraphSlamUpdate* u);
+  // loop_async: waits for the job that runs, if any, and applies its result now (the end of a log);
+  // returns what it changed (loop_*, corrected, correction_*). Without a job: an empty update.
+  GraphSlamUpdate Flush();
+  bool job_running() const { return job_running_; }
 
   // The live pose (at the latest odometry) and the last scan's, in the graph's (map) frame, with
   // every correction so far; the front end's covariance.
@@ -169,7 +201,8 @@ class GraphSlam {
   const LaserSlam& front_end() const { return front_; }
   const PoseGraph& graph() const { return graph_; }
   int keyframes() const { return graph_.nodes(); }
-  int64_t keyframe_scan(int keyframe) const { return keyframes_.at(static_cast<size_t>(keyframe)).scan; }
+  int64_t keyframe_reuses() const { return keyframe_reuses_; }  // keyframes due but reused (keyframe_reuse_m)
+  int64_t keyframe_scan(int keyframe) const { return keyframes_.at(static_cast<size_t>(keyframe))->scan; }
   // The map from the optimized keyframes: their points, one per cell of cell_m.
   std::vector<Eigen::Vector2d> MapPoints(double cell_m) const;
   // The same, one per cell of the front end's map_resolution_m, kept up to date as keyframes join
@@ -178,14 +211,15 @@ class GraphSlam {
   // A scan's pose in the optimized graph (its anchor keyframe's pose composed with its relative pose).
   Pose2 OptimizedPose(int anchor_keyframe, const Pose2& anchor_relative) const;
   // Every loop-closure candidate searched, in order (outcomes updated as pending ones resolve).
-  const std::vector<LoopClosure>& closures() const { return closures_; }
-  int64_t loop_candidates() const { return static_cast<int64_t>(closures_.size()); }
-  int64_t loop_accepted() const { return loop_accepted_; }  // joined and still enabled
-  int64_t loop_rejected() const { return loop_rejected_; }  // rejected, expired or switched off
+  // (With loop_async: as of the last job applied.)
+  const std::vector<LoopClosure>& closures() const { return shown_.closures; }
+  int64_t loop_candidates() const { return static_cast<int64_t>(shown_.closures.size()); }
+  int64_t loop_accepted() const { return shown_.loop_accepted; }  // joined and still enabled
+  int64_t loop_rejected() const { return shown_.loop_rejected; }  // rejected, expired or switched off
   int64_t corrections() const { return corrections_; }
   double last_correction_m() const { return last_correction_m_; }
   double last_correction_rad() const { return last_correction_rad_; }
-  int64_t optimizations() const { return optimizations_; }
+  int64_t optimizations() const { return shown_.optimizations; }
   int64_t scans() const { return front_.scans(); }
 
  private:
@@ -201,6 +235,25 @@ class GraphSlam {
     std::vector<Eigen::Vector2d> search;              // for the correlative search (loop_scan_cell_m)
     std::vector<Eigen::Vector2d> points, normals;     // for ICP (the map's resolution)
   };
+  using Keyframes = std::vector<std::shared_ptr<const Keyframe>>;
+  // A job of the back end: the loop search of the keyframes in `todo` (and the optimizations they
+  // call for) on a copy of the graph; its outcome for the update that applies it.
+  struct Job {
+    PoseGraph graph;
+    Keyframes keyframes;
+    std::vector<int> todo;
+    int nodes_at_start = 0, edges_at_start = 0;
+    int loop_candidates = 0, loop_accepted = 0, loop_rejected = 0, optimizer_iterations = 0;
+    bool optimized = false;
+    bool closures_changed = false;
+    // After an optimization: the front end's map of the keyframes the job knew at their optimized
+    // poses (built on the worker; the scan thread adds the keyframes that joined since, if it takes it).
+    std::optional<PointGridMap> front_map;
+    std::exception_ptr error;
+  };
+  void StartJob();
+  void RunJob();              // the worker's part: touches job_ and the loop state only
+  void ApplyJob(GraphSlamUpdate* u);
   Query MakeQuery(int keyframe) const;
   MatcherOptions LoopIcpOptions() const;
   struct Submap {
@@ -215,19 +268,25 @@ class GraphSlam {
   }
   GraphSlamUpdate AfterFrontEnd(const LaserSlamUpdate& front_update, const std::vector<Eigen::Vector2d>& points_robot);
   void AddKeyframe(const std::vector<Eigen::Vector2d>& points, GraphSlamUpdate* u);
-  void SearchLoops(int keyframe, GraphSlamUpdate* u);
+  void SearchLoops(int keyframe);
   LoopClosure MatchCandidate(int old_keyframe, int keyframe, const Query& query,
                              const std::vector<Eigen::Matrix3d>& from_new);
   const Submap& SubmapAt(int keyframe);
   bool PairConsistent(const LoopClosure& a, const LoopClosure& b) const;
-  void RebuildFrontEndMap();
-  void Optimize(GraphSlamUpdate* u);
+  // The front end moved into the graph's frame, its map rebuilt from the optimized keyframes (or
+  // `prebuilt`, the map of keyframes 0 .. prebuilt_nodes - 1, with the others added).
+  void RebuildFrontEndMap(std::optional<PointGridMap> prebuilt = std::nullopt, int prebuilt_nodes = 0);
+  // Adds the points of keyframes last, last - 1, ..., first (at g's poses; those with travel_m of at
+  // least min_travel_m) to the map, as LaserSlam::ResetMap adds them.
+  void AddKeyframesToMap(const PoseGraph& g, const Keyframes& ks, int first, int last, double min_travel_m,
+                         PointGridMap* map) const;
+  void Optimize();
 
   LaserSlamOptions front_options_;
   GraphSlamOptions options_;
   LaserSlam front_;
   PoseGraph graph_;
-  std::vector<Keyframe> keyframes_;
+  Keyframes keyframes_;
   int last_keyframe_ = -1;
   Pose2 last_keyframe_front_;  // the last keyframe's pose in the front end's frame
   Pose2 start_;
@@ -241,14 +300,30 @@ class GraphSlam {
   std::optional<int64_t> last_scan_utime_;
   double turn_rate_rad_s_ = 0;   // the front end's turn rate into the last scan
   double map_built_travel_m_ = 0;  // travel when the front end's map was last rebuilt (local_map_m)
+  // The loop state: the job's own while it runs (the scan thread reads none of it then).
+  Job job_;
   std::vector<LoopClosure> closures_;
   std::deque<int> pending_;      // indices in closures_ of pending closures
   std::map<int, Submap> submaps_;
-  int64_t graph_version_ = 0;    // bumped by each optimization (submaps are rebuilt after)
+  int64_t loop_version_ = 0;     // bumped by each optimization of a job (submaps are rebuilt after)
   int unoptimized_closures_ = 0; // closures joined since the last optimization
   bool optimize_due_ = false;    // ... one of them moves the graph (optimize_min_*)
   void NoteClosure(const LoopClosure& c);
-  int64_t loop_accepted_ = 0, loop_rejected_ = 0, corrections_ = 0, optimizations_ = 0;
+  int64_t loop_accepted_ = 0, loop_rejected_ = 0, optimizations_ = 0;
+  // The scan thread's: what the getters show (copied from the loop state when a job is applied).
+  struct Shown {
+    std::vector<LoopClosure> closures;
+    int64_t loop_accepted = 0, loop_rejected = 0, optimizations = 0;
+  } shown_;
+  std::vector<int> todo_;        // keyframes not yet searched (joined while a job ran)
+  bool job_running_ = false;     // started, not yet applied
+  int job_scans_ = 0;            // scans since it started
+  std::thread worker_;
+  int64_t graph_version_ = 0;    // the live graph's: bumped when a job's optimization is applied
+  int64_t corrections_ = 0;
+  int64_t keyframe_reuses_ = 0;
+  // The existing keyframe (not the last) nearest to `pose` (graph frame) within keyframe_reuse_*, or -1.
+  int ReusableKeyframe(const Pose2& pose) const;
   double last_correction_m_ = 0, last_correction_rad_ = 0;
   bool pending_front_ = false;   // FrontEnd ran, BackEnd not yet
   // Map()'s cache: its points, their cells, the keyframes in it and the graph version it is of.

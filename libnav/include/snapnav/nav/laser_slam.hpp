@@ -234,7 +234,6 @@ class LaserSlam {
 
  private:
   MapMatcher matcher() const { return MapMatcher(map_, options_); }
-  static PointGridMap MakeMap(const LaserSlamOptions& options);
 
   LaserSlamOptions options_;
   Pose2 pose_;
@@ -292,6 +291,13 @@ class LaserSlam {
   // kept unless a point already kept lies within add_distance_m (as scans add theirs); the pose
   // stays. The graph back end (GraphSlam) rebuilds its front end's map so from the optimized keyframes.
   void ResetMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals);
+  // The same with a map built elsewhere (MakeMap, points added as ResetMap adds them: AddMapPoint),
+  // e.g. on another thread.
+  void ResetMap(PointGridMap map) { map_ = std::move(map); }
+  static PointGridMap MakeMap(const LaserSlamOptions& options);
+  // Adds p to the map unless a point already kept lies within options' add_distance_m (ResetMap's rule).
+  static void AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
+                          PointGridMap* map);
 
  private:
   bool MayAddPoints(const LaserSlamUpdate& u) const;
