@@ -50,7 +50,7 @@ for tool in eval-homing eval-localization; do
 done
 
 # gridgen's folder read back: the same figures as the rendered evaluation of the scene.
-"$BIN/gridgen" --scene indoor_objects11 --out "$OUT/grid" 2>/dev/null
+"$BIN/gridgen" --scene indoor_objects11 --heading-deg 0 --out "$OUT/grid" 2>/dev/null  # at heading 0, as the rendered evaluation
 test -s "$OUT/grid/camera.ini"
 "$BIN/eval-homing" --scene indoor_objects11 --quick --no-return --protocols snapnav,thesis-5x5 --out "$OUT/rendered" \
   >/dev/null 2>"$OUT/rendered.log" || { cat "$OUT/rendered.log"; exit 1; }
