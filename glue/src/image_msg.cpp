@@ -266,7 +266,7 @@ MirrorMask ReadMirrorMask(const IniFile& ini, cv::Size expected, const std::stri
   if (m.path.empty()) return m;
   try {
     m.mask = LoadMask(m.path, expected);
-  } catch (const std::runtime_error& e) {
+  } catch (const std::exception& e) {
     ini.FailKey(section, "mask", e.what());
   }
   return m;
