@@ -68,4 +68,9 @@ void DeadReckoningNode::OnOdometry(const odometry_t& msg) {
   ++published_;
 }
 
+void DeadReckoningNode::Report(std::ostream& out) const {
+  out << "dead-reckoning: published " << published_ << " poses\n";
+  for (const auto& [reason, n] : rejected_) out << "dead-reckoning:   rejected (" << reason << "): " << n << "\n";
+}
+
 }  // namespace snapnav::processes

@@ -32,6 +32,8 @@ class DeadReckoningNode {
   // Odometry messages skipped, by reason ("bad odometry", "odometry back in time", ...); each is
   // also counted as rejected on its channel by the bus.
   const std::map<std::string, int64_t>& rejected() const { return rejected_; }
+  // The counts: "dead-reckoning: published N poses" and a line per reason of rejection.
+  void Report(std::ostream& out) const;
 
  private:
   void OnOdometry(const odometry_t& msg);

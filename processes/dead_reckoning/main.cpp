@@ -4,7 +4,7 @@
 #include "dead_reckoning_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -16,16 +16,9 @@ int Main(int argc, char** argv) {
   flags.AddCommon(&common);
   if (!flags.Parse(argc, argv)) return 0;
   const auto config = processes::DeadReckoningConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
-  std::cerr << "dead-reckoning: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::DeadReckoningNode node(bus, config);
-  bus.Run();
-  std::cerr << "dead-reckoning: published " << node.published() << " poses\n";
-  for (const auto& [reason, n] : node.rejected()) std::cerr << "dead-reckoning:   rejected (" << reason << "): " << n << "\n";
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::DeadReckoningNode>(
+      "dead-reckoning", common.config, config, common.lcm_url,
+      [](const processes::DeadReckoningNode&, const glue::Bus&) { return std::string(); });
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 #include "fused_slam_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -27,18 +27,12 @@ int Main(int argc, char** argv) {
   flags.AddCommon(&common);
   if (!flags.Parse(argc, argv)) return 0;
   const auto config = processes::FusedSlamConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
-  std::cerr << "fused-slam: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::FusedSlamNode node(bus, config);
-  std::cerr << "fused-slam: odometry from " << config.odometry_channel << ", scans from " << config.scan_channel
-            << ", visual poses from " << config.visual_channel << "; poses on " << config.pose_channel << ", map on "
-            << config.map_channel << ", status on " << config.status_channel << " (" << bus.url() << ")\n";
-  bus.Run();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::FusedSlamNode>(
+      "fused-slam", common.config, config, common.lcm_url, [&](const processes::FusedSlamNode&, const glue::Bus& bus) {
+        return "odometry from " + config.odometry_channel + ", scans from " + config.scan_channel +
+               ", visual poses from " + config.visual_channel + "; poses on " + config.pose_channel + ", map on " +
+               config.map_channel + ", status on " + config.status_channel + " (" + bus.url() + ")";
+      });
 }
 
 }  // namespace

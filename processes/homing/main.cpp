@@ -5,7 +5,7 @@
 #include "homing_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -45,18 +45,12 @@ int Main(int argc, char** argv) {
       throw glue::FlagError(std::string("--home-first: ") + e.what());
     }
   }
-  std::cerr << "homing: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::HomingNode node(bus, config);
-  std::cerr << "homing: frames from " << config.input_channel() << ", home snapshots from "
-            << config.home_snapshot_channel << ", vectors on " << config.homing_vector_channel << " (" << bus.url()
-            << ")" << (node.has_home() ? ", home image loaded" : "") << "\n";
-  bus.Run();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::HomingNode>(
+      "homing", common.config, config, common.lcm_url, [&](const processes::HomingNode& node, const glue::Bus& bus) {
+        return "frames from " + config.input_channel() + ", home snapshots from " + config.home_snapshot_channel +
+               ", vectors on " + config.homing_vector_channel + " (" + bus.url() + ")" +
+               (node.has_home() ? ", home image loaded" : "");
+      });
 }
 
 }  // namespace

@@ -4,7 +4,7 @@
 #include "landmarks_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -21,17 +21,11 @@ int Main(int argc, char** argv) {
   flags.AddString("method", &method, "vline | sift | surf (overrides [landmarks] method)");
   if (!flags.Parse(argc, argv)) return 0;
   const auto config = processes::LandmarksConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix, method);
-  std::cerr << "landmarks: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::LandmarksNode node(bus, config);
-  std::cerr << "landmarks: frames from " << config.input_channel() << ", " << nav::LandmarkMethodName(config.extractor.method)
-            << " landmarks on " << config.landmarks_channel << " (" << bus.url() << ")\n";
-  bus.Run();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::LandmarksNode>(
+      "landmarks", common.config, config, common.lcm_url, [&](const processes::LandmarksNode&, const glue::Bus& bus) {
+        return "frames from " + config.input_channel() + ", " + nav::LandmarkMethodName(config.extractor.method) +
+               " landmarks on " + config.landmarks_channel + " (" + bus.url() + ")";
+      });
 }
 
 }  // namespace

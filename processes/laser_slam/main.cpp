@@ -1,13 +1,14 @@
 // laser-slam: 2D laser SLAM on ODOMETRY and LASER_SCAN; publishes one pose per scan, the point map
 // and the occupancy grid. With --mode localize --map FILE: the pose in a saved map instead.
 #include <iostream>
+#include <sstream>
 
 #include "laser_slam_node.hpp"
 #include "localize_node.hpp"
 #include "map_export.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -35,36 +36,32 @@ int Main(int argc, char** argv) {
   if (mode == "localize" && map_path.empty()) throw glue::FlagError("--mode localize needs --map FILE (map.yaml or map.gridmap)");
   if (mode == "slam" && !map_path.empty()) throw glue::FlagError("--map is for --mode localize");
   const auto config = processes::LaserSlamConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
-  std::cerr << "laser-slam: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
   if (mode == "localize") {
     const nav::OccupancyCells map = map::ReadMapFile(map_path, config.grid.grid);
     std::cerr << "laser-slam: map " << map_path << ": " << map.width << " x " << map.height << " cells of " << map.resolution_m
               << " m from (" << map.origin_x_m << ", " << map.origin_y_m << "): " << map.occupied << " occupied, " << map.free
               << " free, " << map.unknown << " unknown\n";
-    processes::LocalizeNode node(bus, config, map, map_path);
-    const auto& g = node.localizer().global();
-    std::cerr << "laser-slam: localize: global search over " << g.free_cells() << " free cells of "
-              << config.localize.options.global.resolution_m << " m (" << g.memory_bytes() / 1024 << " KiB), tracking on "
-              << node.localizer().map_points() << " map points\n";
-    std::cerr << "laser-slam: odometry from " << config.odometry_channel << ", scans from " << config.scan_channel
-              << ", poses on " << config.pose_channel << ", status on " << config.localize.status_channel << ", map on "
-              << config.grid.channel << " (" << bus.url() << ")\n";
-    bus.Run();
-    node.Report(std::cerr);
-    bus.ReportStats(std::cerr);
-    return 0;
+    return glue::RunNode<processes::LocalizeNode>(
+        "laser-slam", common.config, config, common.lcm_url,
+        [&](const processes::LocalizeNode& node, const glue::Bus& bus) {
+          const auto& g = node.localizer().global();
+          std::ostringstream line;
+          line << "localize: global search over " << g.free_cells() << " free cells of "
+               << config.localize.options.global.resolution_m << " m (" << g.memory_bytes() / 1024
+               << " KiB), tracking on " << node.localizer().map_points() << " map points\nlaser-slam: odometry from "
+               << config.odometry_channel << ", scans from " << config.scan_channel << ", poses on " << config.pose_channel
+               << ", status on " << config.localize.status_channel << ", map on " << config.grid.channel << " ("
+               << bus.url() << ")";
+          return line.str();
+        },
+        map, map_path);
   }
-  processes::LaserSlamNode node(bus, config);
-  std::cerr << "laser-slam: odometry from " << config.odometry_channel << ", scans from " << config.scan_channel
-            << ", poses on " << config.pose_channel << ", map on " << config.map_channel << ", grid on "
-            << config.grid.channel << " (" << bus.url() << ")\n";
-  bus.Run();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::LaserSlamNode>(
+      "laser-slam", common.config, config, common.lcm_url, [&](const processes::LaserSlamNode&, const glue::Bus& bus) {
+        return "odometry from " + config.odometry_channel + ", scans from " + config.scan_channel + ", poses on " +
+               config.pose_channel + ", map on " + config.map_channel + ", grid on " + config.grid.channel + " (" +
+               bus.url() + ")";
+      });
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 #include "navigator_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -38,20 +38,14 @@ int Main(int argc, char** argv) {
     config.route_source = route;
     if (const auto r = config.ConfiguredRoute()) r->Validate();
   }
-  std::cerr << "navigator: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::NavigatorNode node(bus, config);
-  std::cerr << "navigator: odometry " << config.odometry_channel << ", fixes " << config.pose_channel << ", homing "
-            << config.homing_vector_channel << ", routes " << config.route_channel << " -> "
-            << config.drive_command_channel << ", " << config.status_channel << " (" << bus.url() << ")"
-            << (node.follower().has_route() ? ", route " + node.follower().route().name : ", waiting for a route")
-            << "\n";
-  bus.Run();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::NavigatorNode>(
+      "navigator", common.config, config, common.lcm_url,
+      [&](const processes::NavigatorNode& node, const glue::Bus& bus) {
+        return "odometry " + config.odometry_channel + ", fixes " + config.pose_channel + ", homing " +
+               config.homing_vector_channel + ", routes " + config.route_channel + " -> " +
+               config.drive_command_channel + ", " + config.status_channel + " (" + bus.url() + ")" +
+               (node.follower().has_route() ? ", route " + node.follower().route().name : ", waiting for a route");
+      });
 }
 
 }  // namespace

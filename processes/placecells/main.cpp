@@ -5,7 +5,7 @@
 #include "placecells_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -42,29 +42,17 @@ int Main(int argc, char** argv) {
   } catch (const std::invalid_argument& e) {
     throw glue::FlagError(std::string("--mode/--memory: ") + e.what());
   }
-  std::cerr << "placecells: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::PlaceCellsNode node(bus, config, std::cerr);
-  std::cerr << "placecells: " << processes::PlaceCellsModeName(config.mode) << ", frames from "
-            << config.input_channel() << ", odometry from " << config.odometry_channel;
-  if (config.mode == processes::PlaceCellsMode::kExplore) {
-    std::cerr << ", cell poses from " << config.explore_pose_channel << ", matches on " << config.match_channel;
-  } else {
-    std::cerr << ", matches on " << config.match_channel << ", poses on " << config.pose_channel;
-  }
-  std::cerr << " (" << bus.url() << ")\n";
-  try {
-    bus.Run();
-  } catch (...) {
-    node.Save();  // keep what was explored
-    throw;
-  }
-  node.Save();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::PlaceCellsNode>(
+      "placecells", common.config, config, common.lcm_url,
+      [&](const processes::PlaceCellsNode&, const glue::Bus& bus) {
+        const bool explore = config.mode == processes::PlaceCellsMode::kExplore;
+        return std::string(processes::PlaceCellsModeName(config.mode)) + ", frames from " + config.input_channel() +
+               ", odometry from " + config.odometry_channel +
+               (explore ? ", cell poses from " + config.explore_pose_channel + ", matches on " + config.match_channel
+                        : ", matches on " + config.match_channel + ", poses on " + config.pose_channel) +
+               " (" + bus.url() + ")";
+      },
+      std::cerr);
 }
 
 }  // namespace

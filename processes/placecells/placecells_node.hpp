@@ -78,6 +78,8 @@ class PlaceCellsNode {
   // Explore: writes the memory file when cells were added since it was last written. Returns
   // whether it wrote.
   bool Save();
+  // When the bus stops (glue::RunNode), also on an error: Save(), so nothing explored is lost.
+  void Finish() { Save(); }
 
   const nav::PlaceCellMemory& memory() const { return memory_; }
   int64_t frames() const { return frames_; }        // decoded frames on the input channel

@@ -5,7 +5,7 @@
 #include "ratslam_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/glue/shutdown.hpp"
+#include "snapnav/glue/run_node.hpp"
 
 namespace {
 
@@ -23,22 +23,19 @@ int Main(int argc, char** argv) {
   flags.AddCommon(&common);
   if (!flags.Parse(argc, argv)) return 0;
   const auto config = processes::RatSlamConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
-  std::cerr << "ratslam: config " << common.config << "\n";
-  config.Print(std::cerr);
-  glue::InstallShutdownHandlers();
-  glue::Bus bus(common.lcm_url);
-  processes::RatSlamNode node(bus, config, std::cerr);
-  std::cerr << "ratslam: frames from " << config.input_channel() << ", odometry from " << config.odometry_channel
-            << ", poses on " << config.pose_channel << ", experience map on " << config.experience_map_channel << " ("
-            << bus.url() << ")\n";
-  if (bus.url().rfind("file://", 0) == 0) {
-    std::cerr << "ratslam: reading a log: LCM cannot publish on a file:// URL, so every pose and map counts as\n"
-                 "ratslam: a failed publish (internal error); record the outputs with lcm-logger on a live bus\n";
-  }
-  bus.Run();
-  node.Report(std::cerr);
-  bus.ReportStats(std::cerr);
-  return 0;
+  return glue::RunNode<processes::RatSlamNode>(
+      "ratslam", common.config, config, common.lcm_url,
+      [&](const processes::RatSlamNode&, const glue::Bus& bus) {
+        std::string line = "frames from " + config.input_channel() + ", odometry from " + config.odometry_channel +
+                           ", poses on " + config.pose_channel + ", experience map on " +
+                           config.experience_map_channel + " (" + bus.url() + ")";
+        if (bus.url().rfind("file://", 0) == 0) {
+          line += "\nratslam: reading a log: LCM cannot publish on a file:// URL, so every pose and map counts as\n"
+                  "ratslam: a failed publish (internal error); record the outputs with lcm-logger on a live bus";
+        }
+        return line;
+      },
+      std::cerr);
 }
 
 }  // namespace
