@@ -25,6 +25,22 @@ odometry_t ToOdometryMsg(int64_t utime, const std::string& sensor_name, const na
 
 nav::Pose2 OdometryPose(const odometry_t& msg) { return {msg.x_m, msg.y_m, msg.theta_rad}; }
 
+point_map_t ToPointMapMsg(int64_t utime, const std::string& estimator, double resolution_m,
+                          const std::vector<Eigen::Vector2d>& points) {
+  point_map_t m{};
+  m.utime = utime;
+  m.estimator = estimator;
+  m.resolution_m = static_cast<float>(resolution_m);
+  m.npoints = static_cast<int32_t>(points.size());
+  m.x_m.reserve(points.size());
+  m.y_m.reserve(points.size());
+  for (const auto& p : points) {
+    m.x_m.push_back(static_cast<float>(p.x()));
+    m.y_m.push_back(static_cast<float>(p.y()));
+  }
+  return m;
+}
+
 pose_t ToPoseMsg(int64_t utime, const std::string& estimator, const std::string& frame, const nav::Pose2& pose,
                  const Eigen::Matrix3d& covariance) {
   pose_t msg;

@@ -307,19 +307,8 @@ void FusedSlamNode::PublishPose(int64_t utime, const nav::Pose2& pose) {
 }
 
 void FusedSlamNode::PublishMap(int64_t utime) {
-  const std::vector<Eigen::Vector2d> points = slam_->WorldMapPoints();
-  point_map_t m{};
-  m.utime = utime;
-  m.estimator = kEstimator;
-  m.resolution_m = static_cast<float>(slam_->map().resolution_m());
-  m.npoints = static_cast<int32_t>(points.size());
-  m.x_m.reserve(points.size());
-  m.y_m.reserve(points.size());
-  for (const auto& p : points) {
-    m.x_m.push_back(static_cast<float>(p.x()));
-    m.y_m.push_back(static_cast<float>(p.y()));
-  }
-  bus_.Publish(config_.map_channel, m);
+  bus_.Publish(config_.map_channel,
+               glue::ToPointMapMsg(utime, kEstimator, slam_->map().resolution_m(), slam_->WorldMapPoints()));
   ++maps_published_;
 }
 

@@ -345,18 +345,7 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
 void LaserSlamNode::PublishMap(int64_t utime) {
   // The graph back end's map: the optimized keyframes' points (GraphSlam::Map).
   const std::vector<Eigen::Vector2d>& points = graph_ ? graph_->Map() : slam_->map().points();
-  point_map_t m{};
-  m.utime = utime;
-  m.estimator = "laser_slam";
-  m.resolution_m = static_cast<float>(slam()->map().resolution_m());
-  m.npoints = static_cast<int32_t>(points.size());
-  m.x_m.reserve(points.size());
-  m.y_m.reserve(points.size());
-  for (const auto& p : points) {
-    m.x_m.push_back(static_cast<float>(p.x()));
-    m.y_m.push_back(static_cast<float>(p.y()));
-  }
-  bus_.Publish(config_.map_channel, m);
+  bus_.Publish(config_.map_channel, glue::ToPointMapMsg(utime, "laser_slam", slam()->map().resolution_m(), points));
   ++maps_published_;
 }
 

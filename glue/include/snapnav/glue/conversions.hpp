@@ -2,11 +2,13 @@
 // Conversions between message types and libnav types.
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/odometry_t.hpp"
+#include "snapnav/point_map_t.hpp"
 #include "snapnav/pose_t.hpp"
 
 namespace snapnav::glue {
@@ -23,6 +25,10 @@ pose_t ToPoseMsg(int64_t utime, const std::string& estimator, const std::string&
                  const Eigen::Matrix3d& covariance);
 nav::Pose2 FromPoseMsg(const pose_t& msg);
 Eigen::Matrix3d CovarianceOf(const pose_t& msg);
+
+// A SLAM's point map (world frame, metres) as laser-slam and fused-slam publish it.
+point_map_t ToPointMapMsg(int64_t utime, const std::string& estimator, double resolution_m,
+                          const std::vector<Eigen::Vector2d>& points);
 
 }  // namespace snapnav::glue
 
