@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 
 namespace snapnav::glue {
 namespace {

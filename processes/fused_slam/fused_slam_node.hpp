@@ -40,7 +40,7 @@
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/message_clock.hpp"
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/fused_slam.hpp"
+#include "snapnav/nav/slam/fused_slam.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/pose_t.hpp"
 

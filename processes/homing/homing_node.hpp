@@ -19,11 +19,11 @@
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/landmark_set_t.hpp"
-#include "snapnav/nav/hog_homing.hpp"
-#include "snapnav/nav/landmarks.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
-#include "snapnav/nav/unwrap.hpp"
-#include "snapnav/nav/view_fusion.hpp"
+#include "snapnav/nav/homing/hog_homing.hpp"
+#include "snapnav/nav/landmarks/landmarks.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
+#include "snapnav/nav/landmarks/view_fusion.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::processes {

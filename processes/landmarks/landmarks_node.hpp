@@ -12,7 +12,7 @@
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::processes {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/graph_slam.hpp"
+#include "snapnav/nav/slam/graph_slam.hpp"
 
 namespace snapnav::processes {
 

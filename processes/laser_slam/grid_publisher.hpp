@@ -22,7 +22,7 @@
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/map_request_t.hpp"
-#include "snapnav/nav/occupancy_grid.hpp"
+#include "snapnav/nav/slam/occupancy_grid.hpp"
 
 namespace snapnav::processes {
 

@@ -29,7 +29,7 @@
 #include "snapnav/glue/laser_scan_checks.hpp"
 #include "graph_slam_config.hpp"
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/odometry_t.hpp"
 
 namespace snapnav::processes {

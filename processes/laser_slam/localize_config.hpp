@@ -5,7 +5,7 @@
 #include <string>
 
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/map_localizer.hpp"
+#include "snapnav/nav/slam/map_localizer.hpp"
 
 namespace snapnav::processes {
 

@@ -15,7 +15,7 @@
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/map_localizer.hpp"
+#include "snapnav/nav/slam/map_localizer.hpp"
 #include "snapnav/odometry_t.hpp"
 
 namespace snapnav::processes {

@@ -19,7 +19,7 @@
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/message_clock.hpp"
 #include "snapnav/homing_vector_t.hpp"
-#include "snapnav/nav/navigator.hpp"
+#include "snapnav/nav/places/navigator.hpp"
 #include "snapnav/navigator_status_t.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/pose_t.hpp"

@@ -8,7 +8,7 @@
 
 #include <opencv2/core/mat.hpp>
 
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::processes {

@@ -20,8 +20,8 @@
 #include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/omni_frame_t.hpp"
 

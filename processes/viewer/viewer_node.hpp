@@ -20,7 +20,7 @@
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/omni_frame_t.hpp"
 #include "snapnav/place_cell_match_t.hpp"
 #include "snapnav/occupancy_grid_t.hpp"

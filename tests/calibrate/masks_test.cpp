@@ -16,12 +16,12 @@
 #include "realistic_render.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/image_msg.hpp"
-#include "snapnav/nav/hog_homing.hpp"
-#include "snapnav/nav/image_mask.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
-#include "snapnav/nav/place_cells.hpp"
-#include "snapnav/nav/ratslam.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/hog_homing.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 
 namespace snapnav::testing {
 namespace {

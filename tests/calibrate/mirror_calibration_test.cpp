@@ -2,7 +2,7 @@
 // radius within 2 px), at several sizes, offsets, seeds, housing brightness, rim contrast and
 // noise levels; the inner radius at the camera's reflection; the self-occlusion mask from frames
 // of a moving robot against the renderer's parts; bad input; the command line end to end.
-#include "snapnav/nav/mirror_calibration.hpp"
+#include "snapnav/nav/homing/mirror_calibration.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,7 +19,7 @@
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/log_writer.hpp"
-#include "snapnav/nav/image_mask.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 
 namespace snapnav::testing {
 namespace {

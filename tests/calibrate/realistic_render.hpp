@@ -8,7 +8,7 @@
 #include <string>
 
 #include "scene_file.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 

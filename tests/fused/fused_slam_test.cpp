@@ -1,7 +1,7 @@
 // The fused filter (libnav): visual pose measurements in the laser SLAM's EKF, the gate, the
 // relocalisation after a kidnapping, late measurements and the map protection. Hand-checked
 // numbers where the filter is a plain Kalman update.
-#include "snapnav/nav/fused_slam.hpp"
+#include "snapnav/nav/slam/fused_slam.hpp"
 
 #include <gtest/gtest.h>
 

@@ -6,7 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/homing/hog_homing.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 

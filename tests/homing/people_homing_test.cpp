@@ -9,7 +9,7 @@
 #include "landmark_eval.hpp"
 #include "people_view.hpp"
 #include "scene_file.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
 #include "snapnav/nav/sim/world.hpp"
 
 namespace snapnav::eval {

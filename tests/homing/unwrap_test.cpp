@@ -5,7 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "snapnav/nav/sim/omni_renderer.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 
 namespace snapnav::nav {
 namespace {

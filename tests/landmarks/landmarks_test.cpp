@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/landmarks.hpp"
+#include "snapnav/nav/landmarks/landmarks.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {

@@ -10,7 +10,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/surf.hpp"
+#include "snapnav/nav/landmarks/surf.hpp"
 
 namespace snapnav::nav {
 namespace {

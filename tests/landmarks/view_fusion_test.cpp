@@ -6,7 +6,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/view_fusion.hpp"
+#include "snapnav/nav/landmarks/view_fusion.hpp"
 
 namespace snapnav::nav {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
-#include "snapnav/nav/vline.hpp"
+#include "snapnav/nav/landmarks/vline.hpp"
 
 namespace snapnav::nav {
 namespace {

@@ -12,7 +12,7 @@
 
 #include "../support/grid_scans.hpp"
 #include "map_export.hpp"
-#include "snapnav/nav/occupancy_grid.hpp"
+#include "snapnav/nav/slam/occupancy_grid.hpp"
 #include "snapnav/nav/sim/scene.hpp"
 #include "snapnav/nav/sim/textures.hpp"
 #include "snapnav/nav/sim/world.hpp"

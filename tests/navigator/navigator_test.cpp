@@ -1,7 +1,7 @@
 // Route following (libnav): the thesis routes, the pose tracker (odometry prediction, place-cell
 // fixes, the gate) and the route follower (turn then drive, waypoints, laps, the final approach
 // by homing).
-#include "snapnav/nav/navigator.hpp"
+#include "snapnav/nav/places/navigator.hpp"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "scene_file.hpp"
-#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 
 namespace snapnav::nav {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
 
 namespace snapnav::nav {
 namespace {

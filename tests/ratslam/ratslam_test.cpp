@@ -9,7 +9,7 @@
 
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/nav/trajectory.hpp"
 
 namespace snapnav::nav {

@@ -12,9 +12,9 @@
 
 #include <Eigen/Geometry>
 
-#include "snapnav/nav/graph_slam.hpp"
-#include "snapnav/nav/loop_closure.hpp"
-#include "snapnav/nav/pose_graph.hpp"
+#include "snapnav/nav/slam/graph_slam.hpp"
+#include "snapnav/nav/slam/loop_closure.hpp"
+#include "snapnav/nav/slam/pose_graph.hpp"
 
 namespace snapnav::nav {
 namespace {

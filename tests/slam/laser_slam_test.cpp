@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "snapnav/nav/dead_reckoning.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/nav/sim/world.hpp"
 
 namespace snapnav::nav {

@@ -17,7 +17,7 @@
 #include "importers.hpp"
 #include "slam_log.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 
 namespace snapnav::eval {
 namespace {

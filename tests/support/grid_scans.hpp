@@ -1,7 +1,7 @@
 #pragma once
 // The simulated laser's scan at `pose`, as the occupancy grid takes it (tests of map export and of
 // localization in a saved map).
-#include "snapnav/nav/grid_scan.hpp"
+#include "snapnav/nav/slam/grid_scan.hpp"
 #include "snapnav/nav/sim/world.hpp"
 
 namespace snapnav::test_support {

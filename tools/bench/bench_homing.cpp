@@ -18,9 +18,9 @@
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/nav/hog_homing.hpp"
+#include "snapnav/nav/homing/hog_homing.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 
 namespace {
 

@@ -15,7 +15,7 @@
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/landmarks.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 
 namespace {

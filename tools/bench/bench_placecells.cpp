@@ -37,7 +37,7 @@
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/place_cells.hpp"
-#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
 
 namespace {
 

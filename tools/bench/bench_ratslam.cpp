@@ -29,7 +29,7 @@
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 
 namespace {

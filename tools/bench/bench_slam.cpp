@@ -36,7 +36,7 @@
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 
 namespace snapnav::calibrate {
 

@@ -16,8 +16,8 @@
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/image_mask.hpp"
-#include "snapnav/nav/mirror_calibration.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
+#include "snapnav/nav/homing/mirror_calibration.hpp"
 
 namespace {
 

@@ -24,7 +24,7 @@
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/image_mask.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace {

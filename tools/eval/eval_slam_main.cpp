@@ -29,7 +29,7 @@
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/plot/plot.hpp"

@@ -34,7 +34,7 @@
 #include "stats.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
-#include "snapnav/nav/surf.hpp"
+#include "snapnav/nav/landmarks/surf.hpp"
 
 namespace {
 

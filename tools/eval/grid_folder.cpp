@@ -12,7 +12,7 @@
 
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 
 namespace snapnav::eval {
 

@@ -17,7 +17,7 @@
 
 #include <opencv2/core.hpp>
 
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::eval {

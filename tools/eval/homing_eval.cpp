@@ -8,10 +8,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "snapnav/nav/image_mask.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 
 #include "snapnav/nav/sim/world.hpp"
-#include "snapnav/nav/view_fusion.hpp"
+#include "snapnav/nav/landmarks/view_fusion.hpp"
 
 namespace snapnav::eval {
 

@@ -13,12 +13,12 @@
 
 #include <opencv2/core.hpp>
 
-#include "snapnav/nav/hog_homing.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/hog_homing.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 #include "snapnav/nav/sim/scene.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 
 namespace snapnav::eval {
 

@@ -11,7 +11,7 @@
 #include "landmark_eval.hpp"
 #include "report_text.hpp"
 #include "scene_file.hpp"
-#include "snapnav/nav/image_mask.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {

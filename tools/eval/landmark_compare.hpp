@@ -8,9 +8,9 @@
 
 #include "homing_eval.hpp"
 #include "landmark_eval.hpp"
-#include "snapnav/nav/hog_homing.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
-#include "snapnav/nav/landmarks.hpp"
+#include "snapnav/nav/homing/hog_homing.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks/landmarks.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 
 namespace snapnav::eval {

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "homing_eval.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
-#include "snapnav/nav/landmarks.hpp"
-#include "snapnav/nav/view_fusion.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks/landmarks.hpp"
+#include "snapnav/nav/landmarks/view_fusion.hpp"
 
 namespace snapnav::eval {
 

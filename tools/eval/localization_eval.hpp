@@ -19,7 +19,7 @@
 #include <opencv2/core.hpp>
 
 #include "homing_eval.hpp"
-#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/scene.hpp"
 #include "snapnav/nav/sim/world.hpp"

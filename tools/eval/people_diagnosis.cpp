@@ -13,7 +13,7 @@
 #include "report_text.hpp"
 #include "scene_file.hpp"
 #include "stats.hpp"
-#include "snapnav/nav/view_fusion.hpp"
+#include "snapnav/nav/landmarks/view_fusion.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {

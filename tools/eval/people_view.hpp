@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 #include "snapnav/nav/sim/scene.hpp"

@@ -20,7 +20,7 @@
 #include "stats.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/nav/trajectory.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/plot/plot.hpp"
 

@@ -25,7 +25,7 @@
 #include "slam_sim.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/pose2.hpp"
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 #include "snapnav/nav/sim/scene.hpp"
 

@@ -29,9 +29,9 @@
 #include <string>
 #include <vector>
 
-#include "snapnav/nav/landmarks.hpp"
-#include "snapnav/nav/navigator.hpp"
-#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/landmarks/landmarks.hpp"
+#include "snapnav/nav/places/navigator.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 #include "snapnav/nav/sim/scene.hpp"

@@ -21,7 +21,7 @@
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/plot/plot.hpp"
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 
 namespace snapnav::eval {
 namespace {

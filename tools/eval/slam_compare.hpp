@@ -36,10 +36,10 @@
 #include <opencv2/core.hpp>
 
 #include "slam_sim.hpp"
-#include "snapnav/nav/fused_slam.hpp"
-#include "snapnav/nav/laser_slam.hpp"
-#include "snapnav/nav/place_cells.hpp"
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/slam/fused_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 #include "snapnav/nav/sim/scene.hpp"

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "snapnav/nav/graph_slam.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/graph_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 
 namespace snapnav::eval {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "slam_log.hpp"
-#include "snapnav/nav/graph_slam.hpp"
+#include "snapnav/nav/slam/graph_slam.hpp"
 
 namespace snapnav::eval {
 

@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/trajectory.hpp"
 

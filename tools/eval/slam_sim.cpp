@@ -8,7 +8,7 @@
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/log_writer.hpp"
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/pose_t.hpp"
 

@@ -18,7 +18,7 @@
 #include "sim_node.hpp"
 #include "slam_log.hpp"
 #include "snapnav/glue/channels.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/nav/sim/world.hpp"
 #include "snapnav/nav/trajectory.hpp"

@@ -31,7 +31,7 @@
 #include "icp_slam.hpp"
 #include "slam_graph.hpp"
 #include "slam_log.hpp"
-#include "snapnav/nav/laser_slam.hpp"
+#include "snapnav/nav/slam/laser_slam.hpp"
 
 namespace snapnav::eval {
 

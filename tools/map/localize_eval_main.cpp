@@ -23,7 +23,7 @@
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/log_reader.hpp"
 #include "snapnav/pose_t.hpp"
-#include "snapnav/nav/map_localizer.hpp"
+#include "snapnav/nav/slam/map_localizer.hpp"
 
 namespace {
 

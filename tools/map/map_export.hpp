@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "snapnav/nav/occupancy_grid.hpp"
+#include "snapnav/nav/slam/occupancy_grid.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::map {

@@ -25,7 +25,7 @@
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/log_reader.hpp"
 #include "snapnav/laser_scan_t.hpp"
-#include "snapnav/nav/occupancy_grid.hpp"
+#include "snapnav/nav/slam/occupancy_grid.hpp"
 #include "snapnav/pose_t.hpp"
 
 namespace {

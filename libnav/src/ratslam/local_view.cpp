@@ -7,8 +7,8 @@
 
 #include <opencv2/core/hal/hal.hpp>
 
-#include "snapnav/nav/image_mask.hpp"
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 
 namespace snapnav::nav {
 namespace {

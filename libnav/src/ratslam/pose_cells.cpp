@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "snapnav/nav/ratslam.hpp"
+#include "snapnav/nav/ratslam/ratslam.hpp"
 
 namespace snapnav::nav {
 namespace {

@@ -11,8 +11,8 @@
 
 #include <opencv2/core.hpp>
 
-#include "snapnav/nav/omni_geometry.hpp"
-#include "snapnav/nav/unwrap.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
+#include "snapnav/nav/homing/unwrap.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::glue {

@@ -10,7 +10,7 @@
 #include <opencv2/core.hpp>
 
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/omni_frame_t.hpp"
 
 namespace snapnav::glue {

@@ -8,9 +8,9 @@
 
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/landmark_set_t.hpp"
-#include "snapnav/nav/landmark_extractor.hpp"
-#include "snapnav/nav/landmarks.hpp"
-#include "snapnav/nav/omni_geometry.hpp"
+#include "snapnav/nav/landmarks/landmark_extractor.hpp"
+#include "snapnav/nav/landmarks/landmarks.hpp"
+#include "snapnav/nav/homing/omni_geometry.hpp"
 
 namespace snapnav::glue {
 

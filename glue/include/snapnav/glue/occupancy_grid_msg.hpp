@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "snapnav/nav/occupancy_cells.hpp"
+#include "snapnav/nav/slam/occupancy_cells.hpp"
 #include "snapnav/occupancy_grid_t.hpp"
 
 namespace snapnav::glue {

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "snapnav/glue/ini.hpp"
-#include "snapnav/nav/place_cells.hpp"
+#include "snapnav/nav/places/place_cells.hpp"
 #include "snapnav/place_cell_match_t.hpp"
 #include "snapnav/pose_t.hpp"
 
