@@ -404,7 +404,9 @@ TEST(GraphSlam, WithTheRobustFrontEndTheLoopStaysClosed) {
   EXPECT_GE(r.accepted, 3);
   EXPECT_LT(Rmse(r.optimized, path), 0.1);
   for (const LoopClosure& c : r.closures) {
-    if (c.outcome == LoopOutcome::kAccepted) EXPECT_TRUE(ClosureIsRight(c, path));
+    if (c.outcome == LoopOutcome::kAccepted) {
+      EXPECT_TRUE(ClosureIsRight(c, path));
+    }
   }
 }
 

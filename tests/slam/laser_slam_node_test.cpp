@@ -316,7 +316,9 @@ TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
   // (at its publications: every 5 s of message time).
   ASSERT_NE(node.grid(), nullptr);
   EXPECT_EQ(node.grid()->keyframe_scans(), static_cast<size_t>(graph.keyframes()));
-  if (graph.corrections() > 0) EXPECT_GE(node.grid()->rebuilds(), 1);
+  if (graph.corrections() > 0) {
+    EXPECT_GE(node.grid()->rebuilds(), 1);
+  }
   // The EKF's status has the graph's fields at zero.
   glue::Bus bus2("memq://");
   LaserSlamNode ekf(bus2, TestConfig("LS8_"));
