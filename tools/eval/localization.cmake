@@ -1,6 +1,6 @@
 # Place-cell localization evaluation (./snapnav eval localization; thesis 5.1.4, 5.2.2, fig. 5.9).
 # Included by tools/CMakeLists.txt: paths are relative to tools/.
-add_library(snapnav_localization_eval STATIC eval/localization_eval.cpp)
+add_library(snapnav_localization_eval STATIC eval/localization_eval.cpp eval/leave_one_out.cpp eval/exploration.cpp)
 target_include_directories(snapnav_localization_eval PUBLIC eval)
 target_link_libraries(snapnav_localization_eval PUBLIC snapnav_homing_eval snapnav_places snapnav_plot
   PRIVATE opencv_imgproc)

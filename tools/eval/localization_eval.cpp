@@ -25,68 +25,10 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kPhysicsDt = 0.05;  // [s] simulation step of the exploration drives
 
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
 
 Eigen::Vector2d Xy(const nav::Pose2& p) { return {p.x_m, p.y_m}; }
-
-// The people of a scene walk (random waypoints) around a robot that stands at `robot`: they do
-// not walk into it, and one who stands where the robot is (radius + robot radius) has stepped
-// aside and is left out of the image.
-class Crowd {
- public:
-  Crowd(const nav::sim::Scene& scene, uint64_t seed) : world_(scene, {}, {}, seed), active_(scene.people.count > 0) {}
-  bool active() const { return active_; }
-  void Step(double dt_s, const nav::Pose2& robot) {
-    if (!active_) return;
-    world_.SetTruePose(robot);
-    world_.Step(0, 0, dt_s);
-  }
-  std::vector<nav::sim::Cylinder> Around(const nav::Pose2& robot, double robot_radius_m) const {
-    std::vector<nav::sim::Cylinder> out;
-    if (!active_) return out;
-    for (const auto& c : world_.people()) {
-      if ((c.center - Xy(robot)).norm() > c.radius_m + robot_radius_m) out.push_back(c);
-    }
-    return out;
-  }
-  // People after dt_s of walking (in 0.1 s steps) around the robot standing at `robot`.
-  std::vector<nav::sim::Cylinder> Advance(double dt_s, const nav::Pose2& robot, double robot_radius_m) {
-    const int steps = std::max(1, static_cast<int>(std::lround(dt_s / 0.1)));
-    for (int i = 0; i < steps; ++i) Step(0.1, robot);
-    return Around(robot, robot_radius_m);
-  }
-
- private:
-  nav::sim::World world_;
-  bool active_;
-};
-
-// The exploring robot: it drives in the scene without its people (so nobody blocks it: the people
-// step aside), while the people walk around it in a World of their own, kept in step.
-class ExploreWorld {
- public:
-  ExploreWorld(const nav::sim::Scene& scene, const nav::sim::DriveOptions& drive, uint64_t seed)
-      : empty_(WithoutPeople(scene)), robot_(empty_, drive, {}, seed), crowd_(scene, seed + 1), drive_(drive) {}
-  void Step(double linear_mps, double angular_radps, double dt_s) {
-    robot_.Step(linear_mps, angular_radps, dt_s);
-    crowd_.Step(dt_s, robot_.true_pose());
-  }
-  nav::sim::World& robot() { return robot_; }
-  const nav::sim::World& robot() const { return robot_; }
-  std::vector<nav::sim::Cylinder> people() const { return crowd_.Around(robot_.true_pose(), drive_.robot_radius_m); }
-
- private:
-  static nav::sim::Scene WithoutPeople(nav::sim::Scene scene) {
-    scene.people.count = 0;
-    return scene;
-  }
-  nav::sim::Scene empty_;  // before robot_, which keeps a reference to it
-  nav::sim::World robot_;
-  Crowd crowd_;
-  nav::sim::DriveOptions drive_;
-};
 
 // Renders a pose (raw omni image, unwrapped) and makes its view, timing both.
 class ViewMaker {
@@ -136,156 +78,6 @@ std::string Key(std::string s) {
 }
 
 }  // namespace
-
-// ---------------------------------------------------------------------------------------------
-bool Area::Contains(const Eigen::Vector2d& p, double margin_m) const {
-  return p.x() >= min.x() - margin_m && p.x() <= max.x() + margin_m && p.y() >= min.y() - margin_m &&
-         p.y() <= max.y() + margin_m;
-}
-
-Area GridArea(const nav::sim::GridSpec& grid) {
-  if (grid.nx < 2 || grid.ny < 2) throw std::invalid_argument("grid area: the grid needs at least 2 x 2 positions");
-  Area a;
-  a.min = grid.Position(0, 0);
-  a.max = grid.Position(grid.nx - 1, grid.ny - 1);
-  return a;
-}
-
-std::vector<nav::Pose2> RandomTestPoses(const Area& area, const nav::sim::GridSpec& grid, int count,
-                                        double min_grid_distance_m, uint64_t seed) {
-  if (count < 0) throw std::invalid_argument("test poses: count must be >= 0");
-  if (!(min_grid_distance_m >= 0) || min_grid_distance_m >= grid.spacing_m / 2) {
-    throw std::invalid_argument("test poses: min_grid_distance_m must be in [0, spacing / 2)");
-  }
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> ux(area.min.x(), area.max.x()), uy(area.min.y(), area.max.y()),
-      heading(-M_PI, M_PI);
-  std::vector<nav::Pose2> poses;
-  while (static_cast<int>(poses.size()) < count) {
-    const Eigen::Vector2d p(ux(rng), uy(rng));
-    const double th = heading(rng);
-    const int ix = std::clamp(static_cast<int>(std::lround((p.x() - grid.origin_x_m) / grid.spacing_m)), 0, grid.nx - 1);
-    const int iy = std::clamp(static_cast<int>(std::lround((p.y() - grid.origin_y_m) / grid.spacing_m)), 0, grid.ny - 1);
-    if ((grid.Position(ix, iy) - p).norm() < min_grid_distance_m) continue;
-    poses.push_back({p.x(), p.y(), th});
-  }
-  return poses;
-}
-
-void RandomWalkOptions::Validate() const {
-  if (runs < 1 || steps < 0) throw std::invalid_argument("random walk: runs must be >= 1 and steps >= 0");
-  if (!(step_m > 0) || !(speed_mps > 0)) throw std::invalid_argument("random walk: step_m and speed_mps must be positive");
-  if (!(turn_sigma_rad >= 0) || !(turn_back_spread_rad >= 0) || !(turn_back_spread_rad < M_PI / 2)) {
-    throw std::invalid_argument("random walk: turn_sigma_rad >= 0, turn_back_spread_rad in [0, pi / 2)");
-  }
-  if (!(border_margin_m >= 0)) throw std::invalid_argument("random walk: border_margin_m must be >= 0");
-  if (!std::isfinite(start_heading_rad)) throw std::invalid_argument("random walk: start_heading_rad must be finite");
-}
-
-namespace {
-
-// Turns in place by `angle_rad`, then drives `distance_m` forward, in physics steps.
-void TurnAndDrive(ExploreWorld& world, double angle_rad, double distance_m, double speed_mps,
-                  double turn_rate_radps) {
-  for (double left = std::abs(angle_rad) / turn_rate_radps; left > 1e-9; left -= kPhysicsDt) {
-    world.Step(0, std::copysign(turn_rate_radps, angle_rad), std::min(kPhysicsDt, left));
-  }
-  for (double left = distance_m / speed_mps; left > 1e-9; left -= kPhysicsDt) {
-    world.Step(speed_mps, 0, std::min(kPhysicsDt, left));
-  }
-}
-
-ExploreSample Sample(const ExploreWorld& world, const nav::Pose2& start, const nav::Pose2& odom_start,
-                     const nav::Pose2& odom_now, double time_offset_s, int run) {
-  ExploreSample s;
-  s.truth = world.robot().true_pose();
-  s.odometry = start.Compose(odom_start.Between(odom_now));
-  s.utime = static_cast<int64_t>(std::llround((time_offset_s + world.robot().time_s()) * 1e6));
-  s.run = run;
-  s.people = world.people();
-  return s;
-}
-
-}  // namespace
-
-std::vector<ExploreSample> RandomWalk(const nav::sim::Scene& scene, const Area& area, const nav::sim::DriveOptions& drive,
-                                      const RandomWalkOptions& options, uint64_t seed) {
-  options.Validate();
-  std::vector<ExploreSample> samples;
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> turn(0.0, options.turn_sigma_rad);
-  std::uniform_real_distribution<double> spread(-options.turn_back_spread_rad, options.turn_back_spread_rad);
-  const double turn_rate = 0.8 * drive.max_angular_radps;
-  const double speed = std::min(options.speed_mps, drive.max_linear_mps);
-  double time_offset_s = 0;
-  for (int run = 0; run < options.runs; ++run) {
-    ExploreWorld world(scene, drive, seed * 7919 + static_cast<uint64_t>(run) + 1);
-    const nav::Pose2 start{area.centre().x(), area.centre().y(),
-                           nav::WrapAngle(options.start_heading_rad + run * 2 * M_PI / options.runs)};
-    world.robot().SetTruePose(start);
-    const nav::Pose2 odom_start = world.robot().TakeOdometry().cumulative;
-    nav::Pose2 odom = odom_start;
-    samples.push_back(Sample(world, start, odom_start, odom, time_offset_s, run));
-    for (int step = 0; step < options.steps; ++step) {
-      const nav::Pose2 p = world.robot().true_pose();
-      double dtheta = turn(rng);
-      const double h = p.theta_rad + dtheta;
-      const Eigen::Vector2d next = Xy(p) + options.step_m * Eigen::Vector2d(std::cos(h), std::sin(h));
-      if (!area.Contains(next, options.border_margin_m)) {
-        // Over the border: turn back drastically, towards the centre give or take a little.
-        const Eigen::Vector2d to = area.centre() - Xy(p);
-        dtheta = nav::WrapAngle(std::atan2(to.y(), to.x()) + spread(rng) - p.theta_rad);
-      }
-      TurnAndDrive(world, dtheta, options.step_m, speed, turn_rate);
-      odom = world.robot().TakeOdometry().cumulative;
-      samples.push_back(Sample(world, start, odom_start, odom, time_offset_s, run));
-    }
-    time_offset_s += world.robot().time_s() + 1.0;
-  }
-  return samples;
-}
-
-std::vector<Eigen::Vector2d> ManualRouteWaypoints(const Area& area, double row_spacing_m) {
-  if (!(row_spacing_m > 0)) throw std::invalid_argument("manual route: row_spacing_m must be positive");
-  const double h = area.max.y() - area.min.y();
-  const int rows = std::max(2, static_cast<int>(std::lround(h / row_spacing_m)) + 1);
-  std::vector<Eigen::Vector2d> w;
-  for (int r = 0; r < rows; ++r) {
-    const double y = area.min.y() + h * r / (rows - 1);
-    const bool east = r % 2 == 0;
-    w.push_back({east ? area.min.x() : area.max.x(), y});
-    w.push_back({east ? area.max.x() : area.min.x(), y});
-  }
-  return w;
-}
-
-std::vector<ExploreSample> DriveRoute(const nav::sim::Scene& scene, const std::vector<Eigen::Vector2d>& waypoints,
-                                      const nav::sim::DriveOptions& drive, double spacing_m, uint64_t seed) {
-  if (waypoints.size() < 2) throw std::invalid_argument("drive route: needs at least 2 waypoints");
-  if (!(spacing_m > 0)) throw std::invalid_argument("drive route: spacing_m must be positive");
-  ExploreWorld world(scene, drive, seed);
-  const Eigen::Vector2d d = waypoints[1] - waypoints[0];
-  const nav::Pose2 start{waypoints[0].x(), waypoints[0].y(), std::atan2(d.y(), d.x())};
-  world.robot().SetTruePose(start);
-  const nav::Pose2 odom_start = world.robot().TakeOdometry().cumulative;
-  nav::sim::RouteDriver driver(std::vector<Eigen::Vector2d>(waypoints.begin() + 1, waypoints.end()),
-                               std::min(0.25, drive.max_linear_mps), 0.05, false);
-  std::vector<ExploreSample> samples = {Sample(world, start, odom_start, odom_start, 0, 0)};
-  double last = 0;
-  for (int i = 0; i < 200000 && !driver.finished(); ++i) {
-    const Eigen::Vector2d cmd = driver.Command(world.robot().true_pose());
-    if (driver.finished()) break;
-    world.Step(cmd.x(), cmd.y(), kPhysicsDt);
-    if (world.robot().distance_m() - last >= spacing_m) {
-      last = world.robot().distance_m();
-      samples.push_back(Sample(world, start, odom_start, world.robot().TakeOdometry().cumulative, 0, 0));
-    }
-  }
-  if (world.robot().distance_m() - last >= spacing_m / 2) {
-    samples.push_back(Sample(world, start, odom_start, world.robot().TakeOdometry().cumulative, 0, 0));
-  }
-  return samples;
-}
 
 const std::vector<std::string>& MeasureVariantNames() {
   static const std::vector<std::string> names = {"bearing-smallest", "bearing-ransac", "count", "vline"};
@@ -407,127 +199,6 @@ std::string DescribeOptions(const LocalizationEvalOptions& o) {
   s << "\nrobot: heading drift " << o.drive.heading_drift_deg_per_m << " deg/m, odometry noise "
     << o.drive.odometry_linear_noise_frac << " (distance), " << o.drive.odometry_angular_noise_frac << " (turn)\n";
   return s.str();
-}
-
-// The thesis' leave-one-out protocol (5.2.2; the 169 locations of 4.4 on a 13x13 grid): each grid
-// image is a query against the grid memory without its own cell (a memory of the other cells,
-// its vocabulary trained on them), so the nearest cell is one grid spacing away. The distance
-// filter gets the truth + N(0, prediction_sigma^2) per axis as the snapnav protocol's queries.
-static void LeaveOneOut(const LocalizationEvalOptions& options, const std::function<void(const std::string&, bool)>& say,
-                 LocalizationEvalResult* result) {
-  const EvalMemory* grid = nullptr;
-  for (const auto& m : result->memories) {
-    if (m.name == "grid") grid = &m;
-  }
-  if (!grid) throw std::invalid_argument("the leave-one-out protocol needs the grid memory");
-  const auto& cells = grid->memory->cells();
-  std::mt19937_64 rng(options.seed + 43);
-  std::normal_distribution<double> noise(0.0, options.prediction_sigma_m);
-  std::vector<int> queries;
-  std::vector<Eigen::Vector2d> predicted;
-  for (int q = 0; q < static_cast<int>(cells.size()); q += options.leave_one_out_stride) {
-    queries.push_back(q);
-    const double dx = options.prediction_sigma_m > 0 ? noise(rng) : 0.0;
-    const double dy = options.prediction_sigma_m > 0 ? noise(rng) : 0.0;
-    predicted.push_back(Xy(cells[q].pose) + Eigen::Vector2d(dx, dy));
-    result->leave_one_out_queries.push_back(cells[q].pose);
-  }
-  struct Acc {
-    ConfigResult nearest, interp;
-    nav::LocalizerOptions lo;
-    std::vector<double> heading_errors;
-    double seconds = 0, candidates = 0;
-  };
-  std::vector<Acc> accs;
-  for (const auto& measure_name : options.measures) {
-    const auto variant = *ParseMeasureVariant(measure_name);
-    for (bool filter : options.filters) {
-      Acc a;
-      a.lo = options.localizer;
-      a.lo.measure.measure = variant.measure;
-      a.lo.measure.refinement = variant.refinement;
-      a.lo.filter.enabled = filter;
-      a.lo.estimate = nav::PlaceEstimate::kInterpolated;
-      for (auto* r : {&a.nearest, &a.interp}) {
-        r->memory = "grid";
-        r->measure = variant.name;
-        r->filter = filter;
-        r->cells = static_cast<int>(cells.size()) - 1;
-        r->cells_per_m2 = r->cells / result->area.area_m2();
-      }
-      a.nearest.estimate = nav::PlaceEstimate::kNearestCell;
-      a.interp.estimate = nav::PlaceEstimate::kInterpolated;
-      accs.push_back(std::move(a));
-    }
-  }
-  const auto t0 = Clock::now();
-  for (size_t k = 0; k < queries.size(); ++k) {
-    const int q = queries[k];
-    nav::PlaceCellMemory memory(options.view, options.camera.panorama, options.vocabulary);
-    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
-      if (i != q) memory.Add(cells[i].pose, cells[i].utime, cells[i].view);
-    }
-    memory.BuildIndex();
-    const nav::Pose2& truth = cells[q].pose;
-    for (auto& a : accs) {
-      const std::optional<nav::Pose2> pred =
-          a.lo.filter.enabled ? std::optional<nav::Pose2>(nav::Pose2{predicted[k].x(), predicted[k].y(), truth.theta_rad})
-                              : std::nullopt;
-      const auto tq = Clock::now();
-      const auto loc = memory.Localize(cells[q].view, pred, a.lo);
-      a.seconds += Seconds(tq);
-      Eigen::Vector2d near_xy = predicted[k], interp_xy = predicted[k];
-      double heading_error = kNaN;
-      if (loc) {
-        near_xy = Xy(memory.cell(loc->cell).pose);
-        interp_xy = Xy(loc->pose);
-        heading_error = nav::WrapAngle(loc->pose.theta_rad - truth.theta_rad);
-        a.candidates += loc->candidates;
-      } else {
-        ++a.nearest.failures;
-        ++a.interp.failures;
-      }
-      a.heading_errors.push_back(heading_error);
-      a.nearest.estimates.push_back(near_xy);
-      a.interp.estimates.push_back(interp_xy);
-      a.nearest.position_errors_m.push_back((near_xy - Xy(truth)).norm());
-      a.interp.position_errors_m.push_back((interp_xy - Xy(truth)).norm());
-    }
-    if (say && ((k + 1) % 10 == 0 || k + 1 == queries.size())) {
-      say("leave-one-out queries " + std::to_string(k + 1) + "/" + std::to_string(queries.size()), k + 1 != queries.size());
-    }
-  }
-  for (auto& a : accs) {
-    const int answered = static_cast<int>(queries.size()) - a.interp.failures;
-    for (auto* r : {&a.nearest, &a.interp}) {
-      r->errors = Summarize(r->position_errors_m, a.heading_errors);
-      r->ms_per_query = 1000 * a.seconds / queries.size();
-      r->mean_candidates = answered ? a.candidates / answered : 0;
-    }
-    if (say) {
-      say("leave-one-out " + a.interp.measure + (a.interp.filter ? " filter" : " no filter") + ": mean error " +
-              Fixed(a.interp.errors.mean_m, 3) + " m interpolated, " + Fixed(a.nearest.errors.mean_m, 3) + " m nearest",
-          false);
-    }
-    result->leave_one_out.push_back(std::move(a.nearest));
-    result->leave_one_out.push_back(std::move(a.interp));
-  }
-  // How far each query is from the nearest cell it may find: the other grid cells; for snapnav's
-  // test positions, every grid cell.
-  auto nearest = [&](const Eigen::Vector2d& p, int skip) {
-    double best = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < static_cast<int>(cells.size()); ++i) {
-      if (i != skip) best = std::min(best, (Xy(cells[i].pose) - p).norm());
-    }
-    return best;
-  };
-  double sum = 0;
-  for (int q : queries) sum += nearest(Xy(cells[q].pose), q);
-  result->leave_one_out_nearest_cell_m = sum / queries.size();
-  sum = 0;
-  for (const auto& t : result->tests) sum += nearest(Xy(t.truth), -1);
-  result->tests_nearest_cell_m = result->tests.empty() ? 0 : sum / result->tests.size();
-  if (say) say("leave-one-out: " + std::to_string(queries.size()) + " queries in " + Fixed(Seconds(t0), 0) + " s", false);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -746,7 +417,7 @@ LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const L
       }
     }
   }
-  if (options.leave_one_out) LeaveOneOut(options, say, &result);
+  if (options.leave_one_out) AddLeaveOneOut(options, say, &result);
   result.total_seconds = Seconds(t_start);
   return result;
 }
@@ -793,7 +464,7 @@ LocalizationEvalResult RunGridFolderLocalization(const std::string& name, const 
   result.views_made = static_cast<int>(poses.size());
   result.extract_ms_per_view = 1000 * extract_s / poses.size();
   result.mean_landmarks = static_cast<double>(landmarks) / poses.size();
-  LeaveOneOut(options, say, &result);
+  AddLeaveOneOut(options, say, &result);
   result.total_seconds = Seconds(t_start);
   return result;
 }
