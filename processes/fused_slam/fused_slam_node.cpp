@@ -10,7 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "laser_slam_node.hpp"
+#include "snapnav/glue/slam_options.hpp"
 #include "snapnav/fused_slam_status_t.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
@@ -57,7 +57,7 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.map_channel = channel_prefix + ini.GetString("channels", "map");
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
   nav::FusedSlamOptions& o = c.options;
-  o.laser = ReadLaserSlamOptions(ini, "laser_slam");
+  o.laser = glue::ReadLaserSlamOptions(ini, "laser_slam");
   const char* s = "fused_slam";
   c.start = glue::ReadChoice<FusedStart>(ini, s, "start", {{"odometry", FusedStart::kOdometry}, {"visual", FusedStart::kVisual}});
   o.gate_chi2 = ini.GetDouble(s, "gate_chi2");
@@ -105,7 +105,7 @@ void FusedSlamConfig::Print(std::ostream& out) const {
   const nav::FusedSlamOptions& o = options;
   out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\nvisual = " << visual_channel
       << "\npose = " << pose_channel << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\n[laser_slam]\n";
-  PrintLaserSlamOptions(out, o.laser);
+  glue::PrintLaserSlamOptions(out, o.laser);
   out << "[fused_slam]\nstart = " << FusedStartName(start) << "\ngate_chi2 = " << o.gate_chi2
       << "\nagree_chi2 = " << o.agree_chi2 << "\nrelocalize_after = " << o.relocalize_after
       << "\nrelocalize_sigma_xy_m = " << o.relocalize_sigma_xy_m

@@ -1,7 +1,6 @@
 #pragma once
-// laser-slam's back end choice (`[laser_slam] backend = ekf | graph`) and the graph back end's
-// keys (`graph_*` in [laser_slam]; nav::GraphSlamOptions, docs/laser_slam.md). Angles in degrees
-// in the file.
+// laser-slam's back end choice (`[laser_slam] backend = ekf | graph`). The graph back end's keys
+// (`graph_*` in [laser_slam]) are declared in glue/slam_options.hpp.
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -17,10 +16,5 @@ enum class SlamBackend {
 };
 const char* SlamBackendName(SlamBackend b);
 std::optional<SlamBackend> ParseSlamBackend(const std::string& name);
-
-// The graph_* keys of `section`: every key required, invalid values are glue::ConfigError.
-nav::GraphSlamOptions ReadGraphSlamOptions(const glue::IniFile& ini, const std::string& section);
-// Those keys as ReadGraphSlamOptions reads them, one per line.
-void PrintGraphSlamOptions(std::ostream& out, const nav::GraphSlamOptions& options);
 
 }  // namespace snapnav::processes

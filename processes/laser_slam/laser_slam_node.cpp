@@ -12,6 +12,7 @@
 
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
+#include "snapnav/glue/slam_options.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
 #include "snapnav/point_map_t.hpp"
 
@@ -25,115 +26,6 @@ bool Finite(double a, double b, double c) { return std::isfinite(a) && std::isfi
 
 }  // namespace
 
-nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::string& section) {
-  const char* s = section.c_str();
-  nav::LaserSlamOptions o;
-  o.motion.translation_noise_m_per_m = ini.GetDouble(s, "translation_noise_m_per_m");
-  o.motion.rotation_noise_rad_per_rad = ini.GetDouble(s, "rotation_noise_rad_per_rad");
-  o.motion.rotation_noise_rad_per_m = ini.GetDouble(s, "rotation_noise_rad_per_m");
-  o.initial_sigma_xy_m = ini.GetDouble(s, "initial_sigma_xy_m");
-  o.initial_sigma_theta_rad = ini.GetDouble(s, "initial_sigma_theta_deg") / kDegPerRad;
-  const std::string metric = ini.GetString(s, "metric");
-  const auto parsed = nav::ParseIcpMetric(metric);
-  if (!parsed) {
-    ini.FailKey(section, "metric", "expected point_to_point | point_to_line");
-  }
-  o.metric = *parsed;
-  o.match_distance_m = ini.GetDouble(s, "match_distance_m");
-  o.match_distance_start_m = ini.GetDouble(s, "match_distance_start_m");
-  o.robust_scale_m = ini.GetDouble(s, "robust_scale_m");
-  o.max_range_m = ini.GetDouble(s, "max_range_m");
-  o.search_sigmas = ini.GetDouble(s, "search_sigmas");
-  o.search_window_max_rad = ini.GetDouble(s, "search_window_max_deg") / kDegPerRad;
-  o.search_step_rad = ini.GetDouble(s, "search_step_deg") / kDegPerRad;
-  const std::string matcher = ini.GetString(s, "matcher");
-  const auto parsed_matcher = nav::ParseScanMatcher(matcher);
-  if (!parsed_matcher) {
-    ini.FailKey(section, "matcher", "expected heading | correlative");
-  }
-  o.matcher = *parsed_matcher;
-  o.search_window_xy_m = ini.GetDouble(s, "search_window_xy_m");
-  o.search_sigma_m = ini.GetDouble(s, "search_sigma_m");
-  o.search_prior_weight = ini.GetDouble(s, "search_prior_weight");
-  o.refine_starts = ini.GetInt(s, "refine_starts");
-  o.refine_prune_iterations = ini.GetInt(s, "refine_prune_iterations");
-  o.refine_prune_fraction = ini.GetDouble(s, "refine_prune_fraction");
-  o.scan_latency_s = ini.GetDouble(s, "scan_latency_s");
-  o.recovery_fit = ini.GetDouble(s, "recovery_fit");
-  o.turn_noise_rad_per_rad = ini.GetDouble(s, "turn_noise_rad_per_rad");
-  o.interval_sigma_xy_m = ini.GetDouble(s, "interval_sigma_xy_m");
-  o.interval_sigma_theta_rad = ini.GetDouble(s, "interval_sigma_theta_deg") / kDegPerRad;
-  o.interval_full_m = ini.GetDouble(s, "interval_full_m");
-  o.interval_full_rad = ini.GetDouble(s, "interval_full_deg") / kDegPerRad;
-  o.motion_noise_per_scan = ini.GetBool(s, "motion_noise_per_scan");
-  o.stale_odometry = ini.GetBool(s, "stale_odometry");
-  o.stale_fraction = ini.GetDouble(s, "stale_fraction");
-  o.hypothesis_odds = ini.GetDouble(s, "hypothesis_odds");
-  o.match_sigma_xy_m = ini.GetDouble(s, "match_sigma_xy_m");
-  o.match_sigma_theta_rad = ini.GetDouble(s, "match_sigma_theta_deg") / kDegPerRad;
-  o.gate_mahalanobis2 = ini.GetDouble(s, "gate_mahalanobis2");
-  o.max_ambiguity = ini.GetDouble(s, "max_ambiguity");
-  o.min_fit = ini.GetDouble(s, "min_fit");
-  o.adaptive_motion_noise = ini.GetBool(s, "adaptive_motion_noise");
-  o.adaptive_window_scans = ini.GetDouble(s, "adaptive_window_scans");
-  o.adaptive_scale_min = ini.GetDouble(s, "adaptive_scale_min");
-  o.adaptive_scale_max = ini.GetDouble(s, "adaptive_scale_max");
-  o.outlier_scale = ini.GetDouble(s, "outlier_scale");
-  o.outlier_min_fit = ini.GetDouble(s, "outlier_min_fit");
-  o.update_score_margin = ini.GetDouble(s, "update_score_margin");
-  o.icp_iterations = ini.GetInt(s, "icp_iterations");
-  o.icp_convergence_m = ini.GetDouble(s, "icp_convergence_m");
-  o.point_sigma_m = ini.GetDouble(s, "point_sigma_m");
-  o.point_sigma_rad = ini.GetDouble(s, "point_sigma_deg") / kDegPerRad;
-  o.min_matches = ini.GetInt(s, "min_matches");
-  o.map_resolution_m = ini.GetDouble(s, "map_resolution_m");
-  o.add_distance_m = ini.GetDouble(s, "add_distance_m");
-  o.scan_step = ini.GetInt(s, "scan_step");
-  o.lookup_cell_m = ini.GetDouble(s, "lookup_cell_m");
-  try {
-    o.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ini.ValidationError(e.what());
-  }
-  return o;
-}
-
-void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& o) {
-  out << "translation_noise_m_per_m = " << o.motion.translation_noise_m_per_m
-      << "\nrotation_noise_rad_per_rad = " << o.motion.rotation_noise_rad_per_rad
-      << "\nrotation_noise_rad_per_m = " << o.motion.rotation_noise_rad_per_m
-      << "\ninitial_sigma_xy_m = " << o.initial_sigma_xy_m
-      << "\ninitial_sigma_theta_deg = " << o.initial_sigma_theta_rad * kDegPerRad
-      << "\nmetric = " << nav::IcpMetricName(o.metric) << "\nmatch_distance_m = " << o.match_distance_m
-      << "\nmatch_distance_start_m = " << o.match_distance_start_m << "\nrobust_scale_m = " << o.robust_scale_m
-      << "\nmax_range_m = " << o.max_range_m << "\nsearch_sigmas = " << o.search_sigmas
-      << "\nsearch_window_max_deg = " << o.search_window_max_rad * kDegPerRad
-      << "\nsearch_step_deg = " << o.search_step_rad * kDegPerRad << "\nmatcher = " << nav::ScanMatcherName(o.matcher)
-      << "\nsearch_window_xy_m = " << o.search_window_xy_m << "\nsearch_sigma_m = " << o.search_sigma_m
-      << "\nsearch_prior_weight = " << o.search_prior_weight << "\nrefine_starts = " << o.refine_starts
-      << "\nrefine_prune_iterations = " << o.refine_prune_iterations
-      << "\nrefine_prune_fraction = " << o.refine_prune_fraction
-      << "\nscan_latency_s = " << o.scan_latency_s << "\nrecovery_fit = " << o.recovery_fit
-      << "\nturn_noise_rad_per_rad = " << o.turn_noise_rad_per_rad
-      << "\ninterval_sigma_xy_m = " << o.interval_sigma_xy_m
-      << "\ninterval_sigma_theta_deg = " << o.interval_sigma_theta_rad * kDegPerRad
-      << "\ninterval_full_m = " << o.interval_full_m << "\ninterval_full_deg = " << o.interval_full_rad * kDegPerRad
-      << "\nmotion_noise_per_scan = " << (o.motion_noise_per_scan ? "true" : "false")
-      << "\nstale_odometry = " << (o.stale_odometry ? "true" : "false") << "\nstale_fraction = " << o.stale_fraction
-      << "\nhypothesis_odds = " << o.hypothesis_odds << "\nmatch_sigma_xy_m = " << o.match_sigma_xy_m
-      << "\nmatch_sigma_theta_deg = " << o.match_sigma_theta_rad * kDegPerRad << "\ngate_mahalanobis2 = " << o.gate_mahalanobis2
-      << "\nmax_ambiguity = " << o.max_ambiguity << "\nmin_fit = " << o.min_fit
-      << "\nadaptive_motion_noise = " << (o.adaptive_motion_noise ? "true" : "false")
-      << "\nadaptive_window_scans = " << o.adaptive_window_scans << "\nadaptive_scale_min = " << o.adaptive_scale_min
-      << "\nadaptive_scale_max = " << o.adaptive_scale_max << "\noutlier_scale = " << o.outlier_scale << "\noutlier_min_fit = " << o.outlier_min_fit
-      << "\nupdate_score_margin = " << o.update_score_margin << "\nicp_iterations = " << o.icp_iterations
-      << "\nicp_convergence_m = " << o.icp_convergence_m << "\npoint_sigma_m = " << o.point_sigma_m
-      << "\npoint_sigma_deg = " << o.point_sigma_rad * kDegPerRad
-      << "\nmin_matches = " << o.min_matches << "\nmap_resolution_m = " << o.map_resolution_m
-      << "\nadd_distance_m = " << o.add_distance_m << "\nscan_step = " << o.scan_step
-      << "\nlookup_cell_m = " << o.lookup_cell_m << "\n";
-}
-
 LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   LaserSlamConfig c;
   c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
@@ -141,7 +33,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
   c.map_channel = channel_prefix + ini.GetString("channels", "map");
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
-  c.options = ReadLaserSlamOptions(ini, "laser_slam");
+  c.options = glue::ReadLaserSlamOptions(ini, "laser_slam");
   c.map_every_n_scans = ini.GetInt("laser_slam", "map_every_n_scans");
   const std::string backend = ini.GetString("laser_slam", "backend");
   const auto parsed_backend = ParseSlamBackend(backend);
@@ -149,7 +41,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
     ini.FailKey("laser_slam", "backend", "expected ekf or graph");
   }
   c.backend = *parsed_backend;
-  c.graph = ReadGraphSlamOptions(ini, "laser_slam");
+  c.graph = glue::ReadGraphSlamOptions(ini, "laser_slam");
   c.grid = GridConfig::FromIni(ini, channel_prefix);
   c.localize = LocalizeConfig::FromIni(ini, channel_prefix);
   c.localize.options.tracking = c.options;
@@ -164,9 +56,9 @@ void LaserSlamConfig::Print(std::ostream& out) const {
       << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\ngrid = " << grid.channel
       << "\ngrid_request = " << grid.request_channel << "\nlocalization_status = " << localize.status_channel
       << "\n[laser_slam]\n";
-  PrintLaserSlamOptions(out, options);
+  glue::PrintLaserSlamOptions(out, options);
   out << "map_every_n_scans = " << map_every_n_scans << "\nbackend = " << SlamBackendName(backend) << "\n";
-  PrintGraphSlamOptions(out, graph);
+  glue::PrintGraphSlamOptions(out, graph);
   grid.Print(out);
   out << "[localize]\n";
   localize.Print(out);

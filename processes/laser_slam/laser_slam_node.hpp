@@ -53,13 +53,6 @@ struct LaserSlamConfig {
   void Print(std::ostream& out) const;
 };
 
-// The [section] keys of nav::LaserSlamOptions (laser_slam.ini's [laser_slam] without
-// map_every_n_scans; fused_slam.ini has the same section): every key required, invalid values are
-// glue::ConfigError. Angles in degrees in the file.
-nav::LaserSlamOptions ReadLaserSlamOptions(const glue::IniFile& ini, const std::string& section);
-// Those keys as ReadLaserSlamOptions reads them, one per line (no section header).
-void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& options);
-
 // Limits of a scan's beam count and range_max_m (glue/laser_scan_checks.hpp, shared with fused-slam).
 using glue::kMaxLaserBeams;
 using glue::kMaxLaserRangeM;

@@ -4,15 +4,17 @@
 #include <iostream>
 #include <ostream>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/options.hpp"
 
 namespace snapnav::processes {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
-
-const char* Bool(bool b) { return b ? "true" : "false"; }
 
 bool Finite(const nav::Pose2& p) { return std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad); }
 
@@ -30,6 +32,61 @@ int8_t StateCode(nav::FollowState s) {
       return navigator_status_t::FINISHED;
   }
   return navigator_status_t::IDLE;
+}
+
+// The options of every section but [channels], declared once: read, printed and described from here.
+using Table = glue::OptionTable<NavigatorConfig>;
+const std::vector<std::pair<std::string, Table>>& Sections() {
+  using C = NavigatorConfig;
+  static const std::vector<std::pair<std::string, Table>> sections = {
+      {"route", Table()
+                    .Choice("route", &C::route_source,
+                            std::vector<std::pair<std::string, std::string>>{
+                                {"none", "none"}, {"thesis1", "thesis1"}, {"thesis2", "thesis2"}})
+                    .Number("origin_x_m", "m", [](auto& c) -> auto& { return c.route_origin.x(); })
+                    .Number("origin_y_m", "m", [](auto& c) -> auto& { return c.route_origin.y(); })
+                    .Number("size_m", "m", &C::route_size_m)
+                    .Flag("loop", &C::route_loop)
+                    .Number("laps", "", &C::route_laps)
+                    .Number("tolerance_m", "m", &C::route_tolerance_m)
+                    .Number("first_waypoint", "", &C::route_first_waypoint)},
+      {"tracker", Table()
+                      .Number("translation_noise_m_per_m", "m/m",
+                              [](auto& c) -> auto& { return c.tracker.odometry.translation_noise_m_per_m; })
+                      .Number("rotation_noise_rad_per_rad", "rad/rad",
+                              [](auto& c) -> auto& { return c.tracker.odometry.rotation_noise_rad_per_rad; })
+                      .Degrees("rotation_noise_deg_per_m", [](auto& c) -> auto& { return c.tracker.odometry.rotation_noise_rad_per_m; },
+                               "deg/m")
+                      .Number("initial_position_sigma_m", "m", [](auto& c) -> auto& { return c.tracker.initial_position_sigma_m; })
+                      .Degrees("initial_heading_sigma_deg", [](auto& c) -> auto& { return c.tracker.initial_heading_sigma_rad; })
+                      .Number("gate_chi2", "", [](auto& c) -> auto& { return c.tracker.gate_chi2; })
+                      .Number("reset_after_rejections", "", [](auto& c) -> auto& { return c.tracker.reset_after_rejections; })
+                      .Flag("use_fix_heading", [](auto& c) -> auto& { return c.tracker.use_fix_heading; })
+                      .Number("min_fix_position_sigma_m", "m", [](auto& c) -> auto& { return c.tracker.min_fix_position_sigma_m; })
+                      .Degrees("min_fix_heading_sigma_deg", [](auto& c) -> auto& { return c.tracker.min_fix_heading_sigma_rad; })
+                      .Number("max_fix_age_s", "s", [](auto& c) -> auto& { return c.tracker.max_fix_age_s; })
+                      .Number("unknown_fix_position_sigma_m", "m", &C::unknown_fix_position_sigma_m)
+                      .Degrees("unknown_fix_heading_sigma_deg", &C::unknown_fix_heading_sigma_rad)},
+      {"follower", Table()
+                       .Number("max_linear_mps", "m/s", [](auto& c) -> auto& { return c.follower.max_linear_mps; })
+                       .Number("min_linear_mps", "m/s", [](auto& c) -> auto& { return c.follower.min_linear_mps; })
+                       .Degrees("max_angular_deg_per_s", [](auto& c) -> auto& { return c.follower.max_angular_radps; }, "deg/s")
+                       .Number("heading_gain_per_s", "1/s", [](auto& c) -> auto& { return c.follower.heading_gain_per_s; })
+                       .Degrees("turn_in_place_deg", [](auto& c) -> auto& { return c.follower.turn_in_place_rad; })
+                       .Degrees("align_deg", [](auto& c) -> auto& { return c.follower.align_rad; })
+                       .Number("slow_down_m", "m", [](auto& c) -> auto& { return c.follower.slow_down_m; })
+                       .Number("homing_radius_m", "m", [](auto& c) -> auto& { return c.follower.homing_radius_m; })
+                       .Number("homing_speed_mps", "m/s", [](auto& c) -> auto& { return c.follower.homing_speed_mps; })
+                       .Number("homing_max_age_s", "s", [](auto& c) -> auto& { return c.follower.homing_max_age_s; })
+                       .Degrees("homing_max_deviation_deg", [](auto& c) -> auto& { return c.follower.homing_max_deviation_rad; })
+                       .Choice("arrival", [](auto& c) -> auto& { return c.follower.arrival; },
+                               {nav::ArrivalRule::kEstimate, nav::ArrivalRule::kHoming, nav::ArrivalRule::kEither},
+                               nav::ArrivalRuleName)
+                       .Number("approach_timeout_s", "s", [](auto& c) -> auto& { return c.follower.approach_timeout_s; })},
+      {"homing", Table().Number("arrived_magnitude", "", &C::homing_arrived_magnitude)},
+      {"navigator", Table().Number("status_period_s", "s", &C::status_period_s)},
+  };
+  return sections;
 }
 
 }  // namespace
@@ -55,53 +112,10 @@ NavigatorConfig NavigatorConfig::FromIni(const glue::IniFile& ini, const std::st
   c.drive_command_channel = channel_prefix + ini.GetString("channels", "drive_command");
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
 
-  c.route_source = glue::ReadChoice<std::string>(ini, "route", "route",
-                                                 {{"none", "none"}, {"thesis1", "thesis1"}, {"thesis2", "thesis2"}});
-  c.route_origin = {ini.GetDouble("route", "origin_x_m"), ini.GetDouble("route", "origin_y_m")};
+  for (const auto& [section, table] : Sections()) table.Read(ini, section, &c);
   for (const char* key : {"origin_x_m", "origin_y_m"}) {
     if (!std::isfinite(ini.GetDouble("route", key))) ini.FailKey("route", key, "must be finite");
   }
-  c.route_size_m = ini.GetDouble("route", "size_m");
-  c.route_loop = ini.GetBool("route", "loop");
-  c.route_laps = ini.GetInt("route", "laps");
-  c.route_tolerance_m = ini.GetDouble("route", "tolerance_m");
-  c.route_first_waypoint = ini.GetInt("route", "first_waypoint");
-
-  auto& t = c.tracker;
-  t.odometry.translation_noise_m_per_m = ini.GetDouble("tracker", "translation_noise_m_per_m");
-  t.odometry.rotation_noise_rad_per_rad = ini.GetDouble("tracker", "rotation_noise_rad_per_rad");
-  t.odometry.rotation_noise_rad_per_m = ini.GetDouble("tracker", "rotation_noise_deg_per_m") * kDeg;
-  t.initial_position_sigma_m = ini.GetDouble("tracker", "initial_position_sigma_m");
-  t.initial_heading_sigma_rad = ini.GetDouble("tracker", "initial_heading_sigma_deg") * kDeg;
-  t.gate_chi2 = ini.GetDouble("tracker", "gate_chi2");
-  t.reset_after_rejections = ini.GetInt("tracker", "reset_after_rejections");
-  t.use_fix_heading = ini.GetBool("tracker", "use_fix_heading");
-  t.min_fix_position_sigma_m = ini.GetDouble("tracker", "min_fix_position_sigma_m");
-  t.min_fix_heading_sigma_rad = ini.GetDouble("tracker", "min_fix_heading_sigma_deg") * kDeg;
-  t.max_fix_age_s = ini.GetDouble("tracker", "max_fix_age_s");
-  c.unknown_fix_position_sigma_m = ini.GetDouble("tracker", "unknown_fix_position_sigma_m");
-  c.unknown_fix_heading_sigma_rad = ini.GetDouble("tracker", "unknown_fix_heading_sigma_deg") * kDeg;
-
-  auto& f = c.follower;
-  f.max_linear_mps = ini.GetDouble("follower", "max_linear_mps");
-  f.min_linear_mps = ini.GetDouble("follower", "min_linear_mps");
-  f.max_angular_radps = ini.GetDouble("follower", "max_angular_deg_per_s") * kDeg;
-  f.heading_gain_per_s = ini.GetDouble("follower", "heading_gain_per_s");
-  f.turn_in_place_rad = ini.GetDouble("follower", "turn_in_place_deg") * kDeg;
-  f.align_rad = ini.GetDouble("follower", "align_deg") * kDeg;
-  f.slow_down_m = ini.GetDouble("follower", "slow_down_m");
-  f.homing_radius_m = ini.GetDouble("follower", "homing_radius_m");
-  f.homing_speed_mps = ini.GetDouble("follower", "homing_speed_mps");
-  f.homing_max_age_s = ini.GetDouble("follower", "homing_max_age_s");
-  f.homing_max_deviation_rad = ini.GetDouble("follower", "homing_max_deviation_deg") * kDeg;
-  f.arrival = glue::ReadChoice<nav::ArrivalRule>(ini, "follower", "arrival",
-                                                 {{"estimate", nav::ArrivalRule::kEstimate},
-                                                  {"homing", nav::ArrivalRule::kHoming},
-                                                  {"either", nav::ArrivalRule::kEither}});
-  f.approach_timeout_s = ini.GetDouble("follower", "approach_timeout_s");
-
-  c.homing_arrived_magnitude = ini.GetDouble("homing", "arrived_magnitude");
-  c.status_period_s = ini.GetDouble("navigator", "status_period_s");
   ini.CheckAllUsed();
 
   try {
@@ -144,34 +158,13 @@ NavigatorConfig NavigatorConfig::FromIni(const glue::IniFile& ini, const std::st
 }
 
 void NavigatorConfig::Print(std::ostream& out) const {
-  const auto& t = tracker;
-  const auto& f = follower;
   out << "[channels]\nodometry = " << odometry_channel << "\npose = " << pose_channel
       << "\nhoming_vector = " << homing_vector_channel << "\nroute = " << route_channel
-      << "\ndrive_command = " << drive_command_channel << "\nstatus = " << status_channel << "\n"
-      << "[route]\nroute = " << route_source << "\norigin_x_m = " << route_origin.x()
-      << "\norigin_y_m = " << route_origin.y() << "\nsize_m = " << route_size_m << "\nloop = " << Bool(route_loop)
-      << "\nlaps = " << route_laps << "\ntolerance_m = " << route_tolerance_m
-      << "\nfirst_waypoint = " << route_first_waypoint << "\n"
-      << "[tracker]\ntranslation_noise_m_per_m = " << t.odometry.translation_noise_m_per_m
-      << "\nrotation_noise_rad_per_rad = " << t.odometry.rotation_noise_rad_per_rad
-      << "\nrotation_noise_deg_per_m = " << t.odometry.rotation_noise_rad_per_m / kDeg
-      << "\ninitial_position_sigma_m = " << t.initial_position_sigma_m
-      << "\ninitial_heading_sigma_deg = " << t.initial_heading_sigma_rad / kDeg << "\ngate_chi2 = " << t.gate_chi2
-      << "\nreset_after_rejections = " << t.reset_after_rejections << "\nuse_fix_heading = " << Bool(t.use_fix_heading)
-      << "\nmin_fix_position_sigma_m = " << t.min_fix_position_sigma_m
-      << "\nmin_fix_heading_sigma_deg = " << t.min_fix_heading_sigma_rad / kDeg
-      << "\nmax_fix_age_s = " << t.max_fix_age_s << "\nunknown_fix_position_sigma_m = " << unknown_fix_position_sigma_m
-      << "\nunknown_fix_heading_sigma_deg = " << unknown_fix_heading_sigma_rad / kDeg << "\n"
-      << "[follower]\nmax_linear_mps = " << f.max_linear_mps << "\nmin_linear_mps = " << f.min_linear_mps
-      << "\nmax_angular_deg_per_s = " << f.max_angular_radps / kDeg << "\nheading_gain_per_s = " << f.heading_gain_per_s
-      << "\nturn_in_place_deg = " << f.turn_in_place_rad / kDeg << "\nalign_deg = " << f.align_rad / kDeg
-      << "\nslow_down_m = " << f.slow_down_m << "\nhoming_radius_m = " << f.homing_radius_m
-      << "\nhoming_speed_mps = " << f.homing_speed_mps << "\nhoming_max_age_s = " << f.homing_max_age_s
-      << "\nhoming_max_deviation_deg = " << f.homing_max_deviation_rad / kDeg
-      << "\narrival = " << nav::ArrivalRuleName(f.arrival) << "\napproach_timeout_s = " << f.approach_timeout_s << "\n"
-      << "[homing]\narrived_magnitude = " << homing_arrived_magnitude << "\n"
-      << "[navigator]\nstatus_period_s = " << status_period_s << "\n";
+      << "\ndrive_command = " << drive_command_channel << "\nstatus = " << status_channel << "\n";
+  for (const auto& [section, table] : Sections()) {
+    out << "[" << section << "]\n";
+    table.Print(out, *this);
+  }
 }
 
 NavigatorNode::NavigatorNode(glue::Bus& bus, const NavigatorConfig& config)

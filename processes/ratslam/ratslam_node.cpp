@@ -24,73 +24,6 @@ double Ms(std::chrono::steady_clock::time_point t0) {
 
 }  // namespace
 
-nav::RatSlamOptions ReadRatSlamOptions(const glue::IniFile& ini, const std::string& section) {
-  const std::string& s = section;
-  nav::RatSlamOptions o;
-  nav::LocalViewOptions& v = o.local_view;
-  v.image_crop_x_min_px = ini.GetInt(s, "image_crop_x_min_px");
-  v.image_crop_x_max_px = ini.GetInt(s, "image_crop_x_max_px");
-  v.image_crop_y_min_px = ini.GetInt(s, "image_crop_y_min_px");
-  v.image_crop_y_max_px = ini.GetInt(s, "image_crop_y_max_px");
-  v.template_x_size = ini.GetInt(s, "template_x_size");
-  v.template_y_size = ini.GetInt(s, "template_y_size");
-  v.vt_panoramic = ini.GetBool(s, "vt_panoramic");
-  v.vt_shift_match = ini.GetInt(s, "vt_shift_match");
-  v.vt_step_match = ini.GetInt(s, "vt_step_match");
-  v.vt_shift_subcolumn = ini.GetBool(s, "vt_shift_subcolumn");
-  v.vt_match_threshold = ini.GetDouble(s, "vt_match_threshold");
-  v.vt_normalisation = ini.GetDouble(s, "vt_normalisation");
-  v.vt_patch_normalise = ini.GetInt(s, "vt_patch_normalise");
-  v.vt_min_patch_normalisation_std = ini.GetDouble(s, "vt_min_patch_normalisation_std");
-  nav::PoseCellOptions& p = o.pose_cells;
-  p.pc_dim_xy = ini.GetInt(s, "pc_dim_xy");
-  p.pc_dim_th = ini.GetInt(s, "pc_dim_th");
-  p.pc_w_e_dim = ini.GetInt(s, "pc_w_e_dim");
-  p.pc_w_e_var = ini.GetDouble(s, "pc_w_e_var");
-  p.pc_w_i_dim = ini.GetInt(s, "pc_w_i_dim");
-  p.pc_w_i_var = ini.GetDouble(s, "pc_w_i_var");
-  p.pc_global_inhib = ini.GetDouble(s, "pc_global_inhib");
-  p.pc_cell_x_size_m = ini.GetDouble(s, "pc_cell_x_size_m");
-  p.pc_cells_to_avg = ini.GetInt(s, "pc_cells_to_avg");
-  p.pc_vt_inject_energy = ini.GetDouble(s, "pc_vt_inject_energy");
-  p.vt_active_decay = ini.GetDouble(s, "vt_active_decay");
-  p.pc_vt_restore = ini.GetDouble(s, "pc_vt_restore");
-  p.pc_vt_skip_recent = ini.GetInt(s, "pc_vt_skip_recent");
-  p.exp_delta_pc_threshold = ini.GetDouble(s, "exp_delta_pc_threshold");
-  p.pc_update_interval_s = ini.GetDouble(s, "pc_update_interval_s");
-  o.experience_map.exp_loops = ini.GetInt(s, "exp_loops");
-  o.experience_map.exp_correction = ini.GetDouble(s, "exp_correction");
-  try {
-    o.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ini.ValidationError("[" + s + "] " + e.what());
-  }
-  return o;
-}
-
-void PrintRatSlamOptions(std::ostream& out, const nav::RatSlamOptions& o, const std::string& section) {
-  const nav::LocalViewOptions& v = o.local_view;
-  const nav::PoseCellOptions& p = o.pose_cells;
-  out << "[" << section << "]\nimage_crop_x_min_px = " << v.image_crop_x_min_px
-      << "\nimage_crop_x_max_px = " << v.image_crop_x_max_px << "\nimage_crop_y_min_px = " << v.image_crop_y_min_px
-      << "\nimage_crop_y_max_px = " << v.image_crop_y_max_px << "\ntemplate_x_size = " << v.template_x_size
-      << "\ntemplate_y_size = " << v.template_y_size << "\nvt_panoramic = " << (v.vt_panoramic ? "true" : "false")
-      << "\nvt_shift_match = " << v.vt_shift_match << "\nvt_step_match = " << v.vt_step_match
-      << "\nvt_shift_subcolumn = " << (v.vt_shift_subcolumn ? "true" : "false")
-      << "\nvt_match_threshold = " << v.vt_match_threshold << "\nvt_normalisation = " << v.vt_normalisation
-      << "\nvt_patch_normalise = " << v.vt_patch_normalise
-      << "\nvt_min_patch_normalisation_std = " << v.vt_min_patch_normalisation_std << "\npc_dim_xy = " << p.pc_dim_xy
-      << "\npc_dim_th = " << p.pc_dim_th << "\npc_w_e_dim = " << p.pc_w_e_dim << "\npc_w_e_var = " << p.pc_w_e_var
-      << "\npc_w_i_dim = " << p.pc_w_i_dim << "\npc_w_i_var = " << p.pc_w_i_var
-      << "\npc_global_inhib = " << p.pc_global_inhib << "\npc_cell_x_size_m = " << p.pc_cell_x_size_m
-      << "\npc_cells_to_avg = " << p.pc_cells_to_avg << "\npc_vt_inject_energy = " << p.pc_vt_inject_energy
-      << "\nvt_active_decay = " << p.vt_active_decay << "\npc_vt_restore = " << p.pc_vt_restore
-      << "\npc_vt_skip_recent = " << p.pc_vt_skip_recent << "\nexp_delta_pc_threshold = " << p.exp_delta_pc_threshold
-      << "\npc_update_interval_s = " << p.pc_update_interval_s
-      << "\nexp_loops = " << o.experience_map.exp_loops << "\nexp_correction = " << o.experience_map.exp_correction
-      << "\n";
-}
-
 experience_map_t ToExperienceMapMsg(int64_t utime, const nav::RatSlam& slam) {
   const nav::ExperienceMap& map = slam.experience_map();
   experience_map_t m{};
@@ -156,7 +89,7 @@ RatSlamConfig RatSlamConfig::FromIni(const glue::IniFile& ini, const std::string
   const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
   c.mask_path = mask.path;
   c.mask = mask.mask;
-  c.options = ReadRatSlamOptions(ini);
+  c.options = glue::ReadRatSlamOptions(ini);
   ini.CheckAllUsed();
   if (!(c.experience_map_interval_s >= 0) || !std::isfinite(c.experience_map_interval_s)) {
     ini.FailKey("node", "experience_map_interval_s", "must be >= 0 (0: never publish)");
@@ -181,7 +114,7 @@ void RatSlamConfig::Print(std::ostream& out) const {
       << "\nstats_interval_s = " << stats_interval_s << "\n";
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
-  PrintRatSlamOptions(out, options);
+  glue::PrintRatSlamOptions(out, options);
 }
 
 RatSlamNode::RatSlamNode(glue::Bus& bus, const RatSlamConfig& config, std::ostream& log)

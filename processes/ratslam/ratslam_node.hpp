@@ -20,6 +20,7 @@
 #include "snapnav/glue/handler_problems.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/ratslam_options.hpp"
 #include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/odometry_t.hpp"
@@ -30,12 +31,6 @@ struct experience_map_t;
 }
 
 namespace snapnav::processes {
-
-// The [ratslam] section: OpenRatSLAM's keys (unit-suffixed where the value has a unit; see
-// config/ratslam.ini). Every key is required; invalid values are glue::ConfigError.
-nav::RatSlamOptions ReadRatSlamOptions(const glue::IniFile& ini, const std::string& section = "ratslam");
-// The section ReadRatSlamOptions reads back (header line included).
-void PrintRatSlamOptions(std::ostream& out, const nav::RatSlamOptions& options, const std::string& section = "ratslam");
 
 // The experience map as a message (estimator "ratslam", frame "map").
 experience_map_t ToExperienceMapMsg(int64_t utime, const nav::RatSlam& slam);

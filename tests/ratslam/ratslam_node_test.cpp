@@ -287,8 +287,8 @@ TEST(RatSlamNode, RawFramesAreUnwrappedAndAFrameBeforeOdometryStartsAtTheOrigin)
 TEST(RatSlamConfig, ShippedConfigHasTheLibnavDefaults) {
   const RatSlamConfig c = RatSlamConfig::FromIni(glue::IniFile::Load(kShipped), "");
   std::ostringstream shipped, defaults;
-  PrintRatSlamOptions(shipped, c.options);
-  PrintRatSlamOptions(defaults, nav::RatSlamOptions{});
+  glue::PrintRatSlamOptions(shipped, c.options);
+  glue::PrintRatSlamOptions(defaults, nav::RatSlamOptions{});
   EXPECT_EQ(shipped.str(), defaults.str());
   EXPECT_EQ(c.input_channel(), "OMNI_FRAME");
   EXPECT_EQ(c.pose_channel, "POSE_RATSLAM");

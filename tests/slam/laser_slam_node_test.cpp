@@ -1,6 +1,7 @@
 // Node test: laser-slam on memq:// — publish odometry and scans of a ray-cast room, handle,
 // assert on the decoded poses and maps; bad input is counted, never a crash.
 #include "laser_slam_node.hpp"
+#include "snapnav/glue/slam_options.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
 
 #include <gtest/gtest.h>
@@ -670,14 +671,14 @@ TEST(LaserSlamConfig, ShippedConfigHasTheLibnavDefaults) {
   EXPECT_EQ(o.scan_step, d.scan_step);
   // Every key, as the config writes it.
   std::ostringstream shipped, defaults;
-  PrintLaserSlamOptions(shipped, o);
-  PrintLaserSlamOptions(defaults, d);
+  glue::PrintLaserSlamOptions(shipped, o);
+  glue::PrintLaserSlamOptions(defaults, d);
   EXPECT_EQ(shipped.str(), defaults.str());
   // The back end: the EKF until the graph back end is measured better (docs/laser_slam.md); the
   // graph back end's keys hold libnav's defaults too.
   std::ostringstream shipped_graph, default_graph;
-  PrintGraphSlamOptions(shipped_graph, c.graph);
-  PrintGraphSlamOptions(default_graph, nav::GraphSlamOptions{});
+  glue::PrintGraphSlamOptions(shipped_graph, c.graph);
+  glue::PrintGraphSlamOptions(default_graph, nav::GraphSlamOptions{});
   EXPECT_EQ(shipped_graph.str(), default_graph.str());
   // Print writes what FromIni reads back.
   std::ostringstream printed;

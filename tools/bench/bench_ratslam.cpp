@@ -23,7 +23,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench_timing.hpp"
-#include "ratslam_node.hpp"
+#include "snapnav/glue/ratslam_options.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -73,7 +73,7 @@ int Main(int argc, char** argv) {
   for (const std::string& s : glue::SplitList(sizes_text)) sizes.push_back(std::stoi(s));
   if (sizes.empty() || !std::is_sorted(sizes.begin(), sizes.end())) throw glue::FlagError("--sizes: increasing sizes");
 
-  const nav::RatSlamOptions options = processes::ReadRatSlamOptions(glue::IniFile::Load(ratslam_config));
+  const nav::RatSlamOptions options = glue::ReadRatSlamOptions(glue::IniFile::Load(ratslam_config));
   const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config), "");
   const nav::sim::Scene scene = processes::LoadSceneFile(processes::SceneFilePath(scene_name));
   if (scene.route.size() < 2) throw std::runtime_error("scene " + scene_name + " has no route");

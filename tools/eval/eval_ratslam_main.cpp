@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "ratslam_eval.hpp"
-#include "ratslam_node.hpp"
+#include "snapnav/glue/ratslam_options.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -121,14 +121,14 @@ int Main(int argc, char** argv) {
   options.run.people = !no_people;
   options.rpe_delta_m = rpe_delta_m;
   const std::string ratslam_text = ReadText(ratslam_config);
-  options.ratslam = processes::ReadRatSlamOptions(glue::IniFile::Parse(ratslam_text, ratslam_config));
+  options.ratslam = glue::ReadRatSlamOptions(glue::IniFile::Parse(ratslam_text, ratslam_config));
   options.run.Validate();
   std::cerr << "eval-ratslam: sim " << sim_config << ": scene " << scene << ", laps " << laps << ", seed "
             << options.run.sim.seed << ", heading drift " << options.run.sim.drive.heading_drift_deg_per_m
             << " deg/m, odometry " << options.run.sim.odometry_rate_hz << " Hz, camera " << options.run.camera_rate_hz
             << " Hz " << options.run.camera.panorama.width_px << "x" << options.run.camera.panorama.height_px
             << (raw ? " (raw, unwrapped)" : " (panoramas)") << "\neval-ratslam: " << ratslam_config << ":\n";
-  processes::PrintRatSlamOptions(std::cerr, options.ratslam);
+  glue::PrintRatSlamOptions(std::cerr, options.ratslam);
   const auto progress = [](double t_s, int laps_done) {
     std::cerr << "eval-ratslam: " << t_s << " s simulated, " << laps_done << " laps\r" << std::flush;
   };
@@ -144,7 +144,7 @@ int Main(int argc, char** argv) {
   const auto combos = Combinations(sweep, ratslam_text);
   std::vector<nav::RatSlamOptions> variants;
   for (const auto& [label, text] : combos) {
-    variants.push_back(processes::ReadRatSlamOptions(glue::IniFile::Parse(text, ratslam_config + " (" + label + ")")));
+    variants.push_back(glue::ReadRatSlamOptions(glue::IniFile::Parse(text, ratslam_config + " (" + label + ")")));
   }
   std::cerr << "eval-ratslam: " << variants.size() << " configurations on one run\n";
   const auto results = eval::EvaluateRatSlamVariants(options, variants, progress);

@@ -8,6 +8,7 @@
 
 #include "laser_slam_node.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/slam_options.hpp"
 
 namespace snapnav::eval {
 
@@ -48,7 +49,7 @@ void AddOverride(LaserSlamConfigChoice* choice, const std::string& key, const st
 
 void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& options, const std::string& indent) {
   std::ostringstream s;
-  processes::PrintLaserSlamOptions(s, options);
+  glue::PrintLaserSlamOptions(s, options);
   std::istringstream lines(s.str());
   std::string line;
   while (std::getline(lines, line)) out << indent << line << "\n";
@@ -59,7 +60,7 @@ std::vector<std::string> LaserSlamOptionDifferences(const nav::LaserSlamOptions&
   const auto parse = [](const nav::LaserSlamOptions& o) {
     std::ostringstream s;
     s.precision(17);
-    processes::PrintLaserSlamOptions(s, o);
+    glue::PrintLaserSlamOptions(s, o);
     std::vector<std::pair<std::string, std::string>> kv;
     std::istringstream lines(s.str());
     std::string line;
