@@ -6,16 +6,28 @@
 
 #include "snapnav/glue/channels.hpp"
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/options.hpp"
 
 namespace snapnav::processes {
+namespace {
+
+// The [dead_reckoning] keys, declared once: read, printed and described from here.
+const glue::OptionTable<nav::DeadReckoningOptions>& DeadReckoningTable() {
+  using O = nav::DeadReckoningOptions;
+  static const auto table = glue::OptionTable<O>()
+                                .Number("translation_noise_m_per_m", "m/m", &O::translation_noise_m_per_m)
+                                .Number("rotation_noise_rad_per_rad", "rad/rad", &O::rotation_noise_rad_per_rad)
+                                .Number("rotation_noise_rad_per_m", "rad/m", &O::rotation_noise_rad_per_m);
+  return table;
+}
+
+}  // namespace
 
 DeadReckoningConfig DeadReckoningConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   DeadReckoningConfig c;
   c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
   c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
-  c.options.translation_noise_m_per_m = ini.GetDouble("dead_reckoning", "translation_noise_m_per_m");
-  c.options.rotation_noise_rad_per_rad = ini.GetDouble("dead_reckoning", "rotation_noise_rad_per_rad");
-  c.options.rotation_noise_rad_per_m = ini.GetDouble("dead_reckoning", "rotation_noise_rad_per_m");
+  DeadReckoningTable().ReadKeys(ini, "dead_reckoning", &c.options);
   ini.CheckAllUsed();
   ini.Check([&c] { c.options.Validate(); });
   return c;
@@ -23,9 +35,8 @@ DeadReckoningConfig DeadReckoningConfig::FromIni(const glue::IniFile& ini, const
 
 void DeadReckoningConfig::Print(std::ostream& out) const {
   out << "[channels]\nodometry = " << odometry_channel << "\npose = " << pose_channel << "\n"
-      << "[dead_reckoning]\ntranslation_noise_m_per_m = " << options.translation_noise_m_per_m
-      << "\nrotation_noise_rad_per_rad = " << options.rotation_noise_rad_per_rad
-      << "\nrotation_noise_rad_per_m = " << options.rotation_noise_rad_per_m << "\n";
+      << "[dead_reckoning]\n";
+  DeadReckoningTable().Print(out, options);
 }
 
 DeadReckoningNode::DeadReckoningNode(glue::Bus& bus, const DeadReckoningConfig& config)

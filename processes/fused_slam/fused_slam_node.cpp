@@ -48,6 +48,49 @@ double Ms(std::chrono::steady_clock::time_point since) {
 
 const char* FusedStartName(FusedStart start) { return start == FusedStart::kOdometry ? "odometry" : "visual"; }
 
+namespace {
+
+// The [fused_slam] keys, declared once: read, printed and described from here ([laser_slam] is
+// glue::LaserSlamOptionTable).
+const glue::OptionTable<FusedSlamConfig>& FusedSlamTable() {
+  using C = FusedSlamConfig;
+  static const auto table = glue::OptionTable<C>()
+      .Choice("start", &C::start, {FusedStart::kOdometry, FusedStart::kVisual}, FusedStartName)
+      .Number("gate_chi2", "", [](auto& o) -> auto& { return o.options.gate_chi2; })
+      .Number("agree_chi2", "", [](auto& o) -> auto& { return o.options.agree_chi2; })
+      .Number("relocalize_after", "", [](auto& o) -> auto& { return o.options.relocalize_after; })
+      .Number("relocalize_sigma_xy_m", "m", [](auto& o) -> auto& { return o.options.relocalize_sigma_xy_m; })
+      .Degrees("relocalize_sigma_theta_deg", [](auto& o) -> auto& { return o.options.relocalize_sigma_theta_rad; })
+      .Number("min_fix_sigma_xy_m", "m", [](auto& o) -> auto& { return o.options.min_fix_sigma_xy_m; })
+      .Degrees("min_fix_sigma_theta_deg", [](auto& o) -> auto& { return o.options.min_fix_sigma_theta_rad; })
+      .Number("max_fix_age_s", "s", [](auto& o) -> auto& { return o.options.max_fix_age_s; })
+      .Number("relocalize_window_s", "s", [](auto& o) -> auto& { return o.options.relocalize_window_s; })
+      .Number("relocalize_max_fit_loss", "", [](auto& o) -> auto& { return o.options.relocalize_max_fit_loss; })
+      .Number("relocalize_min_distance_m", "m", [](auto& o) -> auto& { return o.options.relocalize_min_distance_m; })
+      .Degrees("relocalize_min_heading_deg", [](auto& o) -> auto& { return o.options.relocalize_min_heading_rad; })
+      .Number("suspect_after", "", [](auto& o) -> auto& { return o.options.suspect_after; })
+      .Number("start_sigma_xy_m", "m", [](auto& o) -> auto& { return o.options.start_sigma_xy_m; })
+      .Degrees("start_sigma_theta_deg", [](auto& o) -> auto& { return o.options.start_sigma_theta_rad; })
+      .Number("map_cell_m", "m", [](auto& o) -> auto& { return o.options.map_cell_m; })
+      .Number("map_drift_xy_m", "m", [](auto& o) -> auto& { return o.options.map_drift_xy_m; })
+      .Degrees("map_drift_theta_deg", [](auto& o) -> auto& { return o.options.map_drift_theta_rad; })
+      .Flag("map_drift_accumulates", [](auto& o) -> auto& { return o.options.map_drift_accumulates; })
+      .Number("map_min_fit", "", [](auto& o) -> auto& { return o.options.map_min_fit; })
+      .Number("dynamic_explain_m", "m", [](auto& o) -> auto& { return o.options.dynamic_explain_m; })
+      .Number("dynamic_max_behind_m", "m", [](auto& o) -> auto& { return o.options.dynamic_max_behind_m; })
+      .Number("dynamic_max_fraction", "", [](auto& o) -> auto& { return o.options.dynamic_max_fraction; })
+      .Number("dynamic_map_age_s", "s", [](auto& o) -> auto& { return o.options.dynamic_map_age_s; })
+      .Number("occlusion_fix_inflation", "", [](auto& o) -> auto& { return o.options.occlusion_fix_inflation; })
+      .Number("laser_min_constraint", "", [](auto& o) -> auto& { return o.options.laser_min_constraint; })
+      .Flag("map_inherits_laser_drift", [](auto& o) -> auto& { return o.options.map_inherits_laser_drift; })
+      .Number("fix_correlation_m", "m", [](auto& o) -> auto& { return o.options.fix_correlation_m; })
+      .Number("map_every_n_scans", "", &C::map_every_n_scans)
+      .Number("status_every_n_scans", "", &C::status_every_n_scans);
+  return table;
+}
+
+}  // namespace
+
 FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   FusedSlamConfig c;
   c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
@@ -58,38 +101,7 @@ FusedSlamConfig FusedSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
   nav::FusedSlamOptions& o = c.options;
   o.laser = glue::ReadLaserSlamOptions(ini, "laser_slam");
-  const char* s = "fused_slam";
-  c.start = glue::ReadChoice<FusedStart>(ini, s, "start", {{"odometry", FusedStart::kOdometry}, {"visual", FusedStart::kVisual}});
-  o.gate_chi2 = ini.GetDouble(s, "gate_chi2");
-  o.agree_chi2 = ini.GetDouble(s, "agree_chi2");
-  o.relocalize_after = ini.GetInt(s, "relocalize_after");
-  o.relocalize_sigma_xy_m = ini.GetDouble(s, "relocalize_sigma_xy_m");
-  o.relocalize_sigma_theta_rad = ini.GetDouble(s, "relocalize_sigma_theta_deg") / kDegPerRad;
-  o.min_fix_sigma_xy_m = ini.GetDouble(s, "min_fix_sigma_xy_m");
-  o.min_fix_sigma_theta_rad = ini.GetDouble(s, "min_fix_sigma_theta_deg") / kDegPerRad;
-  o.max_fix_age_s = ini.GetDouble(s, "max_fix_age_s");
-  o.relocalize_window_s = ini.GetDouble(s, "relocalize_window_s");
-  o.relocalize_max_fit_loss = ini.GetDouble(s, "relocalize_max_fit_loss");
-  o.relocalize_min_distance_m = ini.GetDouble(s, "relocalize_min_distance_m");
-  o.relocalize_min_heading_rad = ini.GetDouble(s, "relocalize_min_heading_deg") / kDegPerRad;
-  o.suspect_after = ini.GetInt(s, "suspect_after");
-  o.start_sigma_xy_m = ini.GetDouble(s, "start_sigma_xy_m");
-  o.start_sigma_theta_rad = ini.GetDouble(s, "start_sigma_theta_deg") / kDegPerRad;
-  o.map_cell_m = ini.GetDouble(s, "map_cell_m");
-  o.map_drift_xy_m = ini.GetDouble(s, "map_drift_xy_m");
-  o.map_drift_theta_rad = ini.GetDouble(s, "map_drift_theta_deg") / kDegPerRad;
-  o.map_drift_accumulates = ini.GetBool(s, "map_drift_accumulates");
-  o.map_min_fit = ini.GetDouble(s, "map_min_fit");
-  o.dynamic_explain_m = ini.GetDouble(s, "dynamic_explain_m");
-  o.dynamic_max_behind_m = ini.GetDouble(s, "dynamic_max_behind_m");
-  o.dynamic_max_fraction = ini.GetDouble(s, "dynamic_max_fraction");
-  o.dynamic_map_age_s = ini.GetDouble(s, "dynamic_map_age_s");
-  o.occlusion_fix_inflation = ini.GetDouble(s, "occlusion_fix_inflation");
-  o.laser_min_constraint = ini.GetDouble(s, "laser_min_constraint");
-  o.map_inherits_laser_drift = ini.GetBool(s, "map_inherits_laser_drift");
-  o.fix_correlation_m = ini.GetDouble(s, "fix_correlation_m");
-  c.map_every_n_scans = ini.GetInt(s, "map_every_n_scans");
-  c.status_every_n_scans = ini.GetInt(s, "status_every_n_scans");
+  FusedSlamTable().Read(ini, "fused_slam", &c);
   ini.CheckAllUsed();
   try {
     o.Validate();
@@ -106,28 +118,8 @@ void FusedSlamConfig::Print(std::ostream& out) const {
   out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\nvisual = " << visual_channel
       << "\npose = " << pose_channel << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\n[laser_slam]\n";
   glue::PrintLaserSlamOptions(out, o.laser);
-  out << "[fused_slam]\nstart = " << FusedStartName(start) << "\ngate_chi2 = " << o.gate_chi2
-      << "\nagree_chi2 = " << o.agree_chi2 << "\nrelocalize_after = " << o.relocalize_after
-      << "\nrelocalize_sigma_xy_m = " << o.relocalize_sigma_xy_m
-      << "\nrelocalize_sigma_theta_deg = " << o.relocalize_sigma_theta_rad * kDegPerRad
-      << "\nmin_fix_sigma_xy_m = " << o.min_fix_sigma_xy_m
-      << "\nmin_fix_sigma_theta_deg = " << o.min_fix_sigma_theta_rad * kDegPerRad << "\nmax_fix_age_s = " << o.max_fix_age_s
-      << "\nrelocalize_window_s = " << o.relocalize_window_s
-      << "\nrelocalize_max_fit_loss = " << o.relocalize_max_fit_loss
-      << "\nrelocalize_min_distance_m = " << o.relocalize_min_distance_m
-      << "\nrelocalize_min_heading_deg = " << o.relocalize_min_heading_rad * kDegPerRad
-      << "\nsuspect_after = " << o.suspect_after << "\nstart_sigma_xy_m = " << o.start_sigma_xy_m
-      << "\nstart_sigma_theta_deg = " << o.start_sigma_theta_rad * kDegPerRad << "\nmap_cell_m = " << o.map_cell_m
-      << "\nmap_drift_xy_m = " << o.map_drift_xy_m << "\nmap_drift_theta_deg = " << o.map_drift_theta_rad * kDegPerRad
-      << "\nmap_drift_accumulates = " << (o.map_drift_accumulates ? "true" : "false")
-      << "\nmap_min_fit = " << o.map_min_fit << "\ndynamic_explain_m = " << o.dynamic_explain_m
-      << "\ndynamic_max_behind_m = " << o.dynamic_max_behind_m << "\ndynamic_max_fraction = " << o.dynamic_max_fraction
-      << "\ndynamic_map_age_s = " << o.dynamic_map_age_s
-      << "\nocclusion_fix_inflation = " << o.occlusion_fix_inflation
-      << "\nlaser_min_constraint = " << o.laser_min_constraint
-      << "\nmap_inherits_laser_drift = " << (o.map_inherits_laser_drift ? "true" : "false")
-      << "\nfix_correlation_m = " << o.fix_correlation_m
-      << "\nmap_every_n_scans = " << map_every_n_scans << "\nstatus_every_n_scans = " << status_every_n_scans << "\n";
+  out << "[fused_slam]\n";
+  FusedSlamTable().Print(out, *this);
 }
 
 FusedSlamNode::FusedSlamNode(glue::Bus& bus, const FusedSlamConfig& config)

@@ -6,22 +6,31 @@
 
 #include "snapnav/glue/grid_scan_msg.hpp"
 #include "snapnav/glue/occupancy_grid_msg.hpp"
+#include "snapnav/glue/options.hpp"
 
 namespace snapnav::processes {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+
+// The [grid] keys, declared once: read, printed and described from here.
+const glue::OptionTable<GridConfig>& GridTable() {
+  using C = GridConfig;
+  static const auto table = glue::OptionTable<C>()
+                                .Number("every_s", "s", &C::every_s)
+                                .Number("resolution_m", "m", [](auto& c) -> auto& { return c.grid.resolution_m; })
+                                .Number("max_range_m", "m", [](auto& c) -> auto& { return c.grid.max_range_m; })
+                                .Number("keyframe_m", "m", &C::keyframe_m)
+                                .Degrees("keyframe_deg", &C::keyframe_rad);
+  return table;
 }
+
+}  // namespace
 
 GridConfig GridConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   GridConfig c;
   c.channel = channel_prefix + ini.GetString("channels", "grid");
   c.request_channel = channel_prefix + ini.GetString("channels", "grid_request");
-  c.every_s = ini.GetDouble("grid", "every_s");
-  c.grid.resolution_m = ini.GetDouble("grid", "resolution_m");
-  c.grid.max_range_m = ini.GetDouble("grid", "max_range_m");
-  c.keyframe_m = ini.GetDouble("grid", "keyframe_m");
-  c.keyframe_rad = ini.GetDouble("grid", "keyframe_deg") / kDegPerRad;
+  GridTable().ReadKeys(ini, "grid", &c);
   try {
     c.grid.Validate();
   } catch (const std::invalid_argument& e) {
@@ -34,8 +43,8 @@ GridConfig GridConfig::FromIni(const glue::IniFile& ini, const std::string& chan
 }
 
 void GridConfig::Print(std::ostream& out) const {
-  out << "[grid]\nevery_s = " << every_s << "\nresolution_m = " << grid.resolution_m << "\nmax_range_m = " << grid.max_range_m
-      << "\nkeyframe_m = " << keyframe_m << "\nkeyframe_deg = " << keyframe_rad * kDegPerRad << "\n";
+  out << "[grid]\n";
+  GridTable().Print(out, *this);
 }
 
 GridPublisher::GridPublisher(glue::Bus& bus, const GridConfig& config, std::string source, glue::HandlerProblems& problems)

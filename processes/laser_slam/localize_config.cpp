@@ -3,36 +3,46 @@
 #include <ostream>
 #include <stdexcept>
 
+#include "snapnav/glue/options.hpp"
+
 namespace snapnav::processes {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+
+// The [localize] keys, declared once: read, printed and described from here.
+const glue::OptionTable<nav::MapLocalizerOptions>& LocalizeTable() {
+  using O = nav::MapLocalizerOptions;
+  static const auto table = glue::OptionTable<O>()
+      .Number("global_resolution_m", "m", [](auto& o) -> auto& { return o.global.resolution_m; })
+      .Degrees("global_heading_step_deg", [](auto& o) -> auto& { return o.global.heading_step_rad; })
+      .Number("global_sigma_m", "m", [](auto& o) -> auto& { return o.global.sigma_m; })
+      .Number("global_depth", "", [](auto& o) -> auto& { return o.global.depth; })
+      .Number("global_max_range_m", "m", [](auto& o) -> auto& { return o.global.max_range_m; })
+      .Number("global_max_points", "", [](auto& o) -> auto& { return o.global.max_points; })
+      .Number("distinct_m", "m", [](auto& o) -> auto& { return o.global.distinct_m; })
+      .Degrees("distinct_deg", [](auto& o) -> auto& { return o.global.distinct_rad; })
+      .Number("min_global_score", "", &O::min_global_score)
+      .Number("max_global_ambiguity", "", &O::max_global_ambiguity)
+      .Number("accept_fit", "", &O::accept_fit)
+      .Number("window_scans", "", &O::window_scans)
+      .Number("window_m", "m", &O::window_m)
+      .Number("lost_fit", "", &O::lost_fit)
+      .Number("lost_after_scans", "", &O::lost_after_scans)
+      .Number("reset_sigma_xy_m", "m", &O::reset_sigma_xy_m)
+      .Degrees("reset_sigma_deg", &O::reset_sigma_theta_rad)
+      .Number("occupied_threshold", "", [](auto& o) -> auto& { return o.global.occupied_threshold; })
+      .Number("free_threshold", "", [](auto& o) -> auto& { return o.global.free_threshold; });
+  return table;
 }
+
+}  // namespace
 
 LocalizeConfig LocalizeConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   LocalizeConfig c;
   c.status_channel = channel_prefix + ini.GetString("channels", "localization_status");
   const char* s = "localize";
   nav::MapLocalizerOptions& o = c.options;
-  o.global.resolution_m = ini.GetDouble(s, "global_resolution_m");
-  o.global.heading_step_rad = ini.GetDouble(s, "global_heading_step_deg") / kDegPerRad;
-  o.global.sigma_m = ini.GetDouble(s, "global_sigma_m");
-  o.global.depth = ini.GetInt(s, "global_depth");
-  o.global.max_range_m = ini.GetDouble(s, "global_max_range_m");
-  o.global.max_points = ini.GetInt(s, "global_max_points");
-  o.global.distinct_m = ini.GetDouble(s, "distinct_m");
-  o.global.distinct_rad = ini.GetDouble(s, "distinct_deg") / kDegPerRad;
-  o.global.occupied_threshold = ini.GetDouble(s, "occupied_threshold");
-  o.global.free_threshold = ini.GetDouble(s, "free_threshold");
-  o.min_global_score = ini.GetDouble(s, "min_global_score");
-  o.max_global_ambiguity = ini.GetDouble(s, "max_global_ambiguity");
-  o.accept_fit = ini.GetDouble(s, "accept_fit");
-  o.window_scans = ini.GetInt(s, "window_scans");
-  o.window_m = ini.GetDouble(s, "window_m");
-  o.lost_fit = ini.GetDouble(s, "lost_fit");
-  o.lost_after_scans = ini.GetInt(s, "lost_after_scans");
-  o.reset_sigma_xy_m = ini.GetDouble(s, "reset_sigma_xy_m");
-  o.reset_sigma_theta_rad = ini.GetDouble(s, "reset_sigma_deg") / kDegPerRad;
+  LocalizeTable().ReadKeys(ini, s, &o);
   try {
     o.global.Validate();
     nav::MapLocalizerOptions check = o;
@@ -52,16 +62,7 @@ LocalizeConfig LocalizeConfig::FromIni(const glue::IniFile& ini, const std::stri
 }
 
 void LocalizeConfig::Print(std::ostream& out) const {
-  const nav::MapLocalizerOptions& o = options;
-  out << "global_resolution_m = " << o.global.resolution_m << "\nglobal_heading_step_deg = " << o.global.heading_step_rad * kDegPerRad
-      << "\nglobal_sigma_m = " << o.global.sigma_m << "\nglobal_depth = " << o.global.depth
-      << "\nglobal_max_range_m = " << o.global.max_range_m << "\nglobal_max_points = " << o.global.max_points
-      << "\ndistinct_m = " << o.global.distinct_m << "\ndistinct_deg = " << o.global.distinct_rad * kDegPerRad
-      << "\nmin_global_score = " << o.min_global_score << "\nmax_global_ambiguity = " << o.max_global_ambiguity
-      << "\naccept_fit = " << o.accept_fit << "\nwindow_scans = " << o.window_scans << "\nwindow_m = " << o.window_m
-      << "\nlost_fit = " << o.lost_fit << "\nlost_after_scans = " << o.lost_after_scans
-      << "\nreset_sigma_xy_m = " << o.reset_sigma_xy_m << "\nreset_sigma_deg = " << o.reset_sigma_theta_rad * kDegPerRad
-      << "\noccupied_threshold = " << o.global.occupied_threshold << "\nfree_threshold = " << o.global.free_threshold << "\n";
+  LocalizeTable().Print(out, options);
 }
 
 }  // namespace snapnav::processes

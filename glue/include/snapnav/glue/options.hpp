@@ -134,8 +134,13 @@ class OptionTable {
   // Every declared key of `section` into *o (fields nobody declared keep their value), then, when
   // T has Validate(), the check: a complaint names file, line, section and key.
   void Read(const IniFile& ini, const std::string& section, T* o) const {
-    for (const auto& e : entries_) e.read(ini, section, *o);
+    ReadKeys(ini, section, o);
     if constexpr (options_detail::HasValidate<T>::value) ini.Check([o] { o->Validate(); });
+  }
+  // The keys only, for a caller that checks the struct itself (e.g. naming the key behind each of
+  // the library's messages).
+  void ReadKeys(const IniFile& ini, const std::string& section, T* o) const {
+    for (const auto& e : entries_) e.read(ini, section, *o);
   }
   T Read(const IniFile& ini, const std::string& section) const {
     T o{};
