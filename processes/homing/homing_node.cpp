@@ -7,12 +7,14 @@
 #include <ostream>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/glue/landmarks.hpp"
+#include "snapnav/glue/options.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/nav/pose2.hpp"
 
@@ -22,22 +24,6 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 using glue::ReadChoice;
-
-nav::OrientationRange ReadRange(const glue::IniFile& ini, const std::string& section) {
-  const std::string value = ini.GetString(section, "range");
-  if (const auto r = nav::ParseOrientationRange(value)) return *r;
-  ini.FailKey(section, "range", "expected all | vertical | horizontal | narrow_vertical");
-}
-
-nav::HogOptions ReadHog(const glue::IniFile& ini, const std::string& section) {
-  nav::HogOptions o;
-  o.band_top_px = ini.GetInt(section, "band_top_px");
-  o.band_height_px = ini.GetInt(section, "band_height_px");
-  o.cell_size_px = ini.GetInt(section, "cell_size_px");
-  o.bins = ini.GetInt(section, "bins");
-  o.range = ReadRange(ini, section);
-  return o;
-}
 
 void CheckBand(const nav::HogOptions& o, const nav::PanoramaModel& p, const std::string& section) {
   const int band_h = o.band_height_px > 0 ? o.band_height_px : p.height_px - o.band_top_px;
@@ -74,6 +60,100 @@ const char* HomeName(HomeSource h) {
   return "?";
 }
 
+// The keys of [homing], [hog], [compass], [alv], [preprocess] and [view_fusion], declared once: read,
+// printed and described from here. ([panorama], [mirror] and the landmark sections are glue's.)
+using Table = glue::OptionTable<HomingConfig>;
+
+// The HOG keys of [hog] and [compass] (`hog` picks the options struct).
+template <class F>
+Table& AddHog(Table& t, F hog) {
+  return t.Number("band_top_px", "px", [hog](auto& c) -> auto& { return hog(c).band_top_px; })
+      .Number("band_height_px", "px", [hog](auto& c) -> auto& { return hog(c).band_height_px; })
+      .Number("cell_size_px", "px", [hog](auto& c) -> auto& { return hog(c).cell_size_px; })
+      .Number("bins", "", [hog](auto& c) -> auto& { return hog(c).bins; })
+      .Choice("range", [hog](auto& c) -> auto& { return hog(c).range; },
+              {nav::OrientationRange::kAll, nav::OrientationRange::kVertical, nav::OrientationRange::kHorizontal,
+               nav::OrientationRange::kNarrowVertical},
+              nav::OrientationRangeName);
+}
+
+const Table& HomingTable() {
+  using C = HomingConfig;
+  static const auto table = Table()
+                                .Choice("input", &C::input,
+                                        {HomingInput::kRaw, HomingInput::kPanorama, HomingInput::kLandmarks}, InputName)
+                                .Choice("home", &C::home, {HomeSource::kMessage, HomeSource::kImage, HomeSource::kFirst},
+                                        HomeName)
+                                .Text("home_image", &C::home_image)
+                                .Choice("home_image_kind", &C::home_image_raw,
+                                        std::vector<std::pair<std::string, bool>>{{"raw", true}, {"panorama", false}});
+  return table;
+}
+
+const Table& HogTable() {
+  static const auto table = [] {
+    Table t;
+    AddHog(t, [](auto& c) -> auto& { return c.homing.hog; })
+        .Number("narrow_range_deg", "deg", [](auto& c) -> auto& { return c.homing.hog.narrow_range_deg; });
+    return t;
+  }();
+  return table;
+}
+
+const Table& CompassTable() {
+  static const auto table = [] {
+    Table t;
+    t.Flag("enabled", [](auto& c) -> auto& { return c.homing.use_compass; });
+    AddHog(t, [](auto& c) -> auto& { return c.homing.compass_hog; });
+    return t;
+  }();
+  return table;
+}
+
+const Table& AlvTable() {
+  static const auto table =
+      Table()
+          .Number("threshold_frac", "", [](auto& c) -> auto& { return c.homing.alv.threshold_frac; })
+          .Choice("difference", [](auto& c) -> auto& { return c.homing.alv.difference; },
+                  std::vector<std::pair<std::string, nav::AlvDifference>>{
+                      {"current_minus_home", nav::AlvDifference::kCurrentMinusHome},
+                      {"home_minus_current", nav::AlvDifference::kHomeMinusCurrent}})
+          .Choice("weight", [](auto& c) -> auto& { return c.homing.alv.weight; },
+                  std::vector<std::pair<std::string, nav::CellWeight>>{{"magnitude", nav::CellWeight::kMagnitude},
+                                                                      {"log", nav::CellWeight::kLog}})
+          .Number("log_scale", "", [](auto& c) -> auto& { return c.homing.alv.log_scale; })
+          .Number("min_bins", "", [](auto& c) -> auto& { return c.homing.alv.min_bins; });
+  return table;
+}
+
+const Table& PreprocessTable() {
+  static const auto table =
+      Table()
+          .Flag("equalize_histogram", [](auto& c) -> auto& { return c.homing.equalize_histogram; })
+          .Flag("warp_compensation", [](auto& c) -> auto& { return c.homing.warp_compensation; })
+          .Number("camera_height_m", "m", [](auto& c) -> auto& { return c.homing.warp.camera_height_m; })
+          .Number("warp_height_bottom_m", "m", [](auto& c) -> auto& { return c.homing.warp.height_bottom_m; })
+          .Number("warp_height_top_m", "m", [](auto& c) -> auto& { return c.homing.warp.height_top_m; });
+  return table;
+}
+
+const Table& ViewFusionTable() {
+  static const auto table =
+      Table()
+          .Number("home_frames", "", [](auto& c) -> auto& { return c.fusion.home_frames; })
+          .Number("home_interval_s", "s", [](auto& c) -> auto& { return c.fusion.home_interval_s; })
+          .Number("current_frames", "", [](auto& c) -> auto& { return c.fusion.current_frames; })
+          .Number("current_interval_s", "s", [](auto& c) -> auto& { return c.fusion.current_interval_s; })
+          .Choice("fusion", [](auto& c) -> auto& { return c.fusion.mode; },
+                  {nav::ViewFusion::kPersistent, nav::ViewFusion::kMedian}, nav::ViewFusionName)
+          .Number("min_fraction", "", [](auto& c) -> auto& { return c.fusion.persistence.min_fraction; })
+          .Number("max_shift_px", "px", [](auto& c) -> auto& { return c.fusion.persistence.max_shift_px; })
+          .Number("max_row_shift_px", "px", [](auto& c) -> auto& { return c.fusion.persistence.max_row_shift_px; })
+          .Number("max_descriptor_distance_frac", "",
+                  [](auto& c) -> auto& { return c.fusion.persistence.max_descriptor_distance_frac; });
+  return table;
+}
+
 }  // namespace
 
 HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
@@ -85,18 +165,11 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.landmarks_channel = channel_prefix + ini.GetString("channels", "landmarks");
   c.home_landmarks_channel = channel_prefix + ini.GetString("channels", "home_landmarks");
 
-  c.input = ReadChoice<HomingInput>(
-      ini, "homing", "input",
-      {{"raw", HomingInput::kRaw}, {"panorama", HomingInput::kPanorama}, {"landmarks", HomingInput::kLandmarks}});
-  c.home = ReadChoice<HomeSource>(
-      ini, "homing", "home",
-      {{"message", HomeSource::kMessage}, {"image", HomeSource::kImage}, {"first", HomeSource::kFirst}});
-  c.home_image = ini.GetString("homing", "home_image");
+  HomingTable().ReadKeys(ini, "homing", &c);
   if (!c.home_image.empty() && std::filesystem::path(c.home_image).is_relative()) {
     // Relative to the config file's folder, so the config works from any working directory.
     c.home_image = (std::filesystem::path(ini.origin()).parent_path() / c.home_image).lexically_normal().string();
   }
-  c.home_image_raw = ReadChoice<bool>(ini, "homing", "home_image_kind", {{"raw", true}, {"panorama", false}});
 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
@@ -104,42 +177,16 @@ HomingConfig HomingConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.mask_path = mask.path;
   c.mask = mask.mask;
 
-  auto& h = c.homing;
-  h.hog = ReadHog(ini, "hog");
-  h.hog.narrow_range_deg = ini.GetDouble("hog", "narrow_range_deg");
-  h.use_compass = ini.GetBool("compass", "enabled");
-  h.compass_hog = ReadHog(ini, "compass");
-  h.compass_hog.narrow_range_deg = h.hog.narrow_range_deg;
-
-  h.alv.threshold_frac = ini.GetDouble("alv", "threshold_frac");
-  h.alv.difference = ReadChoice<nav::AlvDifference>(ini, "alv", "difference",
-                                                    {{"current_minus_home", nav::AlvDifference::kCurrentMinusHome},
-                                                     {"home_minus_current", nav::AlvDifference::kHomeMinusCurrent}});
-  h.alv.weight = ReadChoice<nav::CellWeight>(
-      ini, "alv", "weight", {{"magnitude", nav::CellWeight::kMagnitude}, {"log", nav::CellWeight::kLog}});
-  h.alv.log_scale = ini.GetDouble("alv", "log_scale");
-  h.alv.min_bins = ini.GetInt("alv", "min_bins");
-
-  h.equalize_histogram = ini.GetBool("preprocess", "equalize_histogram");
-  h.warp_compensation = ini.GetBool("preprocess", "warp_compensation");
-  h.warp.camera_height_m = ini.GetDouble("preprocess", "camera_height_m");
-  h.warp.height_bottom_m = ini.GetDouble("preprocess", "warp_height_bottom_m");
-  h.warp.height_top_m = ini.GetDouble("preprocess", "warp_height_top_m");
+  HogTable().ReadKeys(ini, "hog", &c);
+  CompassTable().ReadKeys(ini, "compass", &c);
+  c.homing.compass_hog.narrow_range_deg = c.homing.hog.narrow_range_deg;
+  AlvTable().ReadKeys(ini, "alv", &c);
+  PreprocessTable().ReadKeys(ini, "preprocess", &c);
 
   c.keypoint_homing = glue::ReadLandmarkHoming(ini, nav::LandmarkMethod::kSift);
   c.vline_homing = glue::ReadLandmarkHoming(ini, nav::LandmarkMethod::kVline);
 
-  auto& f = c.fusion;
-  f.home_frames = ini.GetInt("view_fusion", "home_frames");
-  f.home_interval_s = ini.GetDouble("view_fusion", "home_interval_s");
-  f.current_frames = ini.GetInt("view_fusion", "current_frames");
-  f.current_interval_s = ini.GetDouble("view_fusion", "current_interval_s");
-  f.mode = ReadChoice<nav::ViewFusion>(ini, "view_fusion", "fusion",
-                                       {{"persistent", nav::ViewFusion::kPersistent}, {"median", nav::ViewFusion::kMedian}});
-  f.persistence.min_fraction = ini.GetDouble("view_fusion", "min_fraction");
-  f.persistence.max_shift_px = ini.GetDouble("view_fusion", "max_shift_px");
-  f.persistence.max_row_shift_px = ini.GetDouble("view_fusion", "max_row_shift_px");
-  f.persistence.max_descriptor_distance_frac = ini.GetDouble("view_fusion", "max_descriptor_distance_frac");
+  ViewFusionTable().ReadKeys(ini, "view_fusion", &c);
 
   ini.CheckAllUsed();
   ini.Check([&c] { c.Validate(); });
@@ -195,32 +242,20 @@ void HomingConfig::Validate() const {
 }
 
 void HomingConfig::Print(std::ostream& out) const {
-  auto print_hog = [&out](const nav::HogOptions& o) {
-    out << "band_top_px = " << o.band_top_px << "\nband_height_px = " << o.band_height_px
-        << "\ncell_size_px = " << o.cell_size_px << "\nbins = " << o.bins
-        << "\nrange = " << nav::OrientationRangeName(o.range) << "\n";
-  };
-  const auto& h = homing;
   out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel
       << "\nhome_snapshot = " << home_snapshot_channel << "\nhoming_vector = " << homing_vector_channel
       << "\nlandmarks = " << landmarks_channel << "\nhome_landmarks = " << home_landmarks_channel << "\n"
-      << "[homing]\ninput = " << InputName(input) << "\nhome = " << HomeName(home) << "\nhome_image = " << home_image
-      << "\nhome_image_kind = " << (home_image_raw ? "raw" : "panorama") << "\n";
+      << "[homing]\n";
+  HomingTable().Print(out, *this);
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
-  out << "[hog]\n";
-  print_hog(h.hog);
-  out << "narrow_range_deg = " << h.hog.narrow_range_deg
-      << "\n[compass]\nenabled = " << (h.use_compass ? "true" : "false") << "\n";
-  print_hog(h.compass_hog);
-  out << "[alv]\nthreshold_frac = " << h.alv.threshold_frac << "\ndifference = "
-      << (h.alv.difference == nav::AlvDifference::kCurrentMinusHome ? "current_minus_home" : "home_minus_current")
-      << "\nweight = " << (h.alv.weight == nav::CellWeight::kLog ? "log" : "magnitude")
-      << "\nlog_scale = " << h.alv.log_scale << "\nmin_bins = " << h.alv.min_bins << "\n"
-      << "[preprocess]\nequalize_histogram = " << (h.equalize_histogram ? "true" : "false")
-      << "\nwarp_compensation = " << (h.warp_compensation ? "true" : "false")
-      << "\ncamera_height_m = " << h.warp.camera_height_m << "\nwarp_height_bottom_m = " << h.warp.height_bottom_m
-      << "\nwarp_height_top_m = " << h.warp.height_top_m << "\n";
+  for (const auto& [section, table] : {std::pair<const char*, const Table*>{"hog", &HogTable()},
+                                       {"compass", &CompassTable()},
+                                       {"alv", &AlvTable()},
+                                       {"preprocess", &PreprocessTable()}}) {
+    out << "[" << section << "]\n";
+    table->Print(out, *this);
+  }
   PrintMatching(out, "matching", keypoint_homing.match);
   PrintMatching(out, "vline_matching", vline_homing.match);
   const auto& a = keypoint_homing.alv;
@@ -232,12 +267,8 @@ void HomingConfig::Print(std::ostream& out) const {
       << "\nrotation_refine_deg = " << a.rotation_refine_rad / kDeg
       << "\nrotation = " << (keypoint_homing.rotation == nav::RotationSource::kMatches ? "matches" : "none")
       << "\nrotation_window_deg = " << keypoint_homing.rotation_window_rad / kDeg << "\n";
-  out << "[view_fusion]\nhome_frames = " << fusion.home_frames << "\nhome_interval_s = " << fusion.home_interval_s
-      << "\ncurrent_frames = " << fusion.current_frames << "\ncurrent_interval_s = " << fusion.current_interval_s
-      << "\nfusion = " << nav::ViewFusionName(fusion.mode)
-      << "\nmin_fraction = " << fusion.persistence.min_fraction << "\nmax_shift_px = " << fusion.persistence.max_shift_px
-      << "\nmax_row_shift_px = " << fusion.persistence.max_row_shift_px
-      << "\nmax_descriptor_distance_frac = " << fusion.persistence.max_descriptor_distance_frac << "\n";
+  out << "[view_fusion]\n";
+  ViewFusionTable().Print(out, *this);
 }
 
 cv::Mat LoadHomeImage(const std::string& path, bool raw, const HomingConfig& config) {
