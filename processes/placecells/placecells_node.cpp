@@ -9,8 +9,10 @@
 #include <sstream>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/options.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/message_clock.hpp"
 #include "snapnav/glue/place_cells.hpp"
@@ -95,6 +97,28 @@ const char* PlaceCellsModeName(PlaceCellsMode mode) {
   return mode == PlaceCellsMode::kExplore ? "explore" : "localize";
 }
 
+namespace {
+
+// The [placecells] keys, declared once: read, printed and described from here (the view, localizer
+// and vocabulary sections are glue's).
+const glue::OptionTable<PlaceCellsConfig>& PlaceCellsTable() {
+  using C = PlaceCellsConfig;
+  static const auto table =
+      glue::OptionTable<C>()
+          .Choice("input", &C::raw_input, std::vector<std::pair<std::string, bool>>{{"raw", true}, {"panorama", false}})
+          .Choice("mode", &C::mode, {PlaceCellsMode::kExplore, PlaceCellsMode::kLocalize}, PlaceCellsModeName)
+          .Text("memory_file", &C::memory_file)
+          .Number("novelty_threshold", "", &C::novelty_threshold)
+          .Number("save_every_cells", "", &C::save_every_cells)
+          .Number("explore_pose_max_age_s", "s", &C::explore_pose_max_age_s)
+          .Number("min_interval_s", "s", &C::min_interval_s)
+          .Number("min_travel_m", "m", &C::min_travel_m)
+          .Number("stats_interval_s", "s", &C::stats_interval_s);
+  return table;
+}
+
+}  // namespace
+
 PlaceCellsConfig PlaceCellsConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   PlaceCellsConfig c;
   c.omni_channel = channel_prefix + ini.GetString("channels", "omni");
@@ -104,16 +128,7 @@ PlaceCellsConfig PlaceCellsConfig::FromIni(const glue::IniFile& ini, const std::
   c.match_channel = channel_prefix + ini.GetString("channels", "match");
   c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
 
-  c.raw_input = glue::ReadChoice<bool>(ini, "placecells", "input", {{"raw", true}, {"panorama", false}});
-  c.mode = glue::ReadChoice<PlaceCellsMode>(ini, "placecells", "mode",
-                                            {{"explore", PlaceCellsMode::kExplore}, {"localize", PlaceCellsMode::kLocalize}});
-  c.memory_file = ini.GetString("placecells", "memory_file");
-  c.novelty_threshold = ini.GetDouble("placecells", "novelty_threshold");
-  c.save_every_cells = ini.GetInt("placecells", "save_every_cells");
-  c.explore_pose_max_age_s = ini.GetDouble("placecells", "explore_pose_max_age_s");
-  c.min_interval_s = ini.GetDouble("placecells", "min_interval_s");
-  c.min_travel_m = ini.GetDouble("placecells", "min_travel_m");
-  c.stats_interval_s = ini.GetDouble("placecells", "stats_interval_s");
+  PlaceCellsTable().ReadKeys(ini, "placecells", &c);
 
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
@@ -167,11 +182,8 @@ void PlaceCellsConfig::Print(std::ostream& out) const {
   out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel
       << "\nodometry = " << odometry_channel << "\nexplore_pose = " << explore_pose_channel
       << "\nmatch = " << match_channel << "\npose = " << pose_channel << "\n"
-      << "[placecells]\ninput = " << (raw_input ? "raw" : "panorama") << "\nmode = " << PlaceCellsModeName(mode)
-      << "\nmemory_file = " << memory_file << "\nnovelty_threshold = " << novelty_threshold
-      << "\nsave_every_cells = " << save_every_cells << "\nexplore_pose_max_age_s = " << explore_pose_max_age_s
-      << "\nmin_interval_s = " << min_interval_s << "\nmin_travel_m = " << min_travel_m
-      << "\nstats_interval_s = " << stats_interval_s << "\n";
+      << "[placecells]\n";
+  PlaceCellsTable().Print(out, *this);
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
   glue::PrintPlaceViewOptions(out, view);

@@ -6,6 +6,7 @@
 
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/options.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/occupancy_grid_msg.hpp"
@@ -30,6 +31,30 @@ void Positive(const glue::IniFile& ini, const std::string& key, double v, bool a
   if (!(allow_zero ? v >= 0 : v > 0) || !std::isfinite(v)) {
     ini.FailKey("viewer", key, std::string("must be ") + (allow_zero ? "at least 0" : "positive"));
   }
+}
+
+// The [viewer] keys, declared once: read, printed and described from here (robot_pose_channels as
+// written, without the channel prefix the reader adds).
+const glue::OptionTable<ViewerConfig>& ViewerTable() {
+  using C = ViewerConfig;
+  static const auto table =
+      glue::OptionTable<C>()
+          .Number("refresh_hz", "Hz", &C::refresh_hz)
+          .Number("png_interval_s", "s", &C::png_interval_s)
+          .Number("width_px", "px", [](auto& c) -> auto& { return c.render.size.width; })
+          .Number("height_px", "px", [](auto& c) -> auto& { return c.render.size.height; })
+          .Number("ellipse_sigma", "", [](auto& c) -> auto& { return c.render.ellipse_sigma; })
+          .Number("ellipse_interval_s", "s", [](auto& c) -> auto& { return c.render.ellipse_interval_s; })
+          .Number("min_span_m", "m", [](auto& c) -> auto& { return c.render.min_span_m; })
+          .Number("scan_max_age_s", "s", [](auto& c) -> auto& { return c.render.scan_max_age_s; })
+          .Number("homing_arrow_px", "px", [](auto& c) -> auto& { return c.render.homing_arrow_px; })
+          .List("robot_pose_channels", [](auto& c) -> auto& { return c.render.robot_pose_channels; })
+          .Number("trajectory_min_step_m", "m", &C::trajectory_min_step_m)
+          .Degrees("trajectory_min_turn_deg", &C::trajectory_min_turn_rad)
+          .Number("trajectory_max_gap_s", "s", &C::trajectory_max_gap_s)
+          .Number("max_poses_per_channel", "", &C::max_poses_per_channel)
+          .Number("max_place_cell_matches", "", &C::max_place_cell_matches);
+  return table;
 }
 
 }  // namespace
@@ -58,29 +83,13 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
   c.grid_channel = channel_prefix + ini.GetString("channels", "grid");
 
-  c.refresh_hz = ini.GetDouble("viewer", "refresh_hz");
+  ViewerTable().ReadKeys(ini, "viewer", &c);
+  for (auto& ch : c.render.robot_pose_channels) ch = channel_prefix + ch;
   Positive(ini, "refresh_hz", c.refresh_hz);
-  c.png_interval_s = ini.GetDouble("viewer", "png_interval_s");
   Positive(ini, "png_interval_s", c.png_interval_s, true);
-  c.render.size.width = ini.GetInt("viewer", "width_px");
-  c.render.size.height = ini.GetInt("viewer", "height_px");
-  c.render.ellipse_sigma = ini.GetDouble("viewer", "ellipse_sigma");
-  c.render.ellipse_interval_s = ini.GetDouble("viewer", "ellipse_interval_s");
-  c.render.min_span_m = ini.GetDouble("viewer", "min_span_m");
-  c.render.scan_max_age_s = ini.GetDouble("viewer", "scan_max_age_s");
-  c.render.homing_arrow_px = ini.GetInt("viewer", "homing_arrow_px");
-  c.render.robot_pose_channels.clear();
-  for (const auto& ch : glue::SplitList(ini.GetString("viewer", "robot_pose_channels"))) {
-    c.render.robot_pose_channels.push_back(channel_prefix + ch);
-  }
-  c.trajectory_min_step_m = ini.GetDouble("viewer", "trajectory_min_step_m");
   Positive(ini, "trajectory_min_step_m", c.trajectory_min_step_m, true);
-  c.trajectory_min_turn_rad = ini.GetDouble("viewer", "trajectory_min_turn_deg") * kDeg;
   Positive(ini, "trajectory_min_turn_deg", c.trajectory_min_turn_rad, true);
-  c.trajectory_max_gap_s = ini.GetDouble("viewer", "trajectory_max_gap_s");
   Positive(ini, "trajectory_max_gap_s", c.trajectory_max_gap_s);
-  c.max_poses_per_channel = ini.GetInt("viewer", "max_poses_per_channel");
-  c.max_place_cell_matches = ini.GetInt("viewer", "max_place_cell_matches");
   c.panorama = glue::ReadPanoramaConfig(ini);
   c.mirror = glue::ReadMirrorConfig(ini);
   const glue::MirrorMask mask = glue::ReadMirrorMask(ini);  // the mask, loaded: [mirror] mask
@@ -104,17 +113,8 @@ void ViewerConfig::Print(std::ostream& out) const {
   out << "[channels]\npoint_map = " << point_map_channel << "\nposes = " << pose_channels
       << "\nground_truth = " << truth_channel << "\npanorama = " << panorama_channel << "\nomni = " << omni_channel
       << "\nlandmarks = " << landmark_channels << "\nhoming_vector = " << homing_vector_channel
-      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\ngrid = " << grid_channel << "\n[viewer]\n"
-      << "refresh_hz = " << refresh_hz << "\npng_interval_s = " << png_interval_s
-      << "\nwidth_px = " << render.size.width << "\nheight_px = " << render.size.height
-      << "\nellipse_sigma = " << render.ellipse_sigma << "\nellipse_interval_s = " << render.ellipse_interval_s
-      << "\nmin_span_m = " << render.min_span_m << "\nscan_max_age_s = " << render.scan_max_age_s
-      << "\nhoming_arrow_px = " << render.homing_arrow_px << "\nrobot_pose_channels = ";
-  for (size_t i = 0; i < render.robot_pose_channels.size(); ++i) out << (i ? "," : "") << render.robot_pose_channels[i];
-  out << "\ntrajectory_min_step_m = " << trajectory_min_step_m
-      << "\ntrajectory_min_turn_deg = " << trajectory_min_turn_rad / kDeg
-      << "\ntrajectory_max_gap_s = " << trajectory_max_gap_s << "\nmax_poses_per_channel = " << max_poses_per_channel
-      << "\nmax_place_cell_matches = " << max_place_cell_matches << "\n";
+      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\ngrid = " << grid_channel << "\n[viewer]\n";
+  ViewerTable().Print(out, *this);
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
 }

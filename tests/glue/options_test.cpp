@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/options.hpp"
@@ -115,6 +116,19 @@ TEST(OptionTable, ErrorsNameFileLineSectionAndKey) {
   const std::string bad_count = ErrorOf(std::string(kFile).replace(text.find("12"), 2, "0"));
   EXPECT_NE(bad_count.find("w.ini:3"), std::string::npos) << bad_count;
   EXPECT_NE(bad_count.find("count must be >= 1"), std::string::npos) << bad_count;
+}
+
+TEST(OptionTable, ListsAreCommaSeparatedNames) {
+  struct Channels {
+    std::vector<std::string> names;
+  };
+  const auto table = OptionTable<Channels>().List("names", &Channels::names);
+  const Channels c = table.Read(IniFile::Parse("[c]\nnames = POSE_EKF, POSE_LASER_SLAM ,X\n", "c.ini"), "c");
+  EXPECT_EQ(c.names, (std::vector<std::string>{"POSE_EKF", "POSE_LASER_SLAM", "X"}));
+  std::ostringstream printed;
+  table.Print(printed, c);
+  EXPECT_EQ(printed.str(), "names = POSE_EKF,POSE_LASER_SLAM,X\n");
+  EXPECT_EQ(table.Describe()[0].kind, "list");
 }
 
 TEST(OptionTable, ShippedLaserSlamKeysAreEveryDeclaredKey) {

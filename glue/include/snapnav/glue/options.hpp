@@ -26,6 +26,7 @@
 #include <utility>
 #include <vector>
 
+#include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
 
 namespace snapnav::glue {
@@ -34,7 +35,7 @@ namespace snapnav::glue {
 struct OptionInfo {
   std::string key;
   std::string unit;           // "m", "deg", "s", ... ("" for counts, ratios and names)
-  std::string kind;           // number | integer | flag | text | choice
+  std::string kind;           // number | integer | flag | text | list | choice
   std::string default_value;  // the options struct's default, printed as in a config file
   std::string choices;        // "a | b | c" for a choice
 };
@@ -94,6 +95,17 @@ class OptionTable {
     return Add({std::move(key), "", "text", "", ""},
                [k, access](const IniFile& ini, const std::string& s, T& o) { std::invoke(access, o) = ini.GetString(s, k); },
                [access](std::ostream& out, const T& o) { out << std::invoke(access, o); });
+  }
+  // A comma-separated list of names (a std::vector<std::string> field), printed as written.
+  template <class F>
+  OptionTable& List(std::string key, F access) {
+    const std::string k = key;
+    return Add({std::move(key), "", "list", "", ""},
+               [k, access](const IniFile& ini, const std::string& s, T& o) { std::invoke(access, o) = SplitList(ini.GetString(s, k)); },
+               [access](std::ostream& out, const T& o) {
+                 const auto& names = std::invoke(access, o);
+                 for (size_t i = 0; i < names.size(); ++i) out << (i ? "," : "") << names[i];
+               });
   }
   // One of `choices` (name, value); anything else is an error listing them.
   template <class F, class E>
