@@ -5,24 +5,37 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "snapnav/glue/options.hpp"
 #include "snapnav/glue/shutdown.hpp"
 #include "snapnav/glue/time.hpp"
 
 namespace snapnav::processes {
 
+namespace {
+
+// The [hokuyo] keys, declared once: read, printed and described from here.
+const glue::OptionTable<LaserHokuyoConfig>& HokuyoTable() {
+  using C = LaserHokuyoConfig;
+  static const auto table = glue::OptionTable<C>()
+                                .Text("serial_port", [](auto& c) -> auto& { return c.hokuyo.serial_port; })
+                                .Flag("intensity", [](auto& c) -> auto& { return c.hokuyo.intensity; })
+                                .Text("sensor_name", [](auto& c) -> auto& { return c.scan.sensor_name; })
+                                .Number("sensor_x_m", "m", [](auto& c) -> auto& { return c.scan.sensor_x_m; })
+                                .Number("sensor_y_m", "m", [](auto& c) -> auto& { return c.scan.sensor_y_m; })
+                                .Number("sensor_theta_rad", "rad", [](auto& c) -> auto& { return c.scan.sensor_theta_rad; })
+                                .Number("fov_deg", "deg", [](auto& c) -> auto& { return c.scan.fov_deg; })
+                                .Number("no_scan_timeout_s", "s", &C::no_scan_timeout_s);
+  return table;
+}
+
+}  // namespace
+
 LaserHokuyoConfig LaserHokuyoConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   LaserHokuyoConfig c;
   c.config_path = ini.origin();
   c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
-  c.hokuyo.serial_port = ini.GetString("hokuyo", "serial_port");
-  c.hokuyo.intensity = ini.GetBool("hokuyo", "intensity");
-  c.scan.sensor_name = ini.GetString("hokuyo", "sensor_name");
-  c.scan.sensor_x_m = ini.GetDouble("hokuyo", "sensor_x_m");
-  c.scan.sensor_y_m = ini.GetDouble("hokuyo", "sensor_y_m");
-  c.scan.sensor_theta_rad = ini.GetDouble("hokuyo", "sensor_theta_rad");
-  c.scan.fov_deg = ini.GetDouble("hokuyo", "fov_deg");
+  HokuyoTable().ReadKeys(ini, "hokuyo", &c);
   c.scan.range_min_m = kHokuyoRangeMinM;
-  c.no_scan_timeout_s = ini.GetDouble("hokuyo", "no_scan_timeout_s");
   ini.CheckAllUsed();
   try {
     c.Validate();
@@ -43,11 +56,9 @@ void LaserHokuyoConfig::Validate() const {
 
 void LaserHokuyoConfig::Print(std::ostream& out) const {
   out << "[channels]\nscan = " << scan_channel << "\n"
-      << "[hokuyo]\nserial_port = " << hokuyo.serial_port << "\nintensity = " << (hokuyo.intensity ? "true" : "false")
-      << "\nsensor_name = " << scan.sensor_name << "\nsensor_x_m = " << scan.sensor_x_m
-      << "\nsensor_y_m = " << scan.sensor_y_m << "\nsensor_theta_rad = " << scan.sensor_theta_rad
-      << "\nfov_deg = " << scan.fov_deg << "\nno_scan_timeout_s = " << no_scan_timeout_s
-      << "\n; range_min_m = " << scan.range_min_m << " (fixed: the driver's validity threshold)\n";
+      << "[hokuyo]\n";
+  HokuyoTable().Print(out, *this);
+  out << "; range_min_m = " << scan.range_min_m << " (fixed: the driver's validity threshold)\n";
 }
 
 LaserHokuyoNode::LaserHokuyoNode(glue::Bus& bus, const LaserHokuyoConfig& config,
