@@ -14,15 +14,22 @@ void CheckFinite(float v, const char* what) {
 
 nav::MatchOptions ReadMatching(const IniFile& ini, const std::string& section) {
   nav::MatchOptions m;
-  m.ratio = ini.GetDouble(section, "ratio");
-  m.mutual = ini.GetBool(section, "mutual");
-  m.relaxed_second_best = ini.GetBool(section, "relaxed_second_best");
-  m.max_distance = ini.GetDouble(section, "max_distance");
-  m.max_x_displacement_px = ini.GetDouble(section, "max_x_displacement_px");
+  MatchOptionTable().ReadKeys(ini, section, &m);
   return m;
 }
 
 }  // namespace
+
+const OptionTable<nav::MatchOptions>& MatchOptionTable() {
+  using M = nav::MatchOptions;
+  static const auto table = OptionTable<M>()
+                                .Number("ratio", "", &M::ratio)
+                                .Flag("mutual", &M::mutual)
+                                .Flag("relaxed_second_best", &M::relaxed_second_best)
+                                .Number("max_distance", "", &M::max_distance)
+                                .Number("max_x_displacement_px", "px", &M::max_x_displacement_px);
+  return table;
+}
 
 landmark_set_t LandmarkSetToMsg(const nav::LandmarkSet& set, const nav::PanoramaModel& panorama, int64_t utime,
                                 const std::string& sensor_name) {

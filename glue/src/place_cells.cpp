@@ -9,6 +9,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <string>
+#include <utility>
 #include <ostream>
 #include <vector>
 
@@ -17,8 +19,6 @@
 
 namespace snapnav::glue {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 const char* Bool(bool b) { return b ? "true" : "false"; }
 
@@ -32,13 +32,84 @@ void Validated(const IniFile& ini, const char* section, F&& validate) {
   }
 }
 
-int ReadNonNegativeInt(const IniFile& ini, const std::string& section, const std::string& key) {
-  const int v = ini.GetInt(section, key);
-  if (v < 0) ini.FailKey(section, key, "must be >= 0");
-  return v;
+std::string ErrnoText() { return std::strerror(errno); }
+
+// The keys of [place_view], [measure], [distance_filter], [localizer] and [vocabulary], declared once:
+// read, printed and described from here ([matching] is MatchOptionTable, landmarks.hpp).
+const OptionTable<nav::PlaceViewOptions>& PlaceViewTable() {
+  using O = nav::PlaceViewOptions;
+  static const auto table = OptionTable<O>()
+                                .Flag("keep_vlines", &O::keep_vlines)
+                                .Number("vline_window_px", "px", [](auto& o) -> auto& { return o.vline.window_px; })
+                                .Number("window_px", "px", &O::window_px)
+                                .Number("window_scale", "", &O::window_scale)
+                                .Number("signature_width_px", "px", &O::signature_width_px)
+                                .Number("signature_height_px", "px", &O::signature_height_px);
+  return table;
 }
 
-std::string ErrnoText() { return std::strerror(errno); }
+const OptionTable<nav::PlaceMeasureOptions>& MeasureTable() {
+  using O = nav::PlaceMeasureOptions;
+  static const auto table =
+      OptionTable<O>()
+          .Choice("measure", &O::measure,
+                  std::vector<std::pair<std::string, nav::PlaceMeasure>>{{"bearing", nav::PlaceMeasure::kBearingDifference},
+                                                                        {"count", nav::PlaceMeasure::kMatchCount},
+                                                                        {"vline", nav::PlaceMeasure::kVlineTemplate}})
+          .Choice("refinement", &O::refinement,
+                  std::vector<std::pair<std::string, nav::MatchRefinement>>{
+                      {"smallest", nav::MatchRefinement::kSmallestDistance}, {"ransac", nav::MatchRefinement::kRansac}})
+          .Number("keep_fraction", "", &O::keep_fraction)
+          .Number("keep_min", "", &O::keep_min)
+          .Degrees("ransac_threshold_deg", &O::ransac_threshold_rad)
+          .Number("ransac_iterations", "", &O::ransac_iterations)
+          .Number("residual_cap_rad", "rad", &O::residual_cap_rad)
+          .Number("ransac_seed", "", &O::ransac_seed)
+          .Number("window_min_ncc", "", &O::window_min_ncc)
+          .Number("min_matches", "", &O::min_matches)
+          .Number("templates", "", &O::templates)
+          .Number("image_difference_weight", "", &O::image_difference_weight);
+  return table;
+}
+
+const OptionTable<nav::DistanceFilterOptions>& DistanceFilterTable() {
+  using O = nav::DistanceFilterOptions;
+  static const auto table = OptionTable<O>()
+                                .Flag("enabled", &O::enabled)
+                                .Number("radius_m", "m", &O::radius_m)
+                                .Number("weight", "", &O::weight)
+                                .Number("gate_m", "m", &O::gate_m);
+  return table;
+}
+
+const OptionTable<nav::LocalizerOptions>& LocalizerTable() {
+  using O = nav::LocalizerOptions;
+  static const auto table =
+      OptionTable<O>()
+          .Choice("estimate", &O::estimate,
+                  std::vector<std::pair<std::string, nav::PlaceEstimate>>{{"nearest", nav::PlaceEstimate::kNearestCell},
+                                                                         {"interpolated", nav::PlaceEstimate::kInterpolated}})
+          .Number("interpolate_k", "", &O::interpolate_k)
+          .Number("interpolate_power", "", &O::interpolate_power)
+          .Number("interpolate_radius_m", "m", &O::interpolate_radius_m)
+          .Number("candidates", "", &O::candidates)
+          .Number("near_candidates", "", &O::near_candidates)
+          .Number("exhaustive_below", "", &O::exhaustive_below)
+          .Number("min_position_sigma_m", "m", &O::min_position_sigma_m);
+  return table;
+}
+
+const OptionTable<nav::VocabularyOptions>& VocabularyTable() {
+  using O = nav::VocabularyOptions;
+  static const auto table = OptionTable<O>()
+                                .Number("branching", "", &O::branching)
+                                .Number("depth", "", &O::depth)
+                                .Number("max_training", "", &O::max_training)
+                                .Number("kmeans_iterations", "", &O::kmeans_iterations)
+                                .Number("seed", "", &O::seed);
+  return table;
+}
+
 
 }  // namespace
 
@@ -49,13 +120,8 @@ nav::PlaceViewOptions ReadPlaceViewOptions(const IniFile& ini) {
     // Read again for the line number and the choices.
     ReadChoice<int>(ini, "landmarks", "method", {{"sift", 0}, {"surf", 1}});
   }
-  o.keep_vlines = ini.GetBool("place_view", "keep_vlines");
   o.vline = o.features.vline;
-  o.vline.window_px = ini.GetInt("place_view", "vline_window_px");
-  o.window_px = ini.GetInt("place_view", "window_px");
-  o.window_scale = ini.GetDouble("place_view", "window_scale");
-  o.signature_width_px = ini.GetInt("place_view", "signature_width_px");
-  o.signature_height_px = ini.GetInt("place_view", "signature_height_px");
+  PlaceViewTable().ReadKeys(ini, "place_view", &o);
   Validated(ini, "place_view", [&] {
     // The [vline] options with this section's window: a window the check refuses is vline_window_px.
     try {
@@ -73,46 +139,12 @@ nav::PlaceViewOptions ReadPlaceViewOptions(const IniFile& ini) {
 nav::LocalizerOptions ReadLocalizerOptions(const IniFile& ini) {
   nav::LocalizerOptions o;
   auto& m = o.measure;
-  m.match.ratio = ini.GetDouble("matching", "ratio");
-  m.match.mutual = ini.GetBool("matching", "mutual");
-  m.match.relaxed_second_best = ini.GetBool("matching", "relaxed_second_best");
-  m.match.max_distance = ini.GetDouble("matching", "max_distance");
-  m.match.max_x_displacement_px = ini.GetDouble("matching", "max_x_displacement_px");
+  MatchOptionTable().ReadKeys(ini, "matching", &m.match);
 
-  m.measure = ReadChoice<nav::PlaceMeasure>(ini, "measure", "measure",
-                                            {{"bearing", nav::PlaceMeasure::kBearingDifference},
-                                             {"count", nav::PlaceMeasure::kMatchCount},
-                                             {"vline", nav::PlaceMeasure::kVlineTemplate}});
-  m.refinement = ReadChoice<nav::MatchRefinement>(
-      ini, "measure", "refinement",
-      {{"smallest", nav::MatchRefinement::kSmallestDistance}, {"ransac", nav::MatchRefinement::kRansac}});
-  m.keep_fraction = ini.GetDouble("measure", "keep_fraction");
-  m.keep_min = ini.GetInt("measure", "keep_min");
-  m.ransac_threshold_rad = ini.GetDouble("measure", "ransac_threshold_deg") * kDeg;
-  m.ransac_iterations = ini.GetInt("measure", "ransac_iterations");
-  m.residual_cap_rad = ini.GetDouble("measure", "residual_cap_rad");
-  m.ransac_seed = static_cast<uint64_t>(ReadNonNegativeInt(ini, "measure", "ransac_seed"));
-  m.window_min_ncc = ini.GetDouble("measure", "window_min_ncc");
-  m.min_matches = ini.GetInt("measure", "min_matches");
-  m.templates = ini.GetInt("measure", "templates");
-  m.image_difference_weight = ini.GetDouble("measure", "image_difference_weight");
-
+  MeasureTable().ReadKeys(ini, "measure", &m);
   auto& f = o.filter;
-  f.enabled = ini.GetBool("distance_filter", "enabled");
-  f.radius_m = ini.GetDouble("distance_filter", "radius_m");
-  f.weight = ini.GetDouble("distance_filter", "weight");
-  f.gate_m = ini.GetDouble("distance_filter", "gate_m");
-
-  o.estimate = ReadChoice<nav::PlaceEstimate>(
-      ini, "localizer", "estimate",
-      {{"nearest", nav::PlaceEstimate::kNearestCell}, {"interpolated", nav::PlaceEstimate::kInterpolated}});
-  o.interpolate_k = ini.GetInt("localizer", "interpolate_k");
-  o.interpolate_power = ini.GetDouble("localizer", "interpolate_power");
-  o.interpolate_radius_m = ini.GetDouble("localizer", "interpolate_radius_m");
-  o.candidates = ini.GetInt("localizer", "candidates");
-  o.near_candidates = ini.GetInt("localizer", "near_candidates");
-  o.exhaustive_below = ini.GetInt("localizer", "exhaustive_below");
-  o.min_position_sigma_m = ini.GetDouble("localizer", "min_position_sigma_m");
+  DistanceFilterTable().ReadKeys(ini, "distance_filter", &f);
+  LocalizerTable().ReadKeys(ini, "localizer", &o);
   Validated(ini, "matching", [&] { m.match.Validate(); });
   Validated(ini, "measure", [&] { m.Validate(); });
   Validated(ini, "distance_filter", [&] { f.Validate(); });
@@ -122,11 +154,7 @@ nav::LocalizerOptions ReadLocalizerOptions(const IniFile& ini) {
 
 nav::VocabularyOptions ReadVocabularyOptions(const IniFile& ini) {
   nav::VocabularyOptions o;
-  o.branching = ini.GetInt("vocabulary", "branching");
-  o.depth = ini.GetInt("vocabulary", "depth");
-  o.max_training = ini.GetInt("vocabulary", "max_training");
-  o.kmeans_iterations = ini.GetInt("vocabulary", "kmeans_iterations");
-  o.seed = static_cast<uint64_t>(ReadNonNegativeInt(ini, "vocabulary", "seed"));
+  VocabularyTable().ReadKeys(ini, "vocabulary", &o);
   Validated(ini, "vocabulary", [&] { o.Validate(); });
   return o;
 }
@@ -135,36 +163,26 @@ void PrintPlaceViewOptions(std::ostream& out, const nav::PlaceViewOptions& o) {
   out << "[landmarks]\nmethod = " << nav::LandmarkMethodName(o.features.method)
       << "\nequalize_histogram = " << Bool(o.features.equalize_histogram) << "\n";
   PrintLandmarkExtractorSections(out, o.features);
-  out << "[place_view]\nkeep_vlines = " << Bool(o.keep_vlines) << "\nvline_window_px = " << o.vline.window_px
-      << "\nwindow_px = " << o.window_px << "\nwindow_scale = " << o.window_scale
-      << "\nsignature_width_px = " << o.signature_width_px << "\nsignature_height_px = " << o.signature_height_px
-      << "\n";
+  out << "[place_view]\n";
+  PlaceViewTable().Print(out, o);
 }
 
 void PrintLocalizerOptions(std::ostream& out, const nav::LocalizerOptions& o) {
   const auto& m = o.measure;
   const auto& f = o.filter;
-  out << "[matching]\nratio = " << m.match.ratio << "\nmutual = " << Bool(m.match.mutual)
-      << "\nrelaxed_second_best = " << Bool(m.match.relaxed_second_best) << "\nmax_distance = " << m.match.max_distance
-      << "\nmax_x_displacement_px = " << m.match.max_x_displacement_px << "\n"
-      << "[measure]\nmeasure = " << nav::PlaceMeasureName(m.measure)
-      << "\nrefinement = " << nav::MatchRefinementName(m.refinement) << "\nkeep_fraction = " << m.keep_fraction
-      << "\nkeep_min = " << m.keep_min << "\nransac_threshold_deg = " << m.ransac_threshold_rad / kDeg
-      << "\nransac_iterations = " << m.ransac_iterations << "\nresidual_cap_rad = " << m.residual_cap_rad << "\nransac_seed = " << m.ransac_seed
-      << "\nwindow_min_ncc = " << m.window_min_ncc << "\nmin_matches = " << m.min_matches
-      << "\ntemplates = " << m.templates << "\nimage_difference_weight = " << m.image_difference_weight << "\n"
-      << "[distance_filter]\nenabled = " << Bool(f.enabled) << "\nradius_m = " << f.radius_m
-      << "\nweight = " << f.weight << "\ngate_m = " << f.gate_m << "\n"
-      << "[localizer]\nestimate = " << nav::PlaceEstimateName(o.estimate) << "\ninterpolate_k = " << o.interpolate_k
-      << "\ninterpolate_power = " << o.interpolate_power << "\ninterpolate_radius_m = " << o.interpolate_radius_m
-      << "\ncandidates = " << o.candidates
-      << "\nnear_candidates = " << o.near_candidates << "\nexhaustive_below = " << o.exhaustive_below
-      << "\nmin_position_sigma_m = " << o.min_position_sigma_m << "\n";
+  out << "[matching]\n";
+  MatchOptionTable().Print(out, m.match);
+  out << "[measure]\n";
+  MeasureTable().Print(out, o.measure);
+  out << "[distance_filter]\n";
+  DistanceFilterTable().Print(out, o.filter);
+  out << "[localizer]\n";
+  LocalizerTable().Print(out, o);
 }
 
 void PrintVocabularyOptions(std::ostream& out, const nav::VocabularyOptions& o) {
-  out << "[vocabulary]\nbranching = " << o.branching << "\ndepth = " << o.depth << "\nmax_training = " << o.max_training
-      << "\nkmeans_iterations = " << o.kmeans_iterations << "\nseed = " << o.seed << "\n";
+  out << "[vocabulary]\n";
+  VocabularyTable().Print(out, o);
 }
 
 nav::PlaceCellMemory LoadPlaceMemory(const std::string& path, const nav::VocabularyOptions& vocabulary) {

@@ -44,9 +44,8 @@ const char* InputName(HomingInput i) {
 }
 
 void PrintMatching(std::ostream& out, const char* section, const nav::MatchOptions& m) {
-  out << "[" << section << "]\nratio = " << m.ratio << "\nmutual = " << (m.mutual ? "true" : "false")
-      << "\nrelaxed_second_best = " << (m.relaxed_second_best ? "true" : "false")
-      << "\nmax_distance = " << m.max_distance << "\nmax_x_displacement_px = " << m.max_x_displacement_px << "\n";
+  out << "[" << section << "]\n";
+  glue::MatchOptionTable().Print(out, m);
 }
 const char* HomeName(HomeSource h) {
   switch (h) {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/options.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/nav/landmarks/landmark_extractor.hpp"
 #include "snapnav/nav/landmarks/landmarks.hpp"
@@ -28,6 +29,9 @@ nav::LandmarkExtractorConfig ReadLandmarkExtractor(const IniFile& ini);
 // The extractors' sections as ReadLandmarkExtractor reads them: [vline], [sift], [surf] (the
 // [landmarks] keys belong to each process's own section printing).
 void PrintLandmarkExtractorSections(std::ostream& out, const nav::LandmarkExtractorConfig& config);
+// The keys of [matching] and [vline_matching] (ratio, mutual, ...), declared once: placecells and
+// homing read and print them through this table.
+const OptionTable<nav::MatchOptions>& MatchOptionTable();
 // [matching] (SIFT and SURF) or [vline_matching] (vertical lines), and [landmark_alv]; the
 // matching section of `method` is read, the other one is only checked for its keys.
 nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMethod method);

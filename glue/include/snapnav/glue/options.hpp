@@ -17,6 +17,7 @@
 // `access` is a pointer to a data member or a generic lambda returning a reference to the field
 // (for nested structs); it is called on a const T when printing.
 
+#include <cstdint>
 #include <functional>
 #include <initializer_list>
 #include <ostream>
@@ -53,16 +54,22 @@ class OptionTable {
   // File degrees <-> struct radians.
   static constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
 
-  // A number in the file's unit: a double or an int field (by the type `access` yields).
+  // A number in the file's unit: a double, an int or a uint64_t field (by the type `access` yields;
+  // a uint64_t, a seed, refuses a negative value).
   template <class F>
   OptionTable& Number(std::string key, std::string unit, F access) {
     using V = std::remove_cv_t<std::remove_reference_t<std::invoke_result_t<F, T&>>>;
-    static_assert(std::is_same_v<V, double> || std::is_same_v<V, int>, "Number: the field must be a double or an int");
+    static_assert(std::is_same_v<V, double> || std::is_same_v<V, int> || std::is_same_v<V, uint64_t>,
+                  "Number: the field must be a double, an int or a uint64_t (a seed)");
     const std::string k = key;
-    return Add({std::move(key), std::move(unit), std::is_same_v<V, int> ? "integer" : "number", "", ""},
+    return Add({std::move(key), std::move(unit), std::is_same_v<V, double> ? "number" : "integer", "", ""},
                [k, access](const IniFile& ini, const std::string& s, T& o) {
                  if constexpr (std::is_same_v<V, int>) {
                    std::invoke(access, o) = ini.GetInt(s, k);
+                 } else if constexpr (std::is_same_v<V, uint64_t>) {
+                   const int v = ini.GetInt(s, k);
+                   if (v < 0) ini.FailKey(s, k, "must be >= 0");
+                   std::invoke(access, o) = static_cast<uint64_t>(v);
                  } else {
                    std::invoke(access, o) = ini.GetDouble(s, k);
                  }
