@@ -2,9 +2,9 @@
 // A component's options declared once: each key with its unit and where it lives in the options
 // struct; the one declaration reads the keys from an INI section, prints them back in the same
 // form (the effective config every process prints at start), and describes them (key, unit,
-// kind, the struct's default). The check is the struct's own
-// Validate() (libnav keeps it beside the algorithm), run by Read through IniFile::Check so its
-// complaint names file, line, section and key.
+// kind, the struct's default). The check is the struct's own Validate() (libnav keeps it beside
+// the algorithm), run by Read through IniFile::Check so its complaint names file, line, section
+// and key; ReadKeys reads without it, for a caller that checks several sections together.
 //
 //   const OptionTable<nav::Foo>& FooTable() {
 //     static const auto table = OptionTable<nav::Foo>()
