@@ -9,4 +9,4 @@ add_executable(eval-ratslam eval/eval_ratslam_main.cpp)
 target_link_libraries(eval-ratslam PRIVATE snapnav_ratslam_eval snapnav_ratslam_node)
 # bench-ratslam (./snapnav bench ratslam): ms per update at several map sizes, on one core.
 add_executable(bench-ratslam bench/bench_ratslam.cpp)
-target_link_libraries(bench-ratslam PRIVATE snapnav_ratslam_node snapnav_sim_node opencv_imgproc)
+target_link_libraries(bench-ratslam PRIVATE snapnav_ratslam_node snapnav_sim_node snapnav_results opencv_imgproc)
