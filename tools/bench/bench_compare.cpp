@@ -102,7 +102,8 @@ int Main(int argc, char** argv) {
   const std::map<std::string, std::string> units = {{"dead_reckoning", "odometry message"},
                                                     {"laser_slam", "scan"},
                                                     {"ratslam", "frame (" + eval::Fixed(o.ratslam_rate_hz, 0) + " Hz)"},
-                                                    {"fused_slam", "scan"}};
+                                                    {"fused_slam", "scan"},
+                                                    {"fused_no_vision", "scan"}};
   for (const auto& name : eval::CompareMethodNames()) {
     if (!per_update.count(name)) {
       md << "| " << name << " | not run | | | |\n";
