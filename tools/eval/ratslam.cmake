@@ -4,7 +4,7 @@
 add_library(snapnav_ratslam_eval STATIC eval/ratslam_eval.cpp)
 target_include_directories(snapnav_ratslam_eval PUBLIC eval)
 target_link_libraries(snapnav_ratslam_eval PUBLIC snapnav_slam_sim snapnav_ratslam snapnav_homing snapnav_plot
-  PRIVATE opencv_imgproc)
+  PRIVATE snapnav_results opencv_imgproc)
 add_executable(eval-ratslam eval/eval_ratslam_main.cpp)
 target_link_libraries(eval-ratslam PRIVATE snapnav_ratslam_eval snapnav_ratslam_node)
 # bench-ratslam (./snapnav bench ratslam): ms per update at several map sizes, on one core.
