@@ -68,6 +68,9 @@ TEST(Results, SignificantKeepsTheDigitsAStreamPrints) {
   EXPECT_EQ(Significant(0.123456789).get<double>(), 0.123457);
   EXPECT_EQ(Significant(123456789.0).get<double>(), 1.23457e8);
   EXPECT_EQ(Significant(2.5, 1).get<double>(), 2.0);
+  EXPECT_EQ(Significant(600.0).dump(), "600");
+  EXPECT_EQ(Significant(-3.0).dump(), "-3");
+  EXPECT_EQ(Significant(1234567.0).dump(), "1234570.0");
   EXPECT_TRUE(Significant(std::numeric_limits<double>::infinity()).is_null());
 }
 

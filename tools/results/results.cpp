@@ -21,7 +21,10 @@ Json Significant(double v, int digits) {
   if (!std::isfinite(v)) return nullptr;
   std::ostringstream text;
   text << std::setprecision(digits) << v;
-  return std::stod(text.str());
+  const std::string s = text.str();
+  // "60", not "60.0", as the stream printed it (counts kept in doubles stay integers).
+  if (s.find_first_not_of("-0123456789") == std::string::npos) return std::stoll(s);
+  return std::stod(s);
 }
 
 void WriteJsonFile(const std::string& path, const Json& j) {

@@ -28,8 +28,8 @@ Json Rounded(T v, int digits) {
   }
 }
 
-// v with `digits` significant digits (as std::setprecision(digits) << v prints it), or null when it
-// is NaN or infinite.
+// v with `digits` significant digits (as std::setprecision(digits) << v prints it: an integer when
+// it prints without a point), or null when it is NaN or infinite.
 Json Significant(double v, int digits = 6);
 
 // Writes `j` to `path` (2-space indent, a trailing newline). Throws std::runtime_error naming the
