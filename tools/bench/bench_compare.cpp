@@ -15,6 +15,7 @@
 
 #include "compare_config.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "stats.hpp"
 #include "slam_compare.hpp"
@@ -31,7 +32,7 @@ const double kNaN = std::nan("");
 // The median of the runs' figures; NaN (null in the JSON) for none.
 double Median(const std::vector<double>& v) { return eval::Median(v, kNaN); }
 
-std::string Json(double v) { return std::isfinite(v) ? eval::Fixed(v, 5) : "null"; }
+results::Json Json(double v) { return results::Rounded(v, 5); }
 
 std::string Margin(double ms) { return ms > 0.1 ? eval::Fixed(100.0 / ms, 0) + "x" : "> 1000x"; }
 
@@ -88,12 +89,16 @@ int Main(int argc, char** argv) {
   }
 
   const double view = Median(view_ms), localize = Median(localize_ms), filter = Median(visual_filter_ms);
-  std::ostringstream md, json;
+  std::ostringstream md;
+  results::Json json;
   md << "# bench compare: " << scene << ", " << duration_s << " s simulated, median of " << runs
      << " runs, one core\n\n| method | ms per update | update | ms per 10 Hz period | margin (100 ms / period) |\n"
         "|---|---|---|---|---|\n";
-  json << "{\n  \"scene\": " << eval::JsonString(scene) << ",\n  \"duration_s\": " << duration_s << ",\n  \"runs\": " << runs
-       << ",\n  \"visual_rate_hz\": " << o.visual_rate_hz << ",\n  \"ratslam_rate_hz\": " << o.ratslam_rate_hz;
+  json["scene"] = scene;
+  json["duration_s"] = results::Significant(duration_s);
+  json["runs"] = runs;
+  json["visual_rate_hz"] = results::Significant(o.visual_rate_hz);
+  json["ratslam_rate_hz"] = results::Significant(o.ratslam_rate_hz);
   const std::map<std::string, std::string> units = {{"dead_reckoning", "odometry message"},
                                                     {"laser_slam", "scan"},
                                                     {"ratslam", "frame (" + eval::Fixed(o.ratslam_rate_hz, 0) + " Hz)"},
@@ -102,13 +107,15 @@ int Main(int argc, char** argv) {
   for (const auto& name : eval::CompareMethodNames()) {
     if (!per_update.count(name)) {
       md << "| " << name << " | not run | | | |\n";
-      json << ",\n  \"" << name << "_ms_per_update\": null,\n  \"" << name << "_ms_per_frame\": null";
+      json[name + "_ms_per_update"] = nullptr;
+      json[name + "_ms_per_frame"] = nullptr;
       continue;
     }
     const double u = Median(per_update[name]), f = Median(per_frame[name]);
     md << "| " << name << " | " << eval::Fixed(u, 4) << " | " << units.at(name) << " | " << eval::Fixed(f, 3) << " | "
        << Margin(f) << " |\n";
-    json << ",\n  \"" << name << "_ms_per_update\": " << Json(u) << ",\n  \"" << name << "_ms_per_frame\": " << Json(f);
+    json[name + "_ms_per_update"] = Json(u);
+    json[name + "_ms_per_frame"] = Json(f);
     std::cout << std::left << std::setw(16) << name << std::right << " " << eval::Fixed(u, 4) << " ms per "
               << units.at(name) << ", " << eval::Fixed(f, 3) << " ms per 10 Hz period (margin " << Margin(f) << ")\n";
   }
@@ -119,15 +126,16 @@ int Main(int argc, char** argv) {
      << eval::Fixed(localize, 1) << " ms (the placecells process), filter update " << eval::Fixed(filter, 3)
      << " ms; with a fix on every 10 Hz frame the period would take " << eval::Fixed(every_frame, 1) << " ms (margin "
      << eval::Fixed(100.0 / every_frame, 1) << "x); at " << o.visual_rate_hz << " Hz fixes it is the per-period figure above.\n";
-  json << ",\n  \"place_cells_ms_per_view\": " << Json(view) << ",\n  \"place_cells_ms_per_localize\": " << Json(localize)
-       << ",\n  \"fused_slam_ms_per_visual_update\": " << Json(filter)
-       << ",\n  \"fused_slam_ms_per_frame_with_a_fix_every_frame\": " << Json(every_frame) << "\n}\n";
+  json["place_cells_ms_per_view"] = Json(view);
+  json["place_cells_ms_per_localize"] = Json(localize);
+  json["fused_slam_ms_per_visual_update"] = Json(filter);
+  json["fused_slam_ms_per_frame_with_a_fix_every_frame"] = Json(every_frame);
   std::cout << "fused_slam visual: view " << eval::Fixed(view, 1) << " ms + query " << eval::Fixed(localize, 1)
             << " ms + filter " << eval::Fixed(filter, 3) << " ms per fix; a fix every frame: " << eval::Fixed(every_frame, 1)
             << " ms per period\n";
   fs::create_directories(out_dir);
   std::ofstream(fs::path(out_dir) / "bench.md") << md.str();
-  std::ofstream(fs::path(out_dir) / "bench.json") << json.str();
+  results::WriteJsonFile((fs::path(out_dir) / "bench.json").string(), json);
   std::cerr << "bench-compare: wrote " << (fs::path(out_dir) / "bench.json").string() << " and bench.md\n";
   return 0;
 }

@@ -5,7 +5,6 @@
 // Prints medians of several runs and writes summary.json into --out.
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <vector>
@@ -14,6 +13,7 @@
 
 #include "bench_timing.hpp"
 #include "homing_node.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -107,12 +107,16 @@ int Main(int argc, char** argv) {
             << std::setprecision(2) << homing_ms / thesis_ms << ")\n";
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
-    std::ofstream json(std::filesystem::path(out_dir) / "summary.json");
-    json << std::fixed << std::setprecision(4) << "{\n  \"runs\": " << runs << ",\n  \"frames_per_run\": " << frames
-         << ",\n  \"unwrap_ms\": " << unwrap_ms << ",\n  \"unwrap_map_per_frame_ms\": " << unwrap_rebuild_ms
-         << ",\n  \"hog_homing_ms\": " << homing_ms << ",\n  \"hog_gradients_ms\": " << gradients_ms
-         << ",\n  \"hog_homing_without_compass_ms\": " << no_compass_ms
-         << ",\n  \"hog_homing_thesis_config_ms\": " << thesis_ms << "\n}\n";
+    results::Json j;
+    j["runs"] = runs;
+    j["frames_per_run"] = frames;
+    j["unwrap_ms"] = results::Rounded(unwrap_ms, 4);
+    j["unwrap_map_per_frame_ms"] = results::Rounded(unwrap_rebuild_ms, 4);
+    j["hog_homing_ms"] = results::Rounded(homing_ms, 4);
+    j["hog_gradients_ms"] = results::Rounded(gradients_ms, 4);
+    j["hog_homing_without_compass_ms"] = results::Rounded(no_compass_ms, 4);
+    j["hog_homing_thesis_config_ms"] = results::Rounded(thesis_ms, 4);
+    results::WriteJsonFile((std::filesystem::path(out_dir) / "summary.json").string(), j);
   }
   return 0;
 }

@@ -10,6 +10,7 @@
 
 #include "bench_timing.hpp"
 #include "homing_node.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -93,14 +94,17 @@ int Main(int argc, char** argv) {
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
     std::ofstream(std::filesystem::path(out_dir) / "bench.md") << md.str();
-    std::ofstream json(std::filesystem::path(out_dir) / "summary.json");
-    json << std::fixed << std::setprecision(4) << "{\n  \"runs\": " << runs << ",\n  \"frames_per_run\": " << frames;
+    results::Json j;
+    j["runs"] = runs;
+    j["frames_per_run"] = frames;
     for (const auto& f : figures) {
       const std::string m = nav::LandmarkMethodName(f.method);
-      json << ",\n  \"" << m << "_landmarks_per_view\": " << f.landmarks << ",\n  \"" << m
-           << "_extraction_ms\": " << f.extract_ms << ",\n  \"" << m << "_ms_per_frame\": " << f.total_ms;
+      j[m + "_landmarks_per_view"] = results::Rounded(f.landmarks, 4);
+      j[m + "_extraction_ms"] = results::Rounded(f.extract_ms, 4);
+      j[m + "_ms_per_frame"] = results::Rounded(f.total_ms, 4);
     }
-    json << ",\n  \"surf_speedup_vs_sift\": " << ratio << "\n}\n";
+    j["surf_speedup_vs_sift"] = results::Rounded(ratio, 4);
+    results::WriteJsonFile((std::filesystem::path(out_dir) / "summary.json").string(), j);
   }
   return 0;
 }

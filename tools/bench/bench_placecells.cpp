@@ -30,6 +30,7 @@
 #include "bench_timing.hpp"
 #include "homing_eval.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "stats.hpp"
@@ -190,7 +191,7 @@ int Main(int argc, char** argv) {
   nav::PlaceCellMemory memory(view_options, sim.camera.panorama, vocabulary);
   std::mt19937_64 perturb_rng(static_cast<uint64_t>(seed) + 101);
   std::normal_distribution<double> jitter(0.0, 0.05);
-  std::vector<SizeResult> results;
+  std::vector<SizeResult> size_results;
   int next_copy = 0;
   for (int size : sizes) {
     while (memory.size() < size) {
@@ -250,7 +251,7 @@ int Main(int argc, char** argv) {
       std::cerr << "bench-placecells: " << size << " cells, exhaustive: " << Fixed(r.exhaustive_ms, 1)
                 << " ms/query (mean error " << Fixed(r.exhaustive_error_m, 3) << " m)\n";
     }
-    results.push_back(r);
+    size_results.push_back(r);
   }
 
   // Report.
@@ -267,12 +268,12 @@ int Main(int argc, char** argv) {
      << Fixed(extract, 1) << " ms per panorama, " << Fixed(landmarks / total, 0) << " landmarks.\n\n"
      << "| cells | ms/query | per 10x cells | candidates | mean error [m] | exhaustive ms/query | exhaustive / indexed | "
         "exhaustive error [m] | index build [ms] | bytes/cell |\n|---|---|---|---|---|---|---|---|---|---|\n";
-  for (size_t i = 0; i < results.size(); ++i) {
-    const auto& r = results[i];
+  for (size_t i = 0; i < size_results.size(); ++i) {
+    const auto& r = size_results[i];
     std::string growth = "-";
     if (i > 0) {
-      const double decades = std::log10(static_cast<double>(r.cells) / results[i - 1].cells);
-      if (decades > 0) growth = Fixed(std::pow(r.ms_per_query / results[i - 1].ms_per_query, 1 / decades), 2) + "x";
+      const double decades = std::log10(static_cast<double>(r.cells) / size_results[i - 1].cells);
+      if (decades > 0) growth = Fixed(std::pow(r.ms_per_query / size_results[i - 1].ms_per_query, 1 / decades), 2) + "x";
     }
     md << "| " << r.cells << " | " << Fixed(r.ms_per_query, 2) << " | " << growth << " | " << Fixed(r.candidates, 1)
        << " | " << Fixed(r.mean_error_m, 3) << " | " << (r.exhaustive_ms >= 0 ? Fixed(r.exhaustive_ms, 1) : "-") << " | "
@@ -281,7 +282,7 @@ int Main(int argc, char** argv) {
        << Fixed(r.bytes_per_cell, 0) << " |\n";
   }
   const SizeResult* at1000 = nullptr;
-  for (const auto& r : results) {
+  for (const auto& r : size_results) {
     if (r.cells == 1000) at1000 = &r;
   }
   md << "\nGoal: at most " << kGoalMsAt1000 << " ms per query at 1,000 cells: "
@@ -306,32 +307,37 @@ int Main(int argc, char** argv) {
   if (!out_dir.empty()) {
     fs::create_directories(out_dir);
     std::ofstream(fs::path(out_dir) / "bench.md") << md.str();
-    std::ofstream j(fs::path(out_dir) / "bench.json");
-    j << std::fixed << std::setprecision(4) << "{\n  \"scene\": " << eval::JsonString(scene.name) << ",\n  \"runs\": " << runs
-      << ",\n  \"queries_per_run\": " << per_run << ",\n  \"make_view_ms\": " << extract
-      << ",\n  \"landmarks_per_view\": " << landmarks / total << ",\n  \"view_bytes\": " << view_bytes;
-    for (size_t i = 0; i < results.size(); ++i) {
-      const auto& r = results[i];
+    results::Json j;
+    j["scene"] = scene.name;
+    j["runs"] = runs;
+    j["queries_per_run"] = per_run;
+    j["make_view_ms"] = results::Rounded(extract, 4);
+    j["landmarks_per_view"] = results::Rounded(landmarks / total, 4);
+    j["view_bytes"] = results::Rounded(view_bytes, 4);
+    for (size_t i = 0; i < size_results.size(); ++i) {
+      const auto& r = size_results[i];
       const std::string k = "cells_" + std::to_string(r.cells);
-      j << ",\n  \"" << k << "_ms_per_query\": " << r.ms_per_query << ",\n  \"" << k << "_candidates\": " << r.candidates
-        << ",\n  \"" << k << "_mean_error_m\": " << r.mean_error_m << ",\n  \"" << k << "_index_build_ms\": " << r.build_ms
-        << ",\n  \"" << k << "_bytes_per_cell\": " << r.bytes_per_cell;
+      j[k + "_ms_per_query"] = results::Rounded(r.ms_per_query, 4);
+      j[k + "_candidates"] = results::Rounded(r.candidates, 4);
+      j[k + "_mean_error_m"] = results::Rounded(r.mean_error_m, 4);
+      j[k + "_index_build_ms"] = results::Rounded(r.build_ms, 4);
+      j[k + "_bytes_per_cell"] = results::Rounded(r.bytes_per_cell, 4);
       if (r.exhaustive_ms >= 0) {
-        j << ",\n  \"" << k << "_exhaustive_ms_per_query\": " << r.exhaustive_ms << ",\n  \"" << k
-          << "_exhaustive_over_indexed\": " << r.exhaustive_ms / r.ms_per_query << ",\n  \"" << k
-          << "_exhaustive_mean_error_m\": " << r.exhaustive_error_m;
+        j[k + "_exhaustive_ms_per_query"] = results::Rounded(r.exhaustive_ms, 4);
+        j[k + "_exhaustive_over_indexed"] = results::Rounded(r.exhaustive_ms / r.ms_per_query, 4);
+        j[k + "_exhaustive_mean_error_m"] = results::Rounded(r.exhaustive_error_m, 4);
       }
       if (i > 0) {
-        const double decades = std::log10(static_cast<double>(r.cells) / results[i - 1].cells);
+        const double decades = std::log10(static_cast<double>(r.cells) / size_results[i - 1].cells);
         if (decades > 0) {
-          j << ",\n  \"growth_per_10x_" << results[i - 1].cells << "_to_" << r.cells
-            << "\": " << std::pow(r.ms_per_query / results[i - 1].ms_per_query, 1 / decades);
+          j["growth_per_10x_" + std::to_string(size_results[i - 1].cells) + "_to_" + std::to_string(r.cells)] =
+              results::Rounded(std::pow(r.ms_per_query / size_results[i - 1].ms_per_query, 1 / decades), 4);
         }
       }
     }
-    j << ",\n  \"goal_ms_at_1000\": " << kGoalMsAt1000;
-    if (at1000) j << ",\n  \"goal_met\": " << (at1000->ms_per_query <= kGoalMsAt1000 ? "true" : "false");
-    j << "\n}\n";
+    j["goal_ms_at_1000"] = results::Rounded(kGoalMsAt1000, 4);
+    if (at1000) j["goal_met"] = at1000->ms_per_query <= kGoalMsAt1000;
+    results::WriteJsonFile((fs::path(out_dir) / "bench.json").string(), j);
   }
   return 0;
 }

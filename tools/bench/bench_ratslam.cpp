@@ -23,12 +23,13 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench_timing.hpp"
-#include "snapnav/glue/ratslam_options.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/ratslam_options.hpp"
 #include "snapnav/nav/ratslam/ratslam.hpp"
 #include "snapnav/nav/sim/omni_renderer.hpp"
 
@@ -165,11 +166,15 @@ int Main(int argc, char** argv) {
   });
 
   fs::create_directories(out_dir);
-  std::ostringstream json, md;
-  json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << scene_name << "\",\n  \"runs\": " << runs
-       << ",\n  \"cycles\": " << cycles << ",\n  \"pose_cells_active\": " << cells.peak().active_cells
-       << ",\n  \"pose_cell_step_ms\": " << settled_ms << ",\n  \"pose_cell_step_busy_ms\": " << busy_ms
-       << ",\n  \"pose_cell_busy_active\": " << busy_active;
+  std::ostringstream md;
+  results::Json json;
+  json["scene"] = scene_name;
+  json["runs"] = runs;
+  json["cycles"] = cycles;
+  json["pose_cells_active"] = results::Rounded(cells.peak().active_cells, 4);
+  json["pose_cell_step_ms"] = results::Rounded(settled_ms, 4);
+  json["pose_cell_step_busy_ms"] = results::Rounded(busy_ms, 4);
+  json["pose_cell_busy_active"] = results::Rounded(busy_active, 4);
   md << "# bench-ratslam\n\n" << scene_name << " panoramas, " << options.local_view.template_x_size << "x"
      << options.local_view.template_y_size << " templates, " << d << "x" << d << "x" << t
      << " pose cells; one core; median of " << runs << " runs of " << cycles << " cycles (a view and "
@@ -177,16 +182,17 @@ int Main(int argc, char** argv) {
      << "| templates | experiences | links | ms per image | ms per odometry | share of a core at 10 Hz + 50 Hz |\n"
         "|---|---|---|---|---|---|\n";
   for (const Row& r : rows) {
-    json << ",\n  \"ms_per_image_at_" << r.templates << "\": " << r.image_ms << ",\n  \"ms_per_odometry_at_"
-         << r.templates << "\": " << r.odometry_ms << ",\n  \"core_load_at_" << r.templates << "\": " << r.load;
+    const std::string at = "_at_" + std::to_string(r.templates);
+    json["ms_per_image" + at] = results::Rounded(r.image_ms, 4);
+    json["ms_per_odometry" + at] = results::Rounded(r.odometry_ms, 4);
+    json["core_load" + at] = results::Rounded(r.load, 4);
     md << std::fixed << std::setprecision(3) << "| " << r.templates << " | " << r.experiences << " | " << r.links
        << " | " << r.image_ms << " | " << r.odometry_ms << " | " << std::setprecision(1) << 100 * r.load << " % |\n";
   }
-  json << "\n}\n";
   md << std::fixed << std::setprecision(3) << "\nPose-cell step alone (excitation, inhibition, normalisation, path "
      << "integration, best cell): " << settled_ms << " ms with one packet (" << cells.peak().active_cells
      << " active cells), " << busy_ms << " ms with injected packets (" << busy_active << " active cells).\n";
-  std::ofstream(fs::path(out_dir) / "bench.json") << json.str();
+  results::WriteJsonFile((fs::path(out_dir) / "bench.json").string(), json);
   std::ofstream(fs::path(out_dir) / "bench.md") << md.str();
   std::cout << md.str();
   return 0;

@@ -5,12 +5,12 @@
 // summary.json into --out.
 #include <algorithm>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <vector>
 
 #include "bench_timing.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -146,18 +146,22 @@ int Main(int argc, char** argv) {
   }
   if (!out_dir.empty()) {
     std::filesystem::create_directories(out_dir);
-    std::ofstream json(std::filesystem::path(out_dir) / "summary.json");
-    json << std::fixed << std::setprecision(2) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"runs\": " << runs
-         << ",\n  \"omni_frames_per_second\": " << raw_fps << ",\n  \"omni_realistic_frames_per_second\": " << realistic_fps
-         << ",\n  \"omni_realistic_time_ratio\": " << std::setprecision(3) << realistic_ratio
-         << ",\n  \"omni_realistic_frame_time_ratio\": " << realistic_frame_ratio << std::setprecision(2)
-         << ",\n  \"omni_message_frames_per_second\": " << raw_msg_fps
-         << ",\n  \"panorama_frames_per_second\": " << pano_fps << ",\n  \"laser_scans_per_second\": " << scans_ps;
+    results::Json j;
+    j["scene"] = scene.name;
+    j["runs"] = runs;
+    j["omni_frames_per_second"] = results::Rounded(raw_fps, 2);
+    j["omni_realistic_frames_per_second"] = results::Rounded(realistic_fps, 2);
+    j["omni_realistic_time_ratio"] = results::Rounded(realistic_ratio, 3);
+    j["omni_realistic_frame_time_ratio"] = results::Rounded(realistic_frame_ratio, 3);
+    j["omni_message_frames_per_second"] = results::Rounded(raw_msg_fps, 2);
+    j["panorama_frames_per_second"] = results::Rounded(pano_fps, 2);
+    j["laser_scans_per_second"] = results::Rounded(scans_ps, 2);
     for (const auto& c : codecs) {
-      json << ",\n  \"" << c.name << "_frame_bytes\": " << c.bytes << ",\n  \"" << c.name << "_encode_ms\": " << c.encode_ms
-           << ",\n  \"" << c.name << "_decode_ms\": " << c.decode_ms;
+      j[c.name + "_frame_bytes"] = results::Rounded(c.bytes, 2);
+      j[c.name + "_encode_ms"] = results::Rounded(c.encode_ms, 2);
+      j[c.name + "_decode_ms"] = results::Rounded(c.decode_ms, 2);
     }
-    json << "\n}\n";
+    results::WriteJsonFile((std::filesystem::path(out_dir) / "summary.json").string(), j);
   }
   return 0;
 }

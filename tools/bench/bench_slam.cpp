@@ -27,6 +27,7 @@
 #include "icp_slam.hpp"
 #include "importers.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "slam_config.hpp"
 #include "slam_graph.hpp"
 #include "slam_log.hpp"
@@ -44,7 +45,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace snapnav;
 using eval::Fixed;
-using eval::JsonString;
 using eval::Median;
 
 constexpr double kGoalTimeRatio = 2.0;        // icp-slam ms/scan over ours, at least
@@ -200,9 +200,9 @@ int Main(int argc, char** argv) {
                           {"MappingApplication", "insertionAngDistance", "5"}},
                          false});
   }
-  std::vector<BaselineResult> results(baselines.size());
+  std::vector<BaselineResult> baseline_results(baselines.size());
   const auto run_icp = [&](size_t b) {
-    BaselineResult& res = results[b];
+    BaselineResult& res = baseline_results[b];
     eval::IcpSlamOptions options = icp_options;
     options.set = baselines[b].keys;
     res.last = eval::RunIcpSlam(rawlog, (out / "work" / ("icp-slam-" + baselines[b].name)).string(), options);
@@ -222,17 +222,17 @@ int Main(int argc, char** argv) {
       if (!baselines[b].timed) continue;
       run_icp(b);
       std::cerr << "bench-slam: icp-slam (" << baselines[b].name << ") run " << r + 1 << "/" << icp_runs << ": "
-                << Fixed(results[b].ms.back(), 3) << " ms/scan (wall " << Fixed(results[b].wall_ms.back(), 3) << ")\n";
+                << Fixed(baseline_results[b].ms.back(), 3) << " ms/scan (wall " << Fixed(baseline_results[b].wall_ms.back(), 3) << ")\n";
     }
   }
   for (size_t b = 0; b < baselines.size(); ++b) {
     if (baselines[b].timed) continue;
     run_icp(b);
-    std::cerr << "bench-slam: icp-slam (" << baselines[b].name << ", one run): " << Fixed(results[b].ms.back(), 3)
+    std::cerr << "bench-slam: icp-slam (" << baselines[b].name << ", one run): " << Fixed(baseline_results[b].ms.back(), 3)
               << " ms/scan\n";
   }
   const double ours_ms = Median(ours_runs);
-  for (BaselineResult& res : results) {
+  for (BaselineResult& res : baseline_results) {
     res.median_ms = Median(res.ms);
     res.median_wall_ms = Median(res.wall_ms);
     res.ratio = res.median_ms / std::max(ours_ms, 1e-9);
@@ -240,8 +240,8 @@ int Main(int argc, char** argv) {
     // Which map is consistent where the trajectories differ: scans against the scans seen on a revisit.
     res.consistency = eval::ComputeMapConsistency(log, res.cmp.icp_at_scans);
   }
-  const BaselineResult& classic = results[0];
-  const BaselineResult& every_scan = results[1];
+  const BaselineResult& classic = baseline_results[0];
+  const BaselineResult& every_scan = baseline_results[1];
   const eval::IcpSlamRun& icp = classic.last;
   const eval::IcpSlamComparison& cmp = classic.cmp;
   const double theirs_ms = classic.median_ms, theirs_wall_ms = classic.median_wall_ms, ratio = classic.ratio;
@@ -397,7 +397,7 @@ int Main(int argc, char** argv) {
          << cmp.paired << " scans; map consistency (median distance of a scan's points to the scans seen on a "
          << "revisit, lower is crisper):\n";
   for (size_t b = 0; b < baselines.size(); ++b) {
-    const BaselineResult& res = results[b];
+    const BaselineResult& res = baseline_results[b];
     report << "    " << std::left << std::setw(56) << baselines[b].label << std::right << " " << Fixed(res.median_ms, 3)
            << " ms/scan " << (baselines[b].timed ? "(runs " + Spread(res.ms) + ")" : "(one run)") << ", ratio "
            << Fixed(res.ratio, 2) << "x, " << Fixed(res.cmp.difference.rmse_m, 3) << " m RMS (max "
@@ -434,71 +434,85 @@ int Main(int argc, char** argv) {
          << "\n";
   std::cout << report.str() << std::flush;
 
-  std::ofstream json(out / "bench.json");
   std::string overrides;
   for (const std::string& o : config.overrides) overrides += (overrides.empty() ? "" : "; ") + o;
-  json << std::fixed << std::setprecision(4) << "{\n  \"rawlog\": " << JsonString(rawlog)
-       << ",\n  \"laser_slam_config\": " << JsonString(config.path)
-       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans
-       << ",\n  \"beams\": " << log.beams << ",\n  \"runs\": " << runs << ",\n  \"icp_runs\": " << icp_runs
-       << ",\n  \"laser_slam_ms_per_scan\": " << ours_ms
-       << ",\n  \"laser_slam_scans_per_s\": " << 1000 / std::max(ours_ms, 1e-9)
-       << ",\n  \"icp_slam_ms_per_scan\": " << theirs_ms << ",\n  \"icp_slam_wall_ms_per_scan\": " << theirs_wall_ms
-       << ",\n  \"icp_slam_config\": " << JsonString(icp.config) << ",\n  \"icp_slam_scans\": " << icp.poses.size()
-       << ",\n  \"icp_slam_scans_paired\": " << cmp.paired << ",\n  \"icp_slam_over_laser_slam_time_ratio\": " << ratio
-       << ",\n  \"laser_slam_vs_icp_slam_rms_m\": " << cmp.difference.rmse_m
-       << ",\n  \"laser_slam_vs_icp_slam_max_m\": " << cmp.difference.max_m
-       << ",\n  \"laser_slam_map_consistency_m\": " << ours_consistency.median_m
-       << ",\n  \"icp_slam_map_consistency_m\": " << icp_consistency.median_m;
+  const auto r4 = [](auto v) { return results::Rounded(v, 4); };
+  const auto runs_ms = [](const std::vector<double>& ms) {
+    results::Json list = results::Json::array();
+    for (const double v : ms) list.push_back(results::Significant(v));
+    return list;
+  };
+  results::Json json;
+  json["rawlog"] = rawlog;
+  json["laser_slam_config"] = config.path;
+  json["laser_slam_overrides"] = overrides;
+  json["scans"] = log.scans;
+  json["beams"] = log.beams;
+  json["runs"] = runs;
+  json["icp_runs"] = icp_runs;
+  json["laser_slam_ms_per_scan"] = r4(ours_ms);
+  json["laser_slam_scans_per_s"] = r4(1000 / std::max(ours_ms, 1e-9));
+  json["icp_slam_ms_per_scan"] = r4(theirs_ms);
+  json["icp_slam_wall_ms_per_scan"] = r4(theirs_wall_ms);
+  json["icp_slam_config"] = icp.config;
+  json["icp_slam_scans"] = icp.poses.size();
+  json["icp_slam_scans_paired"] = cmp.paired;
+  json["icp_slam_over_laser_slam_time_ratio"] = r4(ratio);
+  json["laser_slam_vs_icp_slam_rms_m"] = r4(cmp.difference.rmse_m);
+  json["laser_slam_vs_icp_slam_max_m"] = r4(cmp.difference.max_m);
+  json["laser_slam_map_consistency_m"] = r4(ours_consistency.median_m);
+  json["icp_slam_map_consistency_m"] = r4(icp_consistency.median_m);
   for (size_t b = 1; b < baselines.size(); ++b) {  // classic: the unprefixed keys above
-    const BaselineResult& res = results[b];
+    const BaselineResult& res = baseline_results[b];
     const std::string key = "icp_slam_" + baselines[b].name;
-    json << ",\n  \"" << key << "_config\": " << JsonString(res.last.config) << ",\n  \"" << key
-         << "_ms_per_scan\": " << res.median_ms << ",\n  \"" << key << "_over_laser_slam_time_ratio\": " << res.ratio
-         << ",\n  \"" << key << "_vs_laser_slam_rms_m\": " << res.cmp.difference.rmse_m << ",\n  \"" << key
-         << "_vs_laser_slam_max_m\": " << res.cmp.difference.max_m << ",\n  \"" << key
-         << "_map_consistency_m\": " << res.consistency.median_m;
-    if (baselines[b].timed) json << ",\n  \"" << key << "_ms_per_scan_runs\": [" << eval::JsonNumbers(res.ms) << "]";
+    json[key + "_config"] = res.last.config;
+    json[key + "_ms_per_scan"] = r4(res.median_ms);
+    json[key + "_over_laser_slam_time_ratio"] = r4(res.ratio);
+    json[key + "_vs_laser_slam_rms_m"] = r4(res.cmp.difference.rmse_m);
+    json[key + "_vs_laser_slam_max_m"] = r4(res.cmp.difference.max_m);
+    json[key + "_map_consistency_m"] = r4(res.consistency.median_m);
+    if (baselines[b].timed) json[key + "_ms_per_scan_runs"] = runs_ms(res.ms);
   }
-  json << ",\n  \"laser_slam_ms_per_scan_runs\": [" << eval::JsonNumbers(ours_runs) << "]"
-       << ",\n  \"icp_slam_ms_per_scan_runs\": [" << eval::JsonNumbers(icp_ms) << "]"
-       << ",\n  \"sim_scene\": " << JsonString(sim.scene_name) << ",\n  \"sim_beams\": " << sim.log.beams
-       << ",\n  \"sim_scans\": " << sim.log.scans << ",\n  \"sim_laser_slam_ms_per_scan\": " << sim_ms
-       << ",\n  \"sim_laser_slam_scans_per_s\": " << sim_scans_per_s
-       << ",\n  \"graph_malaga_front_ms_per_scan\": " << graph_malaga.front
-       << ",\n  \"graph_malaga_back_ms_per_scan\": " << graph_malaga.back
-       << ",\n  \"graph_malaga_back_max_ms\": " << graph_malaga.back_max
-       << ",\n  \"graph_malaga_closures\": " << graph_malaga.last.loop_accepted
-       << ",\n  \"graph_malaga_core_share_10hz\": " << graph_malaga.core_share_10hz
-       << ",\n  \"graph_sim_front_ms_per_scan\": " << graph_sim.front
-       << ",\n  \"graph_sim_back_ms_per_scan\": " << graph_sim.back
-       << ",\n  \"graph_sim_back_max_ms\": " << graph_sim.back_max
-       << ",\n  \"graph_sim_core_share_10hz\": " << graph_sim.core_share_10hz
-       << ",\n  \"graph_core_share_goal_met\": " << (graph_met ? "true" : "false")
-       << ",\n  \"graph_async_speed\": " << graph_speed;
+  json["laser_slam_ms_per_scan_runs"] = runs_ms(ours_runs);
+  json["icp_slam_ms_per_scan_runs"] = runs_ms(icp_ms);
+  json["sim_scene"] = sim.scene_name;
+  json["sim_beams"] = sim.log.beams;
+  json["sim_scans"] = sim.log.scans;
+  json["sim_laser_slam_ms_per_scan"] = r4(sim_ms);
+  json["sim_laser_slam_scans_per_s"] = r4(sim_scans_per_s);
+  json["graph_malaga_front_ms_per_scan"] = r4(graph_malaga.front);
+  json["graph_malaga_back_ms_per_scan"] = r4(graph_malaga.back);
+  json["graph_malaga_back_max_ms"] = r4(graph_malaga.back_max);
+  json["graph_malaga_closures"] = graph_malaga.last.loop_accepted;
+  json["graph_malaga_core_share_10hz"] = r4(graph_malaga.core_share_10hz);
+  json["graph_sim_front_ms_per_scan"] = r4(graph_sim.front);
+  json["graph_sim_back_ms_per_scan"] = r4(graph_sim.back);
+  json["graph_sim_back_max_ms"] = r4(graph_sim.back_max);
+  json["graph_sim_core_share_10hz"] = r4(graph_sim.core_share_10hz);
+  json["graph_core_share_goal_met"] = graph_met;
+  json["graph_async_speed"] = r4(graph_speed);
   for (const auto& [what, t] : graph_all) {
     std::string key = what;
     for (char& c : key) c = std::isalnum(static_cast<unsigned char>(c)) ? static_cast<char>(std::tolower(c)) : '_';
-    json << ",\n  \"graph_" << key << "_scan_p99_ms_sync\": " << t->scan_p99_sync << ",\n  \"graph_" << key
-         << "_scan_max_ms_sync\": " << t->scan_max_sync << ",\n  \"graph_" << key
-         << "_scan_p99_ms_async\": " << t->scan_p99_async << ",\n  \"graph_" << key
-         << "_scan_max_ms_async\": " << t->scan_max_async;
+    json["graph_" + key + "_scan_p99_ms_sync"] = r4(t->scan_p99_sync);
+    json["graph_" + key + "_scan_max_ms_sync"] = r4(t->scan_max_sync);
+    json["graph_" + key + "_scan_p99_ms_async"] = r4(t->scan_p99_async);
+    json["graph_" + key + "_scan_max_ms_async"] = r4(t->scan_max_async);
   }
-  json
-       << ",\n  \"goal_baseline\": \"every_scan\""
-       << ",\n  \"goal_time_ratio_met\": " << (ratio_met ? "true" : "false")
-       << ",\n  \"goal_rms_difference_met\": " << (rms_met ? "true" : "false")
-       << ",\n  \"classic_time_ratio_met\": " << (ratio_ok(classic) ? "true" : "false")
-       << ",\n  \"classic_rms_difference_met\": " << (rms_ok(classic) ? "true" : "false")
-       << ",\n  \"goal_scans_per_s_met\": " << (rate_met ? "true" : "false") << "\n}\n";
-  json.close();
+  json["goal_baseline"] = "every_scan";
+  json["goal_time_ratio_met"] = ratio_met;
+  json["goal_rms_difference_met"] = rms_met;
+  json["classic_time_ratio_met"] = ratio_ok(classic);
+  json["classic_rms_difference_met"] = rms_ok(classic);
+  json["goal_scans_per_s_met"] = rate_met;
+  results::WriteJsonFile((out / "bench.json").string(), json);
   std::ofstream md(out / "bench.md");
   md << "# bench-slam\n\n```\n"
      << report.str() << "```\n\n"
      << "| icp-slam (MRPT) settings | its ms/scan | ratio to ours (" << Fixed(ours_ms, 3)
      << " ms/scan) | RMS difference from ours | its map consistency |\n|---|---|---|---|---|\n";
   for (size_t b = 0; b < baselines.size(); ++b) {
-    const BaselineResult& res = results[b];
+    const BaselineResult& res = baseline_results[b];
     md << "| " << baselines[b].label << " | " << Fixed(res.median_ms, 3) << (baselines[b].timed ? "" : " (one run)")
        << " | " << Fixed(res.ratio, 2) << "x | " << Fixed(res.cmp.difference.rmse_m, 3) << " m (max "
        << Fixed(res.cmp.difference.max_m, 3) << ") | " << Fixed(res.consistency.median_m, 4) << " m |\n";
@@ -534,7 +548,7 @@ int Main(int argc, char** argv) {
      << "point (within 0.5 m) of scans at least 30 scans away; the median pair distance per scan, then the median "
      << "over scans.\n";
   md << "\nicp-slam configs: `" << icp.config << "`";
-  for (size_t b = 1; b < baselines.size(); ++b) md << ", `" << results[b].last.config << "`";
+  for (size_t b = 1; b < baselines.size(); ++b) md << ", `" << baseline_results[b].last.config << "`";
   md << ".\n";
   md.close();
   if (temporary) {

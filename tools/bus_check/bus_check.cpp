@@ -309,13 +309,9 @@ std::string SoakVerifier::Report() const {
   return out.str();
 }
 
-std::string SoakVerifier::JsonMembers(const std::string& prefix) const {
-  std::ostringstream out;
-  bool first = true;
-  auto member = [&](const std::string& key, int64_t v) {
-    out << (first ? "" : ",\n") << "  \"" << prefix << key << "\": " << v;
-    first = false;
-  };
+results::Json SoakVerifier::Counts(const std::string& prefix) const {
+  results::Json out;
+  auto member = [&](const std::string& key, int64_t v) { out[prefix + key] = v; };
   for (const auto& [name, s] : {std::pair<const char*, const SoakStream&>{"frames", frames_}, {"scans", scans_}}) {
     const std::string n = name;
     member(n + "_expected", s.expected);
@@ -327,7 +323,7 @@ std::string SoakVerifier::JsonMembers(const std::string& prefix) const {
     member(n + "_bytes", s.bytes);
   }
   member("decode_or_handler_errors", errors());
-  return out.str();
+  return out;
 }
 
 LogStreamReader::LogStreamReader(const std::string& path) : path_(path), file_(std::fopen(path.c_str(), "rb")) {

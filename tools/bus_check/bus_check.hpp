@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "results.hpp"
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/omni_frame_t.hpp"
@@ -112,8 +113,8 @@ class SoakVerifier {
   bool ok() const;
   int64_t received_total() const { return frames_.received + scans_.received; }
   std::string Report() const;
-  // Flat JSON members (no braces) with `prefix` on every key, e.g. "  \"verifier_frames_received\": 9000".
-  std::string JsonMembers(const std::string& prefix) const;
+  // The counts as flat JSON keys with `prefix` on every one, e.g. "verifier_frames_received": 9000.
+  results::Json Counts(const std::string& prefix) const;
 
  private:
   struct Seen {

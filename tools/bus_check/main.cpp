@@ -9,7 +9,6 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
-#include <sstream>
 #include <iomanip>
 #include <iostream>
 #include <thread>
@@ -50,11 +49,8 @@ struct SoakSettings {
   std::string log_path;  // soak-verify: read this log (a file or a FIFO) instead of the bus
 };
 
-void WriteJson(const std::string& path, const std::string& members) {
-  if (path.empty()) return;
-  std::ofstream out(path);
-  out << "{\n" << members << "\n}\n";
-  if (!out) throw std::runtime_error("cannot write " + path);
+void WriteJson(const std::string& path, const results::Json& j) {
+  if (!path.empty()) results::WriteJsonFile(path, j);
 }
 
 // Sends the frames and scans of `s` in time order, paced by the steady clock.
@@ -101,15 +97,20 @@ int RunSoakPublisher(glue::Bus& bus, const SoakSettings& s, const std::string& p
             << std::setprecision(1) << elapsed_s << " s (" << late << " more than a frame period late, max "
             << max_late_ms << " ms; " << errors << " publish errors); RSS " << rss_start << " -> " << rss_end
             << " kB\n";
-  std::ostringstream j;
-  j << std::fixed << std::setprecision(3) << "  \"" << prefix << "frames_sent\": " << frames << ",\n  \"" << prefix
-    << "scans_sent\": " << scans << ",\n  \"" << prefix << "frame_bytes\": " << s.frame_bytes << ",\n  \"" << prefix
-    << "beams\": " << s.beams << ",\n  \"" << prefix << "frame_rate_hz\": " << s.frame_rate_hz << ",\n  \"" << prefix
-    << "scan_rate_hz\": " << s.scan_rate_hz << ",\n  \"" << prefix << "elapsed_s\": " << elapsed_s << ",\n  \""
-    << prefix << "late_publishes\": " << late << ",\n  \"" << prefix << "max_late_ms\": " << max_late_ms << ",\n  \""
-    << prefix << "publish_errors\": " << errors << ",\n  \"" << prefix << "rss_start_kb\": " << rss_start << ",\n  \""
-    << prefix << "rss_end_kb\": " << rss_end;
-  WriteJson(s.out_json, j.str());
+  results::Json j;
+  j[prefix + "frames_sent"] = frames;
+  j[prefix + "scans_sent"] = scans;
+  j[prefix + "frame_bytes"] = s.frame_bytes;
+  j[prefix + "beams"] = s.beams;
+  j[prefix + "frame_rate_hz"] = results::Rounded(s.frame_rate_hz, 3);
+  j[prefix + "scan_rate_hz"] = results::Rounded(s.scan_rate_hz, 3);
+  j[prefix + "elapsed_s"] = results::Rounded(elapsed_s, 3);
+  j[prefix + "late_publishes"] = late;
+  j[prefix + "max_late_ms"] = results::Rounded(max_late_ms, 3);
+  j[prefix + "publish_errors"] = errors;
+  j[prefix + "rss_start_kb"] = rss_start;
+  j[prefix + "rss_end_kb"] = rss_end;
+  WriteJson(s.out_json, j);
   return errors == 0 && frames == s.frames && scans == s.scans ? 0 : 1;
 }
 
@@ -144,12 +145,13 @@ int RunSoakLogVerifier(const SoakSettings& s, const std::string& prefix) {
   const int64_t rss_end = ProcessRssKb();
   std::cout << "bus-check soak-verify (log " << s.log_path << "): " << events << " events, " << verifier.Report()
             << ", " << verifier.ignored() << " of other channels\n";
-  std::ostringstream j;
-  j << verifier.JsonMembers(prefix) << ",\n  \"" << prefix << "events\": " << events << ",\n  \"" << prefix
-    << "other_channel_events\": " << verifier.ignored() << ",\n  \"" << prefix << "reader_rss_start_kb\": " << rss_start
-    << ",\n  \"" << prefix << "reader_rss_end_kb\": " << rss_end << ",\n  \"" << prefix
-    << "log_intact\": " << (log_error.empty() ? "true" : "false");
-  WriteJson(s.out_json, j.str());
+  results::Json j = verifier.Counts(prefix);
+  j[prefix + "events"] = events;
+  j[prefix + "other_channel_events"] = verifier.ignored();
+  j[prefix + "reader_rss_start_kb"] = rss_start;
+  j[prefix + "reader_rss_end_kb"] = rss_end;
+  j[prefix + "log_intact"] = log_error.empty();
+  WriteJson(s.out_json, j);
   return verifier.ok() && log_error.empty() ? 0 : 1;
 }
 
@@ -183,10 +185,10 @@ int RunSoakVerifier(glue::Bus& bus, const SoakSettings& s, const std::string& pr
   if (timed_out) std::cerr << "bus-check soak-verify: nothing for " << s.timeout_s << " s, stopping\n";
   std::cout << "bus-check soak-verify: " << verifier.Report() << "; RSS " << rss_start << " -> " << rss_end << " kB\n";
   bus.ReportStats(std::cerr);
-  std::ostringstream j;
-  j << verifier.JsonMembers(prefix) << ",\n  \"" << prefix << "rss_start_kb\": " << rss_start << ",\n  \"" << prefix
-    << "rss_end_kb\": " << rss_end;
-  WriteJson(s.out_json, j.str());
+  results::Json j = verifier.Counts(prefix);
+  j[prefix + "rss_start_kb"] = rss_start;
+  j[prefix + "rss_end_kb"] = rss_end;
+  WriteJson(s.out_json, j);
   return verifier.ok() ? 0 : 1;
 }
 
@@ -296,24 +298,24 @@ int Main(int argc, char** argv) {
     return 0;
   }
   if (mode == "ping") {
-    const auto results = RunPing(bus, ping, pong, sizes, rate_hz, duration_s, true);
+    const auto pings = RunPing(bus, ping, pong, sizes, rate_hz, duration_s, true);
     std::cout << std::left << std::setw(10) << "size_B" << std::setw(8) << "sent" << std::setw(8) << "lost"
               << std::setw(14) << "rtt_median_ms" << std::setw(12) << "rtt_p99_ms" << "rtt_max_ms\n";
-    std::ofstream json;
-    if (!out_json.empty()) json.open(out_json);
-    if (json) json << "{\n  \"rate_hz\": " << rate_hz << ",\n  \"duration_s\": " << duration_s;
-    for (const auto& r : results) {
+    results::Json json;
+    json["rate_hz"] = results::Significant(rate_hz);
+    json["duration_s"] = results::Significant(duration_s);
+    for (const auto& r : pings) {
       std::cout << std::left << std::setw(10) << r.size_bytes << std::setw(8) << r.sent << std::setw(8)
                 << (r.sent - r.received) << std::setw(14) << std::fixed << std::setprecision(3) << r.median_ms
                 << std::setw(12) << r.p99_ms << r.max_ms << "\n";
-      if (json) {
-        const std::string s = std::to_string(r.size_bytes) + "B";
-        json << ",\n  \"sent_" << s << "\": " << r.sent << ",\n  \"lost_" << s << "\": " << (r.sent - r.received)
-             << ",\n  \"rtt_median_ms_" << s << "\": " << r.median_ms << ",\n  \"rtt_p99_ms_" << s
-             << "\": " << r.p99_ms << ",\n  \"rtt_max_ms_" << s << "\": " << r.max_ms;
-      }
+      const std::string s = std::to_string(r.size_bytes) + "B";
+      json["sent_" + s] = r.sent;
+      json["lost_" + s] = r.sent - r.received;
+      json["rtt_median_ms_" + s] = results::Significant(r.median_ms);
+      json["rtt_p99_ms_" + s] = results::Significant(r.p99_ms);
+      json["rtt_max_ms_" + s] = results::Significant(r.max_ms);
     }
-    if (json) json << "\n}\n";
+    WriteJson(out_json, json);
     return 0;
   }
   if (mode == "soak-publish" || mode == "soak-verify") {

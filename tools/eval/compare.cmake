@@ -5,9 +5,9 @@ add_library(snapnav_slam_compare STATIC eval/slam_compare.cpp eval/compare_confi
 target_include_directories(snapnav_slam_compare PUBLIC eval)
 target_link_libraries(snapnav_slam_compare PUBLIC snapnav_slam_sim snapnav_localization_eval snapnav_fused_slam
   snapnav_slam_plot snapnav_plot snapnav_ratslam PRIVATE snapnav_fused_slam_node snapnav_laser_slam_node
-  snapnav_ratslam_node snapnav_glue_places opencv_imgproc)
+  snapnav_ratslam_node snapnav_glue_places snapnav_results opencv_imgproc)
 add_executable(eval-compare eval/eval_compare_main.cpp)
-target_link_libraries(eval-compare PRIVATE snapnav_slam_compare)
+target_link_libraries(eval-compare PRIVATE snapnav_slam_compare snapnav_results)
 add_executable(bench-compare bench/bench_compare.cpp)
 target_include_directories(bench-compare PRIVATE bench)
-target_link_libraries(bench-compare PRIVATE snapnav_slam_compare)
+target_link_libraries(bench-compare PRIVATE snapnav_slam_compare snapnav_results)

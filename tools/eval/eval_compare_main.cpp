@@ -14,6 +14,7 @@
 
 #include "compare_config.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "slam_compare.hpp"
@@ -31,13 +32,6 @@ using namespace snapnav;
 constexpr double kKidnapAtS = 10.0;
 const nav::Pose2 kKidnapTo{29.0, 5.0, -M_PI / 2};
 constexpr double kKidnapRunS = 120.0;
-
-std::string JsonValue(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(6) << v;
-  return s.str();
-}
 
 int Main(int argc, char** argv) {
   std::string scene_name, scenes, out_dir, log_path, reference_path, kidnap_to_text;
@@ -179,7 +173,7 @@ int Main(int argc, char** argv) {
 
   const fs::path out(out_dir);
   fs::create_directories(out);
-  std::vector<eval::CompareRun> results;
+  std::vector<eval::CompareRun> compared;
   std::map<std::string, eval::RouteMemory> memories;  // one per scene
   std::vector<std::string> missed;
   for (const auto& r : runs) {
@@ -208,7 +202,7 @@ int Main(int argc, char** argv) {
     std::cout << line.str() << "\n";
     for (const auto& m : eval::MissedTargets(run)) missed.push_back(m);
     log("wrote " + dir.string() + " in " + eval::Fixed(run.seconds, 0) + " s");
-    results.push_back(std::move(run));
+    compared.push_back(std::move(run));
   }
   std::vector<eval::LogComparison> logs;
   if (!log_path.empty()) {
@@ -222,7 +216,7 @@ int Main(int argc, char** argv) {
     }
   }
 
-  std::ofstream(out / "compare.md") << "# SLAM comparison\n\n" << eval::CompareTableMarkdown(results, logs) << "\n"
+  std::ofstream(out / "compare.md") << "# SLAM comparison\n\n" << eval::CompareTableMarkdown(compared, logs) << "\n"
                                     << (missed.empty() ? "All targets met.\n" : "Missed targets:\n")
                                     << [&] {
                                          std::string s;
@@ -230,16 +224,19 @@ int Main(int argc, char** argv) {
                                          return s;
                                        }()
                                     << "\nOptions:\n\n```\n" << effective.str() << "```\n";
-  std::ofstream(out / "compare.csv") << eval::CompareTableCsv(results, logs);
+  std::ofstream(out / "compare.csv") << eval::CompareTableCsv(compared, logs);
   {
-    std::ofstream j(out / "summary.json");
-    j << "{\n  \"runs\": [";
-    for (size_t i = 0; i < results.size(); ++i) j << (i ? ", " : "") << eval::JsonString(results[i].name);
-    j << "],\n  \"ratslam\": " << eval::JsonString(o.run_ratslam ? "ran" : "off");
-    for (const auto& run : results) {
-      const std::string prefix = results.size() > 1 ? run.name + "_" : "";
-      if (results.size() == 1) j << ",\n  \"run\": " << eval::JsonString(run.name) << ",\n  \"scene\": " << eval::JsonString(run.scene);
-      for (const auto& [key, value] : eval::SummaryKeys(run)) j << ",\n  \"" << prefix << key << "\": " << JsonValue(value);
+    results::Json j;
+    j["runs"] = results::Json::array();
+    for (const auto& run : compared) j["runs"].push_back(run.name);
+    j["ratslam"] = o.run_ratslam ? "ran" : "off";
+    for (const auto& run : compared) {
+      const std::string prefix = compared.size() > 1 ? run.name + "_" : "";
+      if (compared.size() == 1) {
+        j["run"] = run.name;
+        j["scene"] = run.scene;
+      }
+      for (const auto& [key, value] : eval::SummaryKeys(run)) j[prefix + key] = results::Significant(value);
     }
     for (const auto& l : logs) {
       // Keys named after the log file: log_<stem>_...
@@ -248,18 +245,18 @@ int Main(int argc, char** argv) {
         if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
       }
       const std::string k = "log_" + stem + "_";
-      j << ",\n  \"" << k << "path\": " << eval::JsonString(l.log) << ",\n  \"" << k << "scans\": " << l.scans;
+      j[k + "path"] = l.log;
+      j[k + "scans"] = l.scans;
       if (l.has_reference) {
-        j << ",\n  \"" << k << "dead_reckoning_ate_rmse_m\": " << JsonValue(l.dead_reckoning.errors.ate_aligned.rmse_m)
-          << ",\n  \"" << k << "laser_slam_ate_rmse_m\": " << JsonValue(l.laser_slam.errors.ate_aligned.rmse_m)
-          << ",\n  \"" << k << "laser_slam_rpe_translation_rmse_m\": "
-          << JsonValue(l.laser_slam.errors.rpe.translation_rmse_m);
+        j[k + "dead_reckoning_ate_rmse_m"] = results::Significant(l.dead_reckoning.errors.ate_aligned.rmse_m);
+        j[k + "laser_slam_ate_rmse_m"] = results::Significant(l.laser_slam.errors.ate_aligned.rmse_m);
+        j[k + "laser_slam_rpe_translation_rmse_m"] = results::Significant(l.laser_slam.errors.rpe.translation_rmse_m);
       }
-      j << ",\n  \"" << k << "laser_slam_ms_per_scan\": " << JsonValue(l.laser_slam.ms_per_update);
+      j[k + "laser_slam_ms_per_scan"] = results::Significant(l.laser_slam.ms_per_update);
     }
-    j << ",\n  \"targets_missed\": " << missed.size() << ",\n  \"missed\": [";
-    for (size_t i = 0; i < missed.size(); ++i) j << (i ? ", " : "") << eval::JsonString(missed[i]);
-    j << "]\n}\n";
+    j["targets_missed"] = missed.size();
+    j["missed"] = missed;
+    results::WriteJsonFile((out / "summary.json").string(), j);
   }
   for (const auto& l : logs) {
     std::cout << "log " << l.log << ": " << l.scans << " scans";

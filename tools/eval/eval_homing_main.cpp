@@ -14,6 +14,7 @@
 
 #include "grid_folder.hpp"
 #include "homing_eval.hpp"
+#include "results.hpp"
 #include "sim_config_use.hpp"
 #include "landmark_compare.hpp"
 #include "people_diagnosis.hpp"
@@ -212,10 +213,18 @@ void WriteProtocols(std::ostream& report, const eval::GridDatabase& db, int posi
   report << "| thesis' own figure (3.1.4) | | 18.11 |\n\n";
 }
 
-void WriteProtocolsJson(std::ostream& json, const Protocols& p) {
-  json << ",\n  \"protocols\": [\"snapnav\", \"thesis-5x5\"],\n  \"thesis_5x5_positions\": " << p.five_result.positions;
+// As the report prints it: 4 digits after the point.
+template <typename T>
+results::Json R4(T v) {
+  return results::Rounded(v, 4);
+}
+
+void WriteProtocolsJson(results::Json& json, const Protocols& p) {
+  json["protocols"] = {"snapnav", "thesis-5x5"};
+  json["thesis_5x5_positions"] = R4(p.five_result.positions);
   for (const auto& r : p.rows) {
-    json << ",\n  \"snapnav_" << r.key << "_aae_deg\": " << r.snapnav << ",\n  \"thesis_5x5_" << r.key << "_aae_deg\": " << r.thesis5;
+    json["snapnav_" + r.key + "_aae_deg"] = R4(r.snapnav);
+    json["thesis_5x5_" + r.key + "_aae_deg"] = R4(r.thesis5);
   }
 }
 
@@ -299,19 +308,25 @@ int RunGridFolder(const std::string& dir, const nav::HogHomingConfig& config, co
          << "Visual compass over the grid: mean error " << Fixed(result.compass_mean_deg) << " deg.\n\n";
   if (protocol) WriteProtocols(report, db, result.positions, *protocol);
   std::ofstream(out / "report.md") << report.str();
-  std::ofstream json(out / "summary.json");
-  json << std::fixed << std::setprecision(4) << "{\n  \"grid\": \"" << dir << "\",\n  \"input\": \""
-       << (folder.raw ? "raw" : "panorama") << "\",\n  \"grid_nx\": " << db.nx << ",\n  \"grid_ny\": " << db.ny
-       << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
-       << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
-       << ",\n  \"average_angular_error_deg\": " << result.aae_deg << ",\n  \"median_angular_error_deg\": " << result.median_deg
-       << ",\n  \"max_angular_error_deg\": " << result.max_deg << ",\n  \"positions_without_answer\": " << result.failures
-       << ",\n  \"compass_mean_error_deg\": " << result.compass_mean_deg
-       << ",\n  \"thesis_configuration_aae_deg\": " << thesis_aae << ",\n  \"thesis_reported_aae_deg\": 18.11";
+  results::Json json;
+  json["grid"] = dir;
+  json["input"] = folder.raw ? "raw" : "panorama";
+  json["grid_nx"] = R4(db.nx);
+  json["grid_ny"] = R4(db.ny);
+  json["home_x_m"] = R4(db.home.x_m);
+  json["home_y_m"] = R4(db.home.y_m);
+  json["configuration"] = Describe(config);
+  json["grid_positions"] = R4(result.positions);
+  json["average_angular_error_deg"] = R4(result.aae_deg);
+  json["median_angular_error_deg"] = R4(result.median_deg);
+  json["max_angular_error_deg"] = R4(result.max_deg);
+  json["positions_without_answer"] = R4(result.failures);
+  json["compass_mean_error_deg"] = R4(result.compass_mean_deg);
+  json["thesis_configuration_aae_deg"] = R4(thesis_aae);
+  json["thesis_reported_aae_deg"] = 18.11;
   if (protocol) WriteProtocolsJson(json, *protocol);
-  json << ",\n  \"figures\": [";
-  for (size_t i = 0; i < figures.size(); ++i) json << (i ? ", " : "") << "\"" << figures[i] << "\"";
-  json << "]\n}\n";
+  json["figures"] = figures;
+  results::WriteJsonFile((out / "summary.json").string(), json);
   std::cerr << "eval-homing: wrote " << (out / "summary.json").string() << ", report.md and " << figures.size() << " figures\n";
   std::cout << "average_angular_error_deg " << Fixed(result.aae_deg) << "\n";
   if (protocol) std::cout << "thesis_5x5_average_angular_error_deg " << Fixed(protocol->rows[0].thesis5) << "\n";
@@ -796,34 +811,45 @@ int Main(int argc, char** argv) {
            << "|---|---|---|---|---|---|---|---|\n" << best_row;
   }
 
-  std::ofstream json(out / "summary.json");
-  json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << scene.name << "\",\n  \"method\": \"" << method
-       << "\",\n  \"input\": \"" << input << "\",\n  \"camera\": \"" << sim.camera_preset << "\",\n  \"mask\": \""
-       << mask_source << "\",\n  \"effects\": {\"blur_sigma_px\": " << pipeline.effects.blur_sigma_px
-       << ", \"noise_sigma\": " << pipeline.effects.noise_sigma << ", \"salt_pepper_fraction\": "
-       << pipeline.effects.salt_pepper_fraction << ", \"illumination_gain\": " << pipeline.effects.gain
-       << ", \"illumination_offset\": " << pipeline.effects.offset << "},\n  \"masked_fraction\": " << nav::MaskedFraction(mask) << ",\n  \"random_headings\": " << (random_headings ? "true" : "false")
-       << ",\n  \"home_x_m\": " << db.home.x_m << ",\n  \"home_y_m\": " << db.home.y_m << ",\n  \"configuration\": \""
-       << Describe(config) << "\",\n  \"grid_positions\": " << result.positions
-       << ",\n  \"average_angular_error_deg\": " << result.aae_deg
-       << ",\n  \"median_angular_error_deg\": " << result.median_deg
-       << ",\n  \"max_angular_error_deg\": " << result.max_deg << ",\n  \"positions_without_answer\": " << result.failures
-       << ",\n  \"compass_mean_error_deg\": " << result.compass_mean_deg
-       << ",\n  \"compass_pure_rotation_median_error_deg\": " << rotation_median
-       << ",\n  \"compass_pure_rotation_max_error_deg\": " << rotation_errors.back()
-       << ",\n  \"thesis_configuration_aae_deg\": " << thesis_aae
-       << ",\n  \"thesis_configuration_current_minus_home_aae_deg\": " << thesis_lambrinos_aae
-       << ",\n  \"thesis_reported_aae_deg\": 18.11";
+  results::Json json;
+  json["scene"] = scene.name;
+  json["method"] = method;
+  json["input"] = input;
+  json["camera"] = sim.camera_preset;
+  json["mask"] = mask_source;
+  json["effects"] = {{"blur_sigma_px", R4(pipeline.effects.blur_sigma_px)},
+                     {"noise_sigma", R4(pipeline.effects.noise_sigma)},
+                     {"salt_pepper_fraction", R4(pipeline.effects.salt_pepper_fraction)},
+                     {"illumination_gain", R4(pipeline.effects.gain)},
+                     {"illumination_offset", R4(pipeline.effects.offset)}};
+  json["masked_fraction"] = R4(nav::MaskedFraction(mask));
+  json["random_headings"] = random_headings;
+  json["home_x_m"] = R4(db.home.x_m);
+  json["home_y_m"] = R4(db.home.y_m);
+  json["configuration"] = Describe(config);
+  json["grid_positions"] = R4(result.positions);
+  json["average_angular_error_deg"] = R4(result.aae_deg);
+  json["median_angular_error_deg"] = R4(result.median_deg);
+  json["max_angular_error_deg"] = R4(result.max_deg);
+  json["positions_without_answer"] = R4(result.failures);
+  json["compass_mean_error_deg"] = R4(result.compass_mean_deg);
+  json["compass_pure_rotation_median_error_deg"] = R4(rotation_median);
+  json["compass_pure_rotation_max_error_deg"] = R4(rotation_errors.back());
+  json["thesis_configuration_aae_deg"] = R4(thesis_aae);
+  json["thesis_configuration_current_minus_home_aae_deg"] = R4(thesis_lambrinos_aae);
+  json["thesis_reported_aae_deg"] = 18.11;
   if (protocol) WriteProtocolsJson(json, *protocol);
   if (!no_return) {
-    json << ",\n  \"return_ratio\": " << returns.ratio << ",\n  \"return_starts\": " << returns.starts
-         << ",\n  \"return_successes\": " << returns.successes << ",\n  \"return_mean_path_ratio\": " << returns.mean_path_ratio
-         << ",\n  \"return_step_m\": " << ret.step_m;
+    json["return_ratio"] = R4(returns.ratio);
+    json["return_starts"] = R4(returns.starts);
+    json["return_successes"] = R4(returns.successes);
+    json["return_mean_path_ratio"] = R4(returns.mean_path_ratio);
+    json["return_step_m"] = R4(ret.step_m);
   }
-  json << ",\n  \"frames_per_second\": " << fps << ",\n  \"ms_per_frame\": " << (fps > 0 ? 1000 / fps : 0)
-       << ",\n  \"figures\": [";
-  for (size_t i = 0; i < figures.size(); ++i) json << (i ? ", " : "") << "\"" << figures[i] << "\"";
-  json << "]\n}\n";
+  json["frames_per_second"] = R4(fps);
+  json["ms_per_frame"] = R4(fps > 0 ? 1000 / fps : 0);
+  json["figures"] = figures;
+  results::WriteJsonFile((out / "summary.json").string(), json);
   std::ofstream(out / "report.md") << report.str();
   std::cerr << "eval-homing: wrote " << (out / "summary.json").string() << ", report.md and " << figures.size()
             << " figures\n";

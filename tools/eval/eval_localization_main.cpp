@@ -16,6 +16,7 @@
 #include "localization_eval.hpp"
 #include "sim_config_use.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/app.hpp"
@@ -227,7 +228,8 @@ int Main(int argc, char** argv) {
   if (scene_names.empty()) throw glue::FlagError("--scenes must name at least one scene");
   const fs::path out(out_dir);
   fs::create_directories(out);
-  std::ostringstream top;  // several scenes: one summary over them
+  results::Json top;  // several scenes: one summary over them
+  top["scenes"] = scene_names;
   int missed = 0;
   for (const auto& name : scene_names) {
     const auto scene = processes::LoadSceneFile(processes::SceneFilePath(name));
@@ -252,25 +254,20 @@ int Main(int argc, char** argv) {
       const auto* loo_near = result.FindLeaveOneOut("bearing-smallest", true, nav::PlaceEstimate::kNearestCell);
       if (loo) std::cout << " leave_one_out_mean_localization_error_m " << eval::Fixed(loo->errors.mean_m, 4);
       if (loo_near) std::cout << " leave_one_out_nearest_cell_mean_localization_error_m " << eval::Fixed(loo_near->errors.mean_m, 4);
-      if (loo) {
-        top << ",\n  \"" << scene.name << "_leave_one_out_mean_localization_error_m\": " << eval::Fixed(loo->errors.mean_m, 4);
-      }
+      if (loo) top[scene.name + "_leave_one_out_mean_localization_error_m"] = results::Rounded(loo->errors.mean_m, 4);
       if (target) std::cout << " target " << eval::Fixed(*target, 2) << (def->errors.mean_m <= *target ? " met" : " MISSED");
       std::cout << "\n";
       if (target && def->errors.mean_m > *target) ++missed;
-      top << ",\n  \"" << scene.name << "_mean_localization_error_m\": " << eval::Fixed(def->errors.mean_m, 4) << ",\n  \""
-          << scene.name << "_max_localization_error_m\": " << eval::Fixed(def->errors.max_m, 4);
+      top[scene.name + "_mean_localization_error_m"] = results::Rounded(def->errors.mean_m, 4);
+      top[scene.name + "_max_localization_error_m"] = results::Rounded(def->errors.max_m, 4);
       if (thesis) {
-        top << ",\n  \"" << scene.name << "_thesis_configuration_mean_localization_error_m\": "
-            << eval::Fixed(thesis->errors.mean_m, 4);
+        top[scene.name + "_thesis_configuration_mean_localization_error_m"] = results::Rounded(thesis->errors.mean_m, 4);
       }
     }
   }
   if (scene_names.size() > 1) {
-    std::ofstream j(out / "summary.json");
-    j << "{\n  \"scenes\": [";
-    for (size_t i = 0; i < scene_names.size(); ++i) j << (i ? ", " : "") << eval::JsonString(scene_names[i]);
-    j << "]" << top.str() << ",\n  \"scenes_missing_target\": " << missed << "\n}\n";
+    top["scenes_missing_target"] = missed;
+    results::WriteJsonFile((out / "summary.json").string(), top);
   }
   return 0;
 }

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "ratslam_eval.hpp"
-#include "snapnav/glue/ratslam_options.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/ratslam_options.hpp"
 
 namespace {
 

@@ -18,6 +18,7 @@
 
 #include "icp_slam.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "slam_config.hpp"
 #include "slam_log.hpp"
 #include "slam_plot.hpp"
@@ -40,7 +41,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace snapnav;
 using eval::Fixed;
-using eval::JsonString;
 
 int Main(int argc, char** argv) {
   std::string log_path, reference_path, out_dir, icp_input;
@@ -133,16 +133,22 @@ int Main(int argc, char** argv) {
   const eval::SlamRun thesis_run = eval::RunSlam(log, thesis);
   std::cerr << "eval-slam: thesis configuration " << thesis_run.ms_per_scan() << " ms/scan\n";
 
-  std::ostringstream json;
   std::string overrides;
   for (const std::string& o : config.overrides) overrides += (overrides.empty() ? "" : "; ") + o;
-  json << std::fixed << std::setprecision(4) << "{\n  \"log\": " << JsonString(log_path)
-       << ",\n  \"laser_slam_config\": " << JsonString(config.path)
-       << ",\n  \"laser_slam_overrides\": " << JsonString(overrides) << ",\n  \"scans\": " << log.scans
-       << ",\n  \"beams\": " << log.beams << ",\n  \"odometry\": " << log.odometry
-       << ",\n  \"rejected\": " << log.rejected << ",\n  \"log_damaged_places\": " << log.damaged_places
-       << ",\n  \"log_damaged_bytes\": " << log.damaged_bytes << ",\n  \"laser_slam_ms_per_scan\": " << ms_per_scan
-       << ",\n  \"map_points\": " << run.map.size() << ",\n  \"thesis_slam_ms_per_scan\": " << thesis_run.ms_per_scan();
+  const auto r4 = [](auto v) { return results::Rounded(v, 4); };
+  results::Json json;
+  json["log"] = log_path;
+  json["laser_slam_config"] = config.path;
+  json["laser_slam_overrides"] = overrides;
+  json["scans"] = r4(log.scans);
+  json["beams"] = r4(log.beams);
+  json["odometry"] = r4(log.odometry);
+  json["rejected"] = r4(log.rejected);
+  json["log_damaged_places"] = r4(log.damaged_places);
+  json["log_damaged_bytes"] = r4(log.damaged_bytes);
+  json["laser_slam_ms_per_scan"] = r4(ms_per_scan);
+  json["map_points"] = run.map.size();
+  json["thesis_slam_ms_per_scan"] = r4(thesis_run.ms_per_scan());
   std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
   std::vector<std::string> names = {"laser slam", "dead reckoning"};
   std::string title = "laser slam on " + fs::path(log_path).filename().string();
@@ -162,14 +168,16 @@ int Main(int argc, char** argv) {
               << "  ratio icp-slam/laser slam " << std::setprecision(2) << ratio << "x; trajectories differ by "
               << std::setprecision(3) << cmp->difference.rmse_m << " m RMS (max " << cmp->difference.max_m
               << " m) after SE(2) alignment\n";
-    json << ",\n  \"icp_slam_input\": " << JsonString(icp_input)
-         << ",\n  \"icp_slam_config\": " << JsonString(icp->config)
-         << ",\n  \"icp_slam_rawlog_entries\": " << icp->steps << ",\n  \"icp_slam_scans\": " << icp->poses.size()
-         << ",\n  \"icp_slam_scans_paired\": " << cmp->paired << ",\n  \"icp_slam_ms_per_scan\": " << icp->ms_per_scan()
-         << ",\n  \"icp_slam_wall_ms_per_scan\": " << icp->wall_ms_per_scan()
-         << ",\n  \"icp_slam_over_laser_slam_time_ratio\": " << ratio
-         << ",\n  \"laser_slam_vs_icp_slam_rms_m\": " << cmp->difference.rmse_m
-         << ",\n  \"laser_slam_vs_icp_slam_max_m\": " << cmp->difference.max_m;
+    json["icp_slam_input"] = icp_input;
+    json["icp_slam_config"] = icp->config;
+    json["icp_slam_rawlog_entries"] = r4(icp->steps);
+    json["icp_slam_scans"] = icp->poses.size();
+    json["icp_slam_scans_paired"] = r4(cmp->paired);
+    json["icp_slam_ms_per_scan"] = r4(icp->ms_per_scan());
+    json["icp_slam_wall_ms_per_scan"] = r4(icp->wall_ms_per_scan());
+    json["icp_slam_over_laser_slam_time_ratio"] = r4(ratio);
+    json["laser_slam_vs_icp_slam_rms_m"] = r4(cmp->difference.rmse_m);
+    json["laser_slam_vs_icp_slam_max_m"] = r4(cmp->difference.max_m);
     // icp-slam's track in our frame.
     const nav::Pose2 to_slam = cmp->slam_to_icp.Inverse();
     std::vector<nav::Pose2> track;
@@ -217,19 +225,21 @@ int Main(int argc, char** argv) {
       const eval::MapConsistency c_ref = eval::ComputeMapConsistency(log, theirs);
       std::cerr << "eval-slam: map consistency (median distance of a scan's points to revisited scans): laser slam "
                 << c_ours.median_m << " m, reference " << c_ref.median_m << " m\n";
-      json << ",\n  \"laser_slam_map_consistency_m\": " << c_ours.median_m
-           << ",\n  \"reference_map_consistency_m\": " << c_ref.median_m;
+      json["laser_slam_map_consistency_m"] = r4(c_ours.median_m);
+      json["reference_map_consistency_m"] = r4(c_ref.median_m);
     }
     const auto thesis_pairs = eval::PairWithReference(thesis_run.slam, thesis_run, ref);
     const auto thesis_ate = nav::ComputeAte(thesis_pairs, nav::AlignSE2(thesis_pairs));
     std::cerr << "eval-slam: " << slam_pairs.size() << " scans paired with the reference; ATE RMSE: laser slam "
               << slam_ate.rmse_m << " m, thesis configuration " << thesis_ate.rmse_m << " m, dead reckoning "
               << dr_ate.rmse_m << " m\n";
-    json << ",\n  \"thesis_slam_ate_rmse_m\": " << thesis_ate.rmse_m;
-    json << ",\n  \"reference\": " << JsonString(reference_path) << ",\n  \"reference_pairs\": " << slam_pairs.size()
-         << ",\n  \"laser_slam_ate_rmse_m\": " << slam_ate.rmse_m << ",\n  \"laser_slam_ate_max_m\": " << slam_ate.max_m
-         << ",\n  \"dead_reckoning_ate_rmse_m\": " << dr_ate.rmse_m
-         << ",\n  \"dead_reckoning_ate_max_m\": " << dr_ate.max_m;
+    json["thesis_slam_ate_rmse_m"] = r4(thesis_ate.rmse_m);
+    json["reference"] = reference_path;
+    json["reference_pairs"] = slam_pairs.size();
+    json["laser_slam_ate_rmse_m"] = r4(slam_ate.rmse_m);
+    json["laser_slam_ate_max_m"] = r4(slam_ate.max_m);
+    json["dead_reckoning_ate_rmse_m"] = r4(dr_ate.rmse_m);
+    json["dead_reckoning_ate_max_m"] = r4(dr_ate.max_m);
     std::string ate_title =
         "ATE " + Fixed(slam_ate.rmse_m, 3) + " m (dead reckoning " + Fixed(dr_ate.rmse_m, 3) + " m)";
     if (cmp) {
@@ -243,8 +253,9 @@ int Main(int argc, char** argv) {
       if (icp_pairs.size() < 2) throw std::runtime_error("fewer than 2 of icp-slam's poses pair with the reference");
       const auto icp_ate = nav::ComputeAte(icp_pairs, nav::AlignSE2(icp_pairs));
       std::cerr << "eval-slam: icp-slam ATE RMSE " << icp_ate.rmse_m << " m over " << icp_pairs.size() << " scans\n";
-      json << ",\n  \"icp_slam_reference_pairs\": " << icp_pairs.size()
-           << ",\n  \"icp_slam_ate_rmse_m\": " << icp_ate.rmse_m << ",\n  \"icp_slam_ate_max_m\": " << icp_ate.max_m;
+      json["icp_slam_reference_pairs"] = icp_pairs.size();
+      json["icp_slam_ate_rmse_m"] = r4(icp_ate.rmse_m);
+      json["icp_slam_ate_max_m"] = r4(icp_ate.max_m);
       // The title line holds about 85 characters.
       ate_title = "ATE laser slam " + Fixed(slam_ate.rmse_m, 2) + ", dead reckoning " + Fixed(dr_ate.rmse_m, 2) +
                   ", icp-slam " + Fixed(icp_ate.rmse_m, 2) + " m; slam vs icp-slam " +
@@ -322,9 +333,10 @@ int Main(int argc, char** argv) {
                   << Fixed(sorted.front(), 4) << " m, median " << Fixed(median, 4) << " m, max "
                   << Fixed(sorted.back(), 4) << " m\n";
         const std::string k = group == "all" ? "sweep" : "sweep_" + group;
-        json << ",\n  \"" << k << "_runs\": " << sorted.size() << ",\n  \"" << k
-             << "_ate_rmse_min_m\": " << sorted.front() << ",\n  \"" << k << "_ate_rmse_median_m\": " << median
-             << ",\n  \"" << k << "_ate_rmse_max_m\": " << sorted.back();
+        json[k + "_runs"] = sorted.size();
+        json[k + "_ate_rmse_min_m"] = r4(sorted.front());
+        json[k + "_ate_rmse_median_m"] = r4(median);
+        json[k + "_ate_rmse_max_m"] = r4(sorted.back());
       }
       std::ofstream(out / "sweep.md") << md.str();
     }
@@ -340,8 +352,7 @@ int Main(int argc, char** argv) {
     title += "; vs icp-slam: " + Fixed(cmp->difference.rmse_m, 3) + " m RMS, time ratio " +
              Fixed(icp->ms_per_scan() / std::max(ms_per_scan, 1e-9), 2);
   }
-  json << "\n}\n";
-  std::ofstream(out / "summary.json") << json.str();
+  results::WriteJsonFile((out / "summary.json").string(), json);
   plot::SavePng(eval::DrawRun(tracks, names, run.map, title), (out / "trajectories.png").string());
   {
     std::ofstream csv(out / "trajectories.csv");

@@ -31,6 +31,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "report_text.hpp"
+#include "results.hpp"
 #include "stats.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
@@ -41,7 +42,6 @@ namespace {
 namespace fs = std::filesystem;
 using namespace snapnav;
 using eval::Fixed;
-using eval::JsonString;
 using eval::Mean;
 using eval::Median;
 
@@ -497,36 +497,39 @@ int Main(int argc, char** argv) {
   }
   std::ofstream(out / "features.md") << md.str();
 
-  std::ostringstream json;
-  json << "{\n  \"images\": " << images.size() << ",\n  \"transforms\": " << transform_names.size()
-       << ",\n  \"opencv_threads\": " << threads << ",\n  \"surf_hessian_threshold\": " << surf.hessian_threshold;
+  const auto fixed = [](double v, int digits) { return results::Rounded(v, digits); };
+  results::Json json;
+  json["images"] = images.size();
+  json["transforms"] = transform_names.size();
+  json["opencv_threads"] = threads;
+  json["surf_hessian_threshold"] = results::Significant(surf.hessian_threshold);
   for (const char* det : {"surf", "usurf", "sift"}) {
     const auto is = [det](const Row& r) { return r.detector == det; };
-    json << ",\n  \"" << det << "_mean_repeatability\": " << Fixed(mean_of(is, rep), 4) << ",\n  \"" << det
-         << "_mean_precision\": " << Fixed(mean_of(is, prec), 4) << ",\n  \"" << det
-         << "_mean_matching_score\": " << Fixed(mean_of(is, score), 4) << ",\n  \"" << det
-         << "_mean_correct_matches\": " << Fixed(mean_of(is, correct), 1);
+    const std::string d = det;
+    json[d + "_mean_repeatability"] = fixed(mean_of(is, rep), 4);
+    json[d + "_mean_precision"] = fixed(mean_of(is, prec), 4);
+    json[d + "_mean_matching_score"] = fixed(mean_of(is, score), 4);
+    json[d + "_mean_correct_matches"] = fixed(mean_of(is, correct), 1);
     for (const std::string& g : groups) {
       const auto in_group = [det, &g](const Row& r) { return r.detector == det && r.group == g; };
-      json << ",\n  \"" << det << "_" << g << "_repeatability\": " << Fixed(mean_of(in_group, rep), 4) << ",\n  \""
-           << det << "_" << g << "_precision\": " << Fixed(mean_of(in_group, prec), 4);
+      json[d + "_" + g + "_repeatability"] = fixed(mean_of(in_group, rep), 4);
+      json[d + "_" + g + "_precision"] = fixed(mean_of(in_group, prec), 4);
     }
-    json << ",\n  \"" << det << "_mean_keypoints\": " << Fixed(Mean(keypoints_by_detector[det]), 1) << ",\n  \"" << det
-         << "_ms\": " << Fixed(Mean(ms_by_detector[det]), 3) << ",\n  \"" << det
-         << "_panorama_keypoints\": " << pano[det].keypoints << ",\n  \"" << det
-         << "_panorama_extract_ms\": " << Fixed(pano[det].extract_ms, 3) << ",\n  \"" << det
-         << "_panorama_match_ms\": " << Fixed(pano[det].match_ms, 3) << ",\n  \"" << det
-         << "_panorama_total_ms\": " << Fixed(pano[det].extract_ms + pano[det].match_ms, 3);
+    json[d + "_mean_keypoints"] = fixed(Mean(keypoints_by_detector[det]), 1);
+    json[d + "_ms"] = fixed(Mean(ms_by_detector[det]), 3);
+    json[d + "_panorama_keypoints"] = pano[det].keypoints;
+    json[d + "_panorama_extract_ms"] = fixed(pano[det].extract_ms, 3);
+    json[d + "_panorama_match_ms"] = fixed(pano[det].match_ms, 3);
+    json[d + "_panorama_total_ms"] = fixed(pano[det].extract_ms + pano[det].match_ms, 3);
   }
-  json << ",\n  \"surf_speedup_vs_sift\": " << Fixed(sift_ms / std::max(surf_ms, 1e-9), 3)
-       << ",\n  \"surf_panorama_speedup_vs_sift\": "
-       << Fixed((pano["sift"].extract_ms + pano["sift"].match_ms) /
-                    std::max(pano["surf"].extract_ms + pano["surf"].match_ms, 1e-9),
-                3)
-       << ",\n  \"panorama\": " << JsonString(panorama_path.empty() ? "strip of " + paths.front() : panorama_path)
-       << ",\n  \"panorama_width_px\": " << panorama.cols << ",\n  \"panorama_height_px\": " << panorama.rows
-       << "\n}\n";
-  std::ofstream(out / "summary.json") << json.str();
+  json["surf_speedup_vs_sift"] = fixed(sift_ms / std::max(surf_ms, 1e-9), 3);
+  json["surf_panorama_speedup_vs_sift"] = fixed(
+      (pano["sift"].extract_ms + pano["sift"].match_ms) / std::max(pano["surf"].extract_ms + pano["surf"].match_ms, 1e-9),
+      3);
+  json["panorama"] = panorama_path.empty() ? "strip of " + paths.front() : panorama_path;
+  json["panorama_width_px"] = panorama.cols;
+  json["panorama_height_px"] = panorama.rows;
+  results::WriteJsonFile((out / "summary.json").string(), json);
 
   std::cout << md.str();
   std::cerr << "eval-features: wrote " << (out / "features.md").string()

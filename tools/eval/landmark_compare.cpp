@@ -10,6 +10,7 @@
 
 #include "landmark_eval.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
@@ -150,34 +151,40 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
                                   (no_return ? std::string() : ", return ratio " + Fixed(returns.ratio, 2)),
                               no_return ? nullptr : &returns),
                 (out / "vector_map.png").string());
-  std::ofstream json(out / "summary.json");
-  json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"camera\": "
-       << JsonString(setup.camera.optics.enabled ? "realistic" : "clean") << ",\n  \"mask\": " << JsonString(setup.mask)
-       << ",\n  \"masked_fraction\": " << Fixed(nav::MaskedFraction(mask), 4)
-       << ",\n  \"random_headings\": " << (setup.random_headings ? "true" : "false") << ",\n  \"method\": "
-       << JsonString(nav::LandmarkMethodName(method)) << ",\n  \"alv\": " << JsonString(nav::AlvVariantName(variant))
-       << ",\n  \"landmarks\": " << JsonString(NText(top_n))
-       << ",\n  \"fusion\": " << JsonString(setup.frames.fused() ? nav::ViewFusionName(setup.fusion.mode) : "none")
-       << ",\n  \"home_frames\": " << setup.frames.home_frames << ",\n  \"home_interval_s\": " << setup.frames.home_interval_s
-       << ",\n  \"current_frames\": " << setup.frames.current_frames
-       << ",\n  \"current_interval_s\": " << setup.frames.current_interval_s
-       << ",\n  \"grid_positions\": " << result.positions
-       << ",\n  \"average_angular_error_deg\": " << Fixed(result.aae_deg, 4)
-       << ",\n  \"median_angular_error_deg\": " << Fixed(result.median_deg, 4)
-       << ",\n  \"max_angular_error_deg\": " << Fixed(result.max_deg, 4)
-       << ",\n  \"positions_without_answer\": " << result.failures
-       << ",\n  \"compass_mean_error_deg\": " << Fixed(result.compass_mean_deg, 4)
-       << ",\n  \"mean_landmarks_per_view\": " << Fixed(cache.mean_landmarks, 2)
-       << ",\n  \"mean_matches\": " << Fixed(mean_matches, 2) << ",\n  \"ms_per_frame\": " << Fixed(ms, 3);
+  results::Json json;
+  json["scene"] = scene.name;
+  json["camera"] = setup.camera.optics.enabled ? "realistic" : "clean";
+  json["mask"] = setup.mask;
+  json["masked_fraction"] = results::Rounded(nav::MaskedFraction(mask), 4);
+  json["random_headings"] = setup.random_headings;
+  json["method"] = nav::LandmarkMethodName(method);
+  json["alv"] = nav::AlvVariantName(variant);
+  json["landmarks"] = NText(top_n);
+  json["fusion"] = setup.frames.fused() ? nav::ViewFusionName(setup.fusion.mode) : "none";
+  json["home_frames"] = setup.frames.home_frames;
+  json["home_interval_s"] = results::Significant(setup.frames.home_interval_s);
+  json["current_frames"] = setup.frames.current_frames;
+  json["current_interval_s"] = results::Significant(setup.frames.current_interval_s);
+  json["grid_positions"] = result.positions;
+  json["average_angular_error_deg"] = results::Rounded(result.aae_deg, 4);
+  json["median_angular_error_deg"] = results::Rounded(result.median_deg, 4);
+  json["max_angular_error_deg"] = results::Rounded(result.max_deg, 4);
+  json["positions_without_answer"] = result.failures;
+  json["compass_mean_error_deg"] = results::Rounded(result.compass_mean_deg, 4);
+  json["mean_landmarks_per_view"] = results::Rounded(cache.mean_landmarks, 2);
+  json["mean_matches"] = results::Rounded(mean_matches, 2);
+  json["ms_per_frame"] = results::Rounded(ms, 3);
   if (!std::isnan(aae_empty)) {
-    json << ",\n  \"average_angular_error_without_people_deg\": " << Fixed(aae_empty, 4)
-         << ",\n  \"degradation_deg\": " << Fixed(result.aae_deg - aae_empty, 4);
+    json["average_angular_error_without_people_deg"] = results::Rounded(aae_empty, 4);
+    json["degradation_deg"] = results::Rounded(result.aae_deg - aae_empty, 4);
   }
   if (!no_return) {
-    json << ",\n  \"return_ratio\": " << Fixed(returns.ratio, 4) << ",\n  \"return_starts\": " << returns.starts
-         << ",\n  \"return_successes\": " << returns.successes;
+    json["return_ratio"] = results::Rounded(returns.ratio, 4);
+    json["return_starts"] = returns.starts;
+    json["return_successes"] = returns.successes;
   }
-  json << ",\n  \"figures\": [\"vector_map.png\"]\n}\n";
+  json["figures"] = {"vector_map.png"};
+  results::WriteJsonFile((out / "summary.json").string(), json);
   std::ofstream(out / "report.md") << "# Homing evaluation: " << scene.name << ", " << label << "\n\n"
                                    << "| AAE [deg] | median | max | without answer | return ratio | landmarks/view | matches | ms/frame | AAE without people |\n"
                                    << "|---|---|---|---|---|---|---|---|---|\n| " << Fixed(result.aae_deg) << " | "
@@ -517,37 +524,38 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
         << r.positions << "," << OrDash(r.ret, 4) << "," << OrDash(r.ms, 3) << "," << OrDash(r.landmarks, 2) << ","
         << OrDash(r.matches, 2) << "," << OrDash(r.aae_without_people, 3) << "\n";
   }
-  auto num = [](double v) { return std::isnan(v) ? std::string("null") : Fixed(v, 4); };
+  auto num = [](double v) { return results::Rounded(v, 4); };
   auto row_json = [&](const Row& r) {
-    std::ostringstream j;
-    j << "{\"scene\": " << JsonString(r.scene) << ", \"method\": " << JsonString(r.method)
-      << ", \"alv\": " << JsonString(r.alv) << ", \"landmarks\": " << JsonString(r.n)
-      << ", \"fusion\": " << JsonString(r.fusion) << ", \"home_frames\": " << r.home_frames
-      << ", \"current_frames\": " << r.current_frames << ", \"aae_deg\": " << num(r.aae)
-      << ", \"median_deg\": " << num(r.median) << ", \"no_answer\": " << r.failures
-      << ", \"return_ratio\": " << num(r.ret) << ", \"ms_per_frame\": " << num(r.ms)
-      << ", \"landmarks_per_view\": " << num(r.landmarks) << ", \"matches\": " << num(r.matches)
-      << ", \"aae_without_people_deg\": " << num(r.aae_without_people) << "}";
-    return j.str();
+    results::Json j;
+    j["scene"] = r.scene;
+    j["method"] = r.method;
+    j["alv"] = r.alv;
+    j["landmarks"] = r.n;
+    j["fusion"] = r.fusion;
+    j["home_frames"] = r.home_frames;
+    j["current_frames"] = r.current_frames;
+    j["aae_deg"] = num(r.aae);
+    j["median_deg"] = num(r.median);
+    j["no_answer"] = r.failures;
+    j["return_ratio"] = num(r.ret);
+    j["ms_per_frame"] = num(r.ms);
+    j["landmarks_per_view"] = num(r.landmarks);
+    j["matches"] = num(r.matches);
+    j["aae_without_people_deg"] = num(r.aae_without_people);
+    return j;
   };
-  std::ofstream json(out / "summary.json");
-  auto best_map = [&](const char* key, const std::map<std::string, const Row*>& m) {
-    json << "  \"" << key << "\": {";
-    bool first = true;
-    for (const auto& [scene, r] : m) {
-      json << (first ? "\n" : ",\n") << "    " << JsonString(scene) << ": " << row_json(*r);
-      first = false;
-    }
-    json << "\n  },\n";
+  auto best_map = [&](const std::map<std::string, const Row*>& m) {
+    results::Json j = results::Json::object();
+    for (const auto& [scene, r] : m) j[scene] = row_json(*r);
+    return j;
   };
-  json << "{\n";
-  best_map("best_per_scene", best_per_scene);
-  best_map("best_fused_per_scene", best_fused_per_scene);
-  json << "  \"rows\": [";
-  for (size_t i = 0; i < rows.size(); ++i) json << (i ? ",\n" : "\n") << "    " << row_json(rows[i]);
-  json << "\n  ],\n  \"figures\": [";
-  for (size_t i = 0; i < figures.size(); ++i) json << (i ? ", " : "") << JsonString(figures[i]);
-  json << "]\n}\n";
+  results::Json json;
+  json["best_per_scene"] = best_map(best_per_scene);
+  json["best_fused_per_scene"] = best_map(best_fused_per_scene);
+  json["rows"] = results::Json::array();
+  for (const auto& r : rows) json["rows"].push_back(row_json(r));
+  json["figures"] = figures;
+  results::WriteJsonFile((out / "summary.json").string(), json);
   std::cout << md.str();
   std::cerr << "eval-homing: wrote " << (out / "compare.md").string() << ", compare.csv, summary.json and "
             << figures.size() << " figures\n";

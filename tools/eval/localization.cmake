@@ -3,6 +3,6 @@
 add_library(snapnav_localization_eval STATIC eval/localization_eval.cpp eval/leave_one_out.cpp eval/exploration.cpp)
 target_include_directories(snapnav_localization_eval PUBLIC eval)
 target_link_libraries(snapnav_localization_eval PUBLIC snapnav_homing_eval snapnav_places snapnav_plot
-  PRIVATE opencv_imgproc)
+  PRIVATE snapnav_results opencv_imgproc)
 add_executable(eval-localization eval/eval_localization_main.cpp)
-target_link_libraries(eval-localization PRIVATE snapnav_localization_eval snapnav_sim_node snapnav_glue_places)
+target_link_libraries(eval-localization PRIVATE snapnav_localization_eval snapnav_sim_node snapnav_glue_places snapnav_results)

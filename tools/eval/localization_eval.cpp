@@ -16,6 +16,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "report_text.hpp"
+#include "results.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
@@ -563,7 +564,11 @@ cv::Mat DensityChart(const LocalizationEvalResult& r, const LocalizationEvalOpti
 std::string OnOff(bool b) { return b ? "on" : "off"; }
 
 // A JSON number (null when not finite).
-std::string Num(double v) { return std::isfinite(v) ? Fixed(v, 4) : std::string("null"); }
+// As the report prints it: 4 digits after the point; null for NaN.
+template <typename T>
+results::Json Num(T v) {
+  return results::Rounded(v, 4);
+}
 
 }  // namespace
 
@@ -733,65 +738,71 @@ std::vector<std::string> WriteLocalizationOutputs(const LocalizationEvalResult& 
   std::ofstream(out / "report.md") << md.str();
 
   // summary.json: flat keys.
-  std::ofstream j(out / "summary.json");
-  j << std::fixed << std::setprecision(4) << "{\n  \"scene\": " << JsonString(r.scene) << ",\n  \"test_positions\": "
-    << r.tests.size() << ",\n  \"prediction_sigma_m\": " << o.prediction_sigma_m << ",\n  \"pose_source\": \""
-    << (o.odometry_poses ? "odometry" : "truth") << "\",\n  \"seed\": " << o.seed;
+  results::Json j;
+  j["scene"] = r.scene;
+  j["test_positions"] = r.tests.size();
+  j["prediction_sigma_m"] = Num(o.prediction_sigma_m);
+  j["pose_source"] = o.odometry_poses ? "odometry" : "truth";
+  j["seed"] = o.seed;
   if (def) {
-    j << ",\n  \"default_configuration\": " << JsonString(def->Label())
-      << ",\n  \"mean_localization_error_m\": " << def->errors.mean_m
-      << ",\n  \"median_localization_error_m\": " << def->errors.median_m
-      << ",\n  \"max_localization_error_m\": " << def->errors.max_m
-      << ",\n  \"mean_heading_error_deg\": " << Num(def->errors.mean_heading_deg)
-      << ",\n  \"ms_per_query\": " << def->ms_per_query << ",\n  \"queries_without_answer\": " << def->failures;
+    j["default_configuration"] = def->Label();
+    j["mean_localization_error_m"] = Num(def->errors.mean_m);
+    j["median_localization_error_m"] = Num(def->errors.median_m);
+    j["max_localization_error_m"] = Num(def->errors.max_m);
+    j["mean_heading_error_deg"] = Num(def->errors.mean_heading_deg);
+    j["ms_per_query"] = Num(def->ms_per_query);
+    j["queries_without_answer"] = Num(def->failures);
   }
   if (thesis) {
-    j << ",\n  \"thesis_configuration\": " << JsonString(thesis->Label())
-      << ",\n  \"thesis_configuration_mean_localization_error_m\": " << thesis->errors.mean_m
-      << ",\n  \"thesis_configuration_max_localization_error_m\": " << thesis->errors.max_m;
+    j["thesis_configuration"] = thesis->Label();
+    j["thesis_configuration_mean_localization_error_m"] = Num(thesis->errors.mean_m);
+    j["thesis_configuration_max_localization_error_m"] = Num(thesis->errors.max_m);
   }
-  j << ",\n  \"thesis_reported_mean_localization_error_m\": 0.1957";
+  j["thesis_reported_mean_localization_error_m"] = 0.1957;
   if (target) {
-    j << ",\n  \"target_mean_localization_error_m\": " << *target << ",\n  \"target_met\": "
-      << (def && def->errors.mean_m <= *target ? "true" : "false");
+    j["target_mean_localization_error_m"] = Num(*target);
+    j["target_met"] = def && def->errors.mean_m <= *target;
   }
-  j << ",\n  \"views\": " << r.views_made << ",\n  \"mean_landmarks_per_view\": " << r.mean_landmarks
-    << ",\n  \"render_ms_per_view\": " << r.render_ms_per_view << ",\n  \"make_view_ms_per_view\": " << r.extract_ms_per_view
-    << ",\n  \"total_seconds\": " << r.total_seconds;
+  j["views"] = Num(r.views_made);
+  j["mean_landmarks_per_view"] = Num(r.mean_landmarks);
+  j["render_ms_per_view"] = Num(r.render_ms_per_view);
+  j["make_view_ms_per_view"] = Num(r.extract_ms_per_view);
+  j["total_seconds"] = Num(r.total_seconds);
   for (const auto& m : r.memories) {
-    j << ",\n  \"" << m.name << "_cells\": " << m.memory->size() << ",\n  \"" << m.name
-      << "_cells_per_m2\": " << m.cells_per_m2 << ",\n  \"" << m.name << "_bytes_per_cell\": "
-      << (m.memory->size() ? m.memory->bytes() / m.memory->size() : 0);
-    if (m.threshold > 0) j << ",\n  \"" << m.name << "_threshold\": " << m.threshold;
+    j[m.name + "_cells"] = m.memory->size();
+    j[m.name + "_cells_per_m2"] = Num(m.cells_per_m2);
+    j[m.name + "_bytes_per_cell"] = m.memory->size() ? m.memory->bytes() / m.memory->size() : 0;
+    if (m.threshold > 0) j[m.name + "_threshold"] = Num(m.threshold);
   }
   for (const auto& c : r.results) {
     const std::string k = c.memory + "_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
-    j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
-      << ",\n  \"" << k << "_mean_heading_error_deg\": "
-      << Num(c.errors.mean_heading_deg) << ",\n  \""
-      << k << "_ms_per_query\": " << c.ms_per_query << ",\n  \"" << k << "_failures\": " << c.failures;
+    j[k + "_mean_error_m"] = Num(c.errors.mean_m);
+    j[k + "_max_error_m"] = Num(c.errors.max_m);
+    j[k + "_mean_heading_error_deg"] = Num(c.errors.mean_heading_deg);
+    j[k + "_ms_per_query"] = Num(c.ms_per_query);
+    j[k + "_failures"] = Num(c.failures);
   }
   if (!r.leave_one_out.empty()) {
-    j << ",\n  \"protocols\": [\"snapnav\", \"leave-one-out\"]"
-      << ",\n  \"snapnav_mean_nearest_cell_distance_m\": " << r.tests_nearest_cell_m
-      << ",\n  \"leave_one_out_queries\": " << r.leave_one_out_queries.size()
-      << ",\n  \"leave_one_out_mean_nearest_cell_distance_m\": " << r.leave_one_out_nearest_cell_m;
+    j["protocols"] = {"snapnav", "leave-one-out"};
+    j["snapnav_mean_nearest_cell_distance_m"] = Num(r.tests_nearest_cell_m);
+    j["leave_one_out_queries"] = r.leave_one_out_queries.size();
+    j["leave_one_out_mean_nearest_cell_distance_m"] = Num(r.leave_one_out_nearest_cell_m);
     if (const auto* c = r.FindLeaveOneOut(dm, df, nav::PlaceEstimate::kInterpolated)) {
-      j << ",\n  \"leave_one_out_mean_localization_error_m\": " << c->errors.mean_m
-        << ",\n  \"leave_one_out_max_localization_error_m\": " << c->errors.max_m;
+      j["leave_one_out_mean_localization_error_m"] = Num(c->errors.mean_m);
+      j["leave_one_out_max_localization_error_m"] = Num(c->errors.max_m);
     }
     if (const auto* c = r.FindLeaveOneOut(dm, df, nav::PlaceEstimate::kNearestCell)) {
-      j << ",\n  \"leave_one_out_thesis_configuration_mean_localization_error_m\": " << c->errors.mean_m;
+      j["leave_one_out_thesis_configuration_mean_localization_error_m"] = Num(c->errors.mean_m);
     }
     for (const auto& c : r.leave_one_out) {
       const std::string k = "leave_one_out_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
-      j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
-        << ",\n  \"" << k << "_failures\": " << c.failures;
+      j[k + "_mean_error_m"] = Num(c.errors.mean_m);
+      j[k + "_max_error_m"] = Num(c.errors.max_m);
+      j[k + "_failures"] = Num(c.failures);
     }
   }
-  j << ",\n  \"figures\": [";
-  for (size_t i = 0; i < figures.size(); ++i) j << (i ? ", " : "") << JsonString(figures[i]);
-  j << "]\n}\n";
+  j["figures"] = figures;
+  results::WriteJsonFile((out / "summary.json").string(), j);
   return figures;
 }
 
@@ -817,22 +828,27 @@ void WriteGridFolderOutputs(const LocalizationEvalResult& r, const LocalizationE
   md << "| thesis' own figure (5.2.2, SIFT count measure, nearest cell) | | | 0.196 | | | | | |\n\n## Options\n\n```\n"
      << options_text << "```\n";
   std::ofstream(out / "report.md") << md.str();
-  std::ofstream j(out / "summary.json");
-  j << std::fixed << std::setprecision(4) << "{\n  \"grid\": " << JsonString(r.scene) << ",\n  \"images\": " << r.views_made
-    << ",\n  \"protocols\": [\"leave-one-out\"],\n  \"leave_one_out_queries\": " << r.leave_one_out_queries.size()
-    << ",\n  \"leave_one_out_mean_nearest_cell_distance_m\": " << r.leave_one_out_nearest_cell_m
-    << ",\n  \"prediction_sigma_m\": " << o.prediction_sigma_m << ",\n  \"seed\": " << o.seed;
+  results::Json j;
+  j["grid"] = r.scene;
+  j["images"] = Num(r.views_made);
+  j["protocols"] = {"leave-one-out"};
+  j["leave_one_out_queries"] = r.leave_one_out_queries.size();
+  j["leave_one_out_mean_nearest_cell_distance_m"] = Num(r.leave_one_out_nearest_cell_m);
+  j["prediction_sigma_m"] = Num(o.prediction_sigma_m);
+  j["seed"] = o.seed;
   if (def) {
-    j << ",\n  \"leave_one_out_mean_localization_error_m\": " << def->errors.mean_m
-      << ",\n  \"leave_one_out_max_localization_error_m\": " << def->errors.max_m;
+    j["leave_one_out_mean_localization_error_m"] = Num(def->errors.mean_m);
+    j["leave_one_out_max_localization_error_m"] = Num(def->errors.max_m);
   }
-  if (near) j << ",\n  \"leave_one_out_thesis_configuration_mean_localization_error_m\": " << near->errors.mean_m;
+  if (near) j["leave_one_out_thesis_configuration_mean_localization_error_m"] = Num(near->errors.mean_m);
   for (const auto& c : r.leave_one_out) {
     const std::string k = "leave_one_out_" + Key(c.measure) + (c.filter ? "_filter_" : "_nofilter_") + EstimateName(c.estimate);
-    j << ",\n  \"" << k << "_mean_error_m\": " << c.errors.mean_m << ",\n  \"" << k << "_max_error_m\": " << c.errors.max_m
-      << ",\n  \"" << k << "_failures\": " << c.failures;
+    j[k + "_mean_error_m"] = Num(c.errors.mean_m);
+    j[k + "_max_error_m"] = Num(c.errors.max_m);
+    j[k + "_failures"] = Num(c.failures);
   }
-  j << ",\n  \"thesis_reported_mean_localization_error_m\": 0.1957\n}\n";
+  j["thesis_reported_mean_localization_error_m"] = 0.1957;
+  results::WriteJsonFile((out / "summary.json").string(), j);
 }
 
 }  // namespace snapnav::eval

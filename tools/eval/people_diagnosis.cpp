@@ -11,6 +11,7 @@
 #include "landmark_eval.hpp"
 #include "people_view.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "stats.hpp"
 #include "snapnav/nav/landmarks/view_fusion.hpp"
@@ -122,7 +123,8 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
   md << "## AAE [deg] by where the people are (all matches)\n\n"
      << "| method | people in home and current views (the evaluation) | people-free home, people in the current views "
         "| people in the home, people-free current views | no people |\n|---|---|---|---|---|\n";
-  std::ostringstream json_aae, md_on;
+  results::Json json_aae = results::Json::object(), json_on = results::Json::object();
+  std::ostringstream md_on;
   md_on << "## Matched landmarks on people (people in every view)\n\n"
         << "A landmark is on a person when its panorama pixel shows a person; \"near\" adds its outline (half the "
            "keypoint size, at least 3 px, either side). Matches after the descriptor checks, and the ones the "
@@ -130,10 +132,8 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
         << "| method | landmarks per view | of them on people | home landmarks on people | matches per view | home "
            "side on people | current side on people | either side near people | used per view | used, either side on people |\n"
         << "|---|---|---|---|---|---|---|---|---|---|\n";
-  std::ostringstream json_on;
   nav::LandmarkMethod cached_method = nav::LandmarkMethod::kHog;
   LandmarkCache cache;
-  bool first_row = true;
   for (const auto& row : rows) {
     double aae[4];
     const std::vector<cv::Mat>* sets[4] = {&pp, &ep, &pe, &ee};
@@ -207,21 +207,21 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
             << Fixed(frac(home_on, matches), 3) << " | " << Fixed(frac(cur_on, matches), 3) << " | "
             << Fixed(frac(either_near, matches), 3) << " | " << Fixed(per(used), 1) << " | "
             << Fixed(frac(used_on, used), 3) << " |\n";
-      json_on << (json_on.tellp() > 0 ? ",\n" : "\n") << "    " << JsonString(row.label)
-              << ": {\"landmarks_on_people_frac\": " << Fixed(frac(landmarks_on, landmarks), 4)
-              << ", \"home_landmarks_on_people\": " << home_landmarks_on << ", \"home_landmarks\": " << hs.size()
-              << ", \"matches_home_on_people_frac\": " << Fixed(frac(home_on, matches), 4)
-              << ", \"matches_current_on_people_frac\": " << Fixed(frac(cur_on, matches), 4)
-              << ", \"matches_near_people_frac\": " << Fixed(frac(either_near, matches), 4)
-              << ", \"used_on_people_frac\": " << Fixed(frac(used_on, used), 4) << "}";
+      results::Json& row_on = json_on[row.label];
+      row_on["landmarks_on_people_frac"] = results::Rounded(frac(landmarks_on, landmarks), 4);
+      row_on["home_landmarks_on_people"] = home_landmarks_on;
+      row_on["home_landmarks"] = hs.size();
+      row_on["matches_home_on_people_frac"] = results::Rounded(frac(home_on, matches), 4);
+      row_on["matches_current_on_people_frac"] = results::Rounded(frac(cur_on, matches), 4);
+      row_on["matches_near_people_frac"] = results::Rounded(frac(either_near, matches), 4);
+      row_on["used_on_people_frac"] = results::Rounded(frac(used_on, used), 4);
     }
     md << "| " << row.label << " | " << Fixed(aae[0]) << " | " << Fixed(aae[1]) << " | " << Fixed(aae[2]) << " | "
        << Fixed(aae[3]) << " |\n";
-    json_aae << (first_row ? "\n" : ",\n") << "    " << JsonString(row.label) << ": {\"people_home_people_current_deg\": "
-             << Fixed(aae[0], 3) << ", \"empty_home_people_current_deg\": " << Fixed(aae[1], 3)
-             << ", \"people_home_empty_current_deg\": " << Fixed(aae[2], 3) << ", \"empty_home_empty_current_deg\": "
-             << Fixed(aae[3], 3) << "}";
-    first_row = false;
+    json_aae[row.label] = {{"people_home_people_current_deg", results::Rounded(aae[0], 3)},
+                           {"empty_home_people_current_deg", results::Rounded(aae[1], 3)},
+                           {"people_home_empty_current_deg", results::Rounded(aae[2], 3)},
+                           {"empty_home_empty_current_deg", results::Rounded(aae[3], 3)}};
     std::cerr << "eval-homing: " << row.label << ": AAE " << Fixed(aae[0]) << " / " << Fixed(aae[1]) << " / "
               << Fixed(aae[2]) << " / " << Fixed(aae[3]) << " deg\n";
   }
@@ -282,16 +282,20 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
     }
   }
   std::ofstream(out / "people.md") << md.str();
-  std::ofstream json(out / "summary.json");
-  json << "{\n  \"scene\": " << JsonString(scene.name) << ",\n  \"grid_images\": " << g.db.poses.size()
-       << ",\n  \"images_camera_inside_person\": " << inside_images << ",\n  \"images_person_within_0_3_m\": "
-       << within_30cm << ",\n  \"images_occluded_over_half\": " << half_covered
-       << ",\n  \"nearest_person_median_m\": " << Fixed(Median(nearest, kNaN), 3)
-       << ",\n  \"occluded_fraction_mean\": " << Fixed(occluded_mean, 4)
-       << ",\n  \"home_nearest_person_m\": " << Fixed(home_view.nearest_surface_m, 3)
-       << ",\n  \"home_camera_inside_person\": " << home_view.inside
-       << ",\n  \"home_occluded_fraction\": " << Fixed(home_view.occluded_fraction, 4) << ",\n  \"aae\": {"
-       << json_aae.str() << "\n  },\n  \"on_people\": {" << json_on.str() << "\n  }\n}\n";
+  results::Json json;
+  json["scene"] = scene.name;
+  json["grid_images"] = g.db.poses.size();
+  json["images_camera_inside_person"] = inside_images;
+  json["images_person_within_0_3_m"] = within_30cm;
+  json["images_occluded_over_half"] = half_covered;
+  json["nearest_person_median_m"] = results::Rounded(Median(nearest, kNaN), 3);
+  json["occluded_fraction_mean"] = results::Rounded(occluded_mean, 4);
+  json["home_nearest_person_m"] = results::Rounded(home_view.nearest_surface_m, 3);
+  json["home_camera_inside_person"] = home_view.inside;
+  json["home_occluded_fraction"] = results::Rounded(home_view.occluded_fraction, 4);
+  json["aae"] = json_aae;
+  json["on_people"] = json_on;
+  results::WriteJsonFile((out / "summary.json").string(), json);
   std::cout << md.str();
   std::cerr << "eval-homing: wrote " << (out / "people.md").string() << ", people_per_image.csv, summary.json\n";
   return 0;

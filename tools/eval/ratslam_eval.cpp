@@ -16,6 +16,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "results.hpp"
 #include "scene_file.hpp"
 #include "stats.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -385,12 +386,19 @@ cv::Mat DrawExperienceMap(const RatSlamEvaluation& e, const std::string& title) 
 
 namespace {
 
-void JsonErrors(std::ostream& j, const std::string& key, const TrajectoryErrors& e) {
-  j << ",\n  \"" << key << "_ate_rmse_m\": " << e.ate_aligned.rmse_m << ",\n  \"" << key
-    << "_ate_max_m\": " << e.ate_aligned.max_m << ",\n  \"" << key << "_ate_unaligned_rmse_m\": " << e.ate.rmse_m
-    << ",\n  \"" << key << "_ate_unaligned_final_m\": " << e.ate.final_m << ",\n  \"" << key
-    << "_rpe_translation_rmse_m\": " << e.rpe.translation_rmse_m << ",\n  \"" << key
-    << "_rpe_rotation_rmse_deg\": " << e.rpe.rotation_rmse_deg;
+// As the report prints it: 4 digits after the point.
+template <typename T>
+results::Json R4(T v) {
+  return results::Rounded(v, 4);
+}
+
+void JsonErrors(results::Json& j, const std::string& key, const TrajectoryErrors& e) {
+  j[key + "_ate_rmse_m"] = R4(e.ate_aligned.rmse_m);
+  j[key + "_ate_max_m"] = R4(e.ate_aligned.max_m);
+  j[key + "_ate_unaligned_rmse_m"] = R4(e.ate.rmse_m);
+  j[key + "_ate_unaligned_final_m"] = R4(e.ate.final_m);
+  j[key + "_rpe_translation_rmse_m"] = R4(e.rpe.translation_rmse_m);
+  j[key + "_rpe_rotation_rmse_deg"] = R4(e.rpe.rotation_rmse_deg);
 }
 
 cv::Mat DrawErrors(const RatSlamEvaluation& e) {
@@ -450,38 +458,48 @@ void WriteRatSlamEvaluation(const RatSlamEvaluation& e, const RatSlamEvalOptions
   const fs::path out(dir);
   const nav::PoseCellOptions& pc = options.ratslam.pose_cells;
   const nav::LocalViewOptions& lv = options.ratslam.local_view;
-  std::ostringstream json;
-  json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << e.run.scene_name
-       << "\",\n  \"seed\": " << options.run.sim.seed << ",\n  \"laps\": " << e.run.laps
-       << ",\n  \"duration_s\": " << e.run.duration_s << ",\n  \"distance_m\": " << e.run.distance_m
-       << ",\n  \"frames\": " << e.run.frames << ",\n  \"odometry\": " << e.run.odometry
-       << ",\n  \"raw_frames\": " << (options.run.raw_frames ? "true" : "false")
-       << ",\n  \"heading_drift_deg_per_m\": " << options.run.sim.drive.heading_drift_deg_per_m
-       << ",\n  \"ratslam_templates\": " << e.templates << ",\n  \"ratslam_experiences\": " << e.experiences.size()
-       << ",\n  \"ratslam_links\": " << e.links.size() << ",\n  \"ratslam_loop_closures\": " << e.loop_closures
-       << ",\n  \"ratslam_false_loop_closures\": " << e.false_loop_closures()
-       << ",\n  \"ratslam_inconsistent_links\": " << e.inconsistent_links()
-       << ",\n  \"ratslam_experience_switches\": " << e.switches << ",\n  \"ratslam_view_injections\": " << e.injections
-       << ",\n  \"ratslam_first_loop_closure_travel_m\": "
-       << (e.loop_closure_travel_m.empty() ? -1.0 : e.loop_closure_travel_m.front())
-       << ",\n  \"ratslam_ms_per_odometry\": " << e.odometry_ms_median
-       << ",\n  \"ratslam_ms_per_odometry_mean\": " << e.odometry_ms_mean
-       << ",\n  \"ratslam_ms_per_image\": " << e.image_ms_median << ",\n  \"ratslam_ms_per_image_mean\": " << e.image_ms_mean
-       << ",\n  \"ratslam_core_load\": " << e.core_load() << ",\n  \"render_s\": " << e.run.render_s
-       << ",\n  \"pc_dim_xy\": " << pc.pc_dim_xy << ",\n  \"pc_dim_th\": " << pc.pc_dim_th
-       << ",\n  \"pc_cell_x_size_m\": " << pc.pc_cell_x_size_m << ",\n  \"template_x_size\": " << lv.template_x_size
-       << ",\n  \"template_y_size\": " << lv.template_y_size << ",\n  \"vt_match_threshold\": " << lv.vt_match_threshold
-       << ",\n  \"rpe_delta_m\": " << options.rpe_delta_m;
+  results::Json json;
+  json["scene"] = e.run.scene_name;
+  json["seed"] = options.run.sim.seed;
+  json["laps"] = R4(e.run.laps);
+  json["duration_s"] = R4(e.run.duration_s);
+  json["distance_m"] = R4(e.run.distance_m);
+  json["frames"] = R4(e.run.frames);
+  json["odometry"] = R4(e.run.odometry);
+  json["raw_frames"] = options.run.raw_frames;
+  json["heading_drift_deg_per_m"] = R4(options.run.sim.drive.heading_drift_deg_per_m);
+  json["ratslam_templates"] = R4(e.templates);
+  json["ratslam_experiences"] = e.experiences.size();
+  json["ratslam_links"] = e.links.size();
+  json["ratslam_loop_closures"] = R4(e.loop_closures);
+  json["ratslam_false_loop_closures"] = R4(e.false_loop_closures());
+  json["ratslam_inconsistent_links"] = R4(e.inconsistent_links());
+  json["ratslam_experience_switches"] = R4(e.switches);
+  json["ratslam_view_injections"] = R4(e.injections);
+  json["ratslam_first_loop_closure_travel_m"] =
+      R4(e.loop_closure_travel_m.empty() ? -1.0 : e.loop_closure_travel_m.front());
+  json["ratslam_ms_per_odometry"] = R4(e.odometry_ms_median);
+  json["ratslam_ms_per_odometry_mean"] = R4(e.odometry_ms_mean);
+  json["ratslam_ms_per_image"] = R4(e.image_ms_median);
+  json["ratslam_ms_per_image_mean"] = R4(e.image_ms_mean);
+  json["ratslam_core_load"] = R4(e.core_load());
+  json["render_s"] = R4(e.run.render_s);
+  json["pc_dim_xy"] = R4(pc.pc_dim_xy);
+  json["pc_dim_th"] = R4(pc.pc_dim_th);
+  json["pc_cell_x_size_m"] = R4(pc.pc_cell_x_size_m);
+  json["template_x_size"] = R4(lv.template_x_size);
+  json["template_y_size"] = R4(lv.template_y_size);
+  json["vt_match_threshold"] = R4(lv.vt_match_threshold);
+  json["rpe_delta_m"] = R4(options.rpe_delta_m);
   JsonErrors(json, "ratslam", e.ratslam_errors);
   JsonErrors(json, "ratslam_experience", e.experience_errors);
   JsonErrors(json, "dead_reckoning", e.dead_reckoning_errors);
-  json << "\n}\n";
+  results::WriteJsonFile((out / "summary.json").string(), json);
   auto write = [&](const fs::path& path, const std::string& text) {
     std::ofstream f(path);
     f << text;
     if (!f) throw std::runtime_error("cannot write " + path.string());
   };
-  write(out / "summary.json", json.str());
   std::ostringstream title;
   title << std::fixed << std::setprecision(2) << e.run.scene_name << ", " << e.run.laps << " laps, "
         << std::setprecision(0) << e.run.distance_m << " m: " << e.experiences.size() << " experiences, "

@@ -4,6 +4,6 @@
 add_library(snapnav_route_eval STATIC eval/route_eval.cpp)
 target_include_directories(snapnav_route_eval PUBLIC eval)
 target_link_libraries(snapnav_route_eval PUBLIC snapnav_homing_eval snapnav_places snapnav_navigator snapnav_plot
-  PRIVATE opencv_imgproc)
+  PRIVATE snapnav_results opencv_imgproc)
 add_executable(eval-route eval/eval_route_main.cpp)
 target_link_libraries(eval-route PRIVATE snapnav_route_eval snapnav_sim_node snapnav_glue_places snapnav_navigator_node)

@@ -14,6 +14,7 @@
 
 #include "homing_eval.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
@@ -257,13 +258,8 @@ RouteRun RunClosedLoop(const nav::sim::Scene& scene, const RouteEvalOptions& o, 
   return run;
 }
 
-std::string Json(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
+// As the report prints it: 6 significant digits; null for NaN.
+results::Json Json(double v) { return results::Significant(v); }
 
 struct HomingBin {
   double lo_m, hi_m;
@@ -601,47 +597,60 @@ void WriteRouteOutputs(const RouteEvalResult& r, const RouteEvalOptions& o, cons
     }
   }
   {
-    std::ofstream j(out / "summary.json");
-    j << "{\n  \"scene\": " << JsonString(r.scene) << ",\n  \"route\": " << r.route << ",\n  \"seed\": " << o.seed
-      << ",\n  \"route_square_size_m\": " << Json(r.size_m) << ",\n  \"waypoints_per_lap\": " << r.waypoints_per_lap
-      << ",\n  \"laps_requested\": " << o.laps << ",\n  \"laps_completed\": " << r.run.laps_completed
-      << ",\n  \"arrivals\": " << s.arrivals << ",\n  \"tolerance_m\": " << Json(o.tolerance_m)
-      << ",\n  \"waypoint_error_mean_m\": " << Json(s.mean_m)
-      << ",\n  \"waypoint_error_median_m\": " << Json(s.median_m) << ",\n  \"waypoint_error_max_m\": " << Json(s.max_m);
+    results::Json j;
+    j["scene"] = r.scene;
+    j["route"] = r.route;
+    j["seed"] = o.seed;
+    j["route_square_size_m"] = Json(r.size_m);
+    j["waypoints_per_lap"] = r.waypoints_per_lap;
+    j["laps_requested"] = o.laps;
+    j["laps_completed"] = r.run.laps_completed;
+    j["arrivals"] = s.arrivals;
+    j["tolerance_m"] = Json(o.tolerance_m);
+    j["waypoint_error_mean_m"] = Json(s.mean_m);
+    j["waypoint_error_median_m"] = Json(s.median_m);
+    j["waypoint_error_max_m"] = Json(s.max_m);
     for (const auto& l : s.laps) {
-      j << ",\n  \"lap" << l.lap << "_waypoint_error_mean_m\": " << Json(l.mean_m) << ",\n  \"lap" << l.lap
-        << "_waypoint_error_max_m\": " << Json(l.max_m);
+      j["lap" + std::to_string(l.lap) + "_waypoint_error_mean_m"] = Json(l.mean_m);
+      j["lap" + std::to_string(l.lap) + "_waypoint_error_max_m"] = Json(l.max_m);
     }
-    j << ",\n  \"error_growth_m_per_lap\": " << Json(s.growth_m_per_lap)
-      << ",\n  \"last_minus_first_lap_mean_m\": " << Json(s.last_minus_first_lap_m)
-      << ",\n  \"tracking_error_mean_m\": " << Json(r.run.tracking_error_mean_m)
-      << ",\n  \"tracking_error_max_m\": " << Json(r.run.tracking_error_max_m)
-      << ",\n  \"odometry_drift_final_m\": " << Json(r.run.odometry_error_final_m)
-      << ",\n  \"dead_reckoning_laps_completed\": " << r.baseline.laps_completed
-      << ",\n  \"dead_reckoning_waypoint_error_mean_m\": " << Json(b.mean_m)
-      << ",\n  \"dead_reckoning_waypoint_error_max_m\": " << Json(b.max_m);
-    for (const auto& l : b.laps) {
-      j << ",\n  \"dead_reckoning_lap" << l.lap << "_waypoint_error_mean_m\": " << Json(l.mean_m);
-    }
-    j << ",\n  \"dead_reckoning_error_growth_m_per_lap\": " << Json(b.growth_m_per_lap)
-      << ",\n  \"cells\": " << r.cells.size() << ",\n  \"mean_landmarks_per_view\": " << Json(r.mean_landmarks)
-      << ",\n  \"localizations\": " << r.run.localizations
-      << ",\n  \"localizations_without_answer\": " << r.run.no_answer
-      << ",\n  \"fixes_accepted\": " << r.run.fixes_accepted << ",\n  \"fixes_rejected\": " << r.run.fixes_rejected
-      << ",\n  \"tracker_resets\": " << r.run.resets << ",\n  \"homing_calls\": " << r.run.homing_calls
-      << ",\n  \"homing_estimates\": " << r.run.homing_estimates << ",\n  \"homing_steps\": " << r.run.homing_steps
-      << ",\n  \"homing_refused_steps\": " << r.run.homing_refused
-      << ",\n  \"homing_direction_error_mean_deg\": " << Json(MeanHomingErrorDeg(r.run.homing))
-      << ",\n  \"control_steps\": " << r.run.control_steps << ",\n  \"sim_time_s\": " << Json(r.run.sim_time_s)
-      << ",\n  \"distance_m\": " << Json(r.run.distance_m) << ",\n  \"collisions\": " << r.run.collisions
-      << ",\n  \"ms_per_step\": " << Json(r.run.ms_per_step) << ",\n  \"ms_render_per_view\": " << Json(r.run.ms_render)
-      << ",\n  \"ms_place_view_per_view\": " << Json(r.run.ms_view)
-      << ",\n  \"ms_per_localization\": " << Json(r.run.ms_localize)
-      << ",\n  \"ms_per_homing\": " << Json(r.run.ms_homing) << ",\n  \"explore_seconds\": " << Json(r.explore_seconds)
-      << ",\n  \"target_waypoint_error_m\": " << Json(kTargetWaypointErrorM)
-      << ",\n  \"meets_waypoint_error_target\": " << (meets_error ? "true" : "false")
-      << ",\n  \"meets_no_growth_target\": " << (no_growth ? "true" : "false")
-      << ",\n  \"completed_all_laps\": " << (all_laps ? "true" : "false") << "\n}\n";
+    j["error_growth_m_per_lap"] = Json(s.growth_m_per_lap);
+    j["last_minus_first_lap_mean_m"] = Json(s.last_minus_first_lap_m);
+    j["tracking_error_mean_m"] = Json(r.run.tracking_error_mean_m);
+    j["tracking_error_max_m"] = Json(r.run.tracking_error_max_m);
+    j["odometry_drift_final_m"] = Json(r.run.odometry_error_final_m);
+    j["dead_reckoning_laps_completed"] = r.baseline.laps_completed;
+    j["dead_reckoning_waypoint_error_mean_m"] = Json(b.mean_m);
+    j["dead_reckoning_waypoint_error_max_m"] = Json(b.max_m);
+    for (const auto& l : b.laps) j["dead_reckoning_lap" + std::to_string(l.lap) + "_waypoint_error_mean_m"] = Json(l.mean_m);
+    j["dead_reckoning_error_growth_m_per_lap"] = Json(b.growth_m_per_lap);
+    j["cells"] = r.cells.size();
+    j["mean_landmarks_per_view"] = Json(r.mean_landmarks);
+    j["localizations"] = r.run.localizations;
+    j["localizations_without_answer"] = r.run.no_answer;
+    j["fixes_accepted"] = r.run.fixes_accepted;
+    j["fixes_rejected"] = r.run.fixes_rejected;
+    j["tracker_resets"] = r.run.resets;
+    j["homing_calls"] = r.run.homing_calls;
+    j["homing_estimates"] = r.run.homing_estimates;
+    j["homing_steps"] = r.run.homing_steps;
+    j["homing_refused_steps"] = r.run.homing_refused;
+    j["homing_direction_error_mean_deg"] = Json(MeanHomingErrorDeg(r.run.homing));
+    j["control_steps"] = r.run.control_steps;
+    j["sim_time_s"] = Json(r.run.sim_time_s);
+    j["distance_m"] = Json(r.run.distance_m);
+    j["collisions"] = r.run.collisions;
+    j["ms_per_step"] = Json(r.run.ms_per_step);
+    j["ms_render_per_view"] = Json(r.run.ms_render);
+    j["ms_place_view_per_view"] = Json(r.run.ms_view);
+    j["ms_per_localization"] = Json(r.run.ms_localize);
+    j["ms_per_homing"] = Json(r.run.ms_homing);
+    j["explore_seconds"] = Json(r.explore_seconds);
+    j["target_waypoint_error_m"] = Json(kTargetWaypointErrorM);
+    j["meets_waypoint_error_target"] = meets_error;
+    j["meets_no_growth_target"] = no_growth;
+    j["completed_all_laps"] = all_laps;
+    results::WriteJsonFile((out / "summary.json").string(), j);
   }
   {
     std::ofstream md(out / "report.md");

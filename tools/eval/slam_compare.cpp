@@ -16,6 +16,7 @@
 #include "homing_eval.hpp"
 #include "localization_eval.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "slam_plot.hpp"
 #include "stats.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
@@ -567,13 +568,6 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
 
 namespace {
 
-std::string JsonNumber(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream s;
-  s << std::setprecision(6) << v;
-  return s.str();
-}
-
 std::string Cell(double v, int digits = 3) { return std::isfinite(v) ? Fixed(v, digits) : "n/a"; }
 
 const char* Label(const std::string& method) {
@@ -626,11 +620,12 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
   const fs::path out(dir);
   fs::create_directories(out);
   {
-    std::ofstream j(out / "summary.json");
-    j << "{\n  \"run\": " << JsonString(run.name) << ",\n  \"scene\": " << JsonString(run.scene)
-      << ",\n  \"ratslam\": " << JsonString(run.method("ratslam").ran ? "ran" : run.method("ratslam").note);
-    for (const auto& [key, value] : SummaryKeys(run)) j << ",\n  \"" << key << "\": " << JsonNumber(value);
-    j << "\n}\n";
+    results::Json j;
+    j["run"] = run.name;
+    j["scene"] = run.scene;
+    j["ratslam"] = run.method("ratslam").ran ? "ran" : run.method("ratslam").note;
+    for (const auto& [key, value] : SummaryKeys(run)) j[key] = results::Significant(value);
+    results::WriteJsonFile((out / "summary.json").string(), j);
   }
   std::vector<std::vector<nav::Pose2>> tracks = {run.truth};
   std::vector<std::string> names = {"ground truth"};

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "results.hpp"
 #include "slam_plot.hpp"
 #include "slam_sim.hpp"
 #include "snapnav/glue/app.hpp"
@@ -31,15 +32,22 @@ void PrintErrors(std::ostream& o, const std::string& name, const eval::Trajector
     << " deg RMSE\n";
 }
 
-void JsonErrors(std::ostream& j, const std::string& key, const eval::TrajectoryErrors& e) {
-  j << ",\n  \"" << key << "_ate_rmse_m\": " << e.ate_aligned.rmse_m << ",\n  \"" << key
-    << "_ate_max_m\": " << e.ate_aligned.max_m << ",\n  \"" << key << "_ate_unaligned_rmse_m\": " << e.ate.rmse_m
-    << ",\n  \"" << key << "_ate_unaligned_max_m\": " << e.ate.max_m << ",\n  \"" << key
-    << "_ate_unaligned_final_m\": " << e.ate.final_m << ",\n  \"" << key
-    << "_rpe_translation_rmse_m\": " << e.rpe.translation_rmse_m << ",\n  \"" << key
-    << "_rpe_translation_max_m\": " << e.rpe.translation_max_m << ",\n  \"" << key
-    << "_rpe_rotation_rmse_deg\": " << e.rpe.rotation_rmse_deg << ",\n  \"" << key
-    << "_rpe_rotation_max_deg\": " << e.rpe.rotation_max_deg;
+// As the report prints it: 4 digits after the point.
+template <typename T>
+results::Json R4(T v) {
+  return results::Rounded(v, 4);
+}
+
+void JsonErrors(results::Json& j, const std::string& key, const eval::TrajectoryErrors& e) {
+  j[key + "_ate_rmse_m"] = R4(e.ate_aligned.rmse_m);
+  j[key + "_ate_max_m"] = R4(e.ate_aligned.max_m);
+  j[key + "_ate_unaligned_rmse_m"] = R4(e.ate.rmse_m);
+  j[key + "_ate_unaligned_max_m"] = R4(e.ate.max_m);
+  j[key + "_ate_unaligned_final_m"] = R4(e.ate.final_m);
+  j[key + "_rpe_translation_rmse_m"] = R4(e.rpe.translation_rmse_m);
+  j[key + "_rpe_translation_max_m"] = R4(e.rpe.translation_max_m);
+  j[key + "_rpe_rotation_rmse_deg"] = R4(e.rpe.rotation_rmse_deg);
+  j[key + "_rpe_rotation_max_deg"] = R4(e.rpe.rotation_max_deg);
 }
 
 // Position error (no alignment) against the distance travelled, per estimator.
@@ -121,21 +129,25 @@ int Main(int argc, char** argv) {
             << " blocked steps\n";
   const eval::SimSlamEvaluation e = eval::EvaluateSimulatedSlam(sim, slam_options, rpe_delta_m);
 
-  std::ostringstream json;
-  json << std::fixed << std::setprecision(4) << "{\n  \"scene\": \"" << sim.scene_name
-       << "\",\n  \"seed\": " << options.seed << ",\n  \"laps\": " << sim.laps
-       << ",\n  \"duration_s\": " << sim.duration_s << ",\n  \"distance_m\": " << sim.distance_m
-       << ",\n  \"scans\": " << sim.log.scans << ",\n  \"odometry\": " << sim.log.odometry
-       << ",\n  \"blocked_steps\": " << sim.collisions
-       << ",\n  \"heading_drift_deg_per_m\": " << d.heading_drift_deg_per_m
-       << ",\n  \"odometry_linear_noise_frac\": " << d.odometry_linear_noise_frac
-       << ",\n  \"odometry_angular_noise_frac\": " << d.odometry_angular_noise_frac
-       << ",\n  \"laser_slam_ms_per_scan\": " << e.run.ms_per_scan() << ",\n  \"map_points\": " << e.run.map.size()
-       << ",\n  \"rpe_delta_m\": " << rpe_delta_m << ",\n  \"rpe_segments\": " << e.laser_slam.rpe.segments;
+  results::Json json;
+  json["scene"] = sim.scene_name;
+  json["seed"] = options.seed;
+  json["laps"] = sim.laps;
+  json["duration_s"] = R4(sim.duration_s);
+  json["distance_m"] = R4(sim.distance_m);
+  json["scans"] = sim.log.scans;
+  json["odometry"] = sim.log.odometry;
+  json["blocked_steps"] = sim.collisions;
+  json["heading_drift_deg_per_m"] = R4(d.heading_drift_deg_per_m);
+  json["odometry_linear_noise_frac"] = R4(d.odometry_linear_noise_frac);
+  json["odometry_angular_noise_frac"] = R4(d.odometry_angular_noise_frac);
+  json["laser_slam_ms_per_scan"] = R4(e.run.ms_per_scan());
+  json["map_points"] = e.run.map.size();
+  json["rpe_delta_m"] = R4(rpe_delta_m);
+  json["rpe_segments"] = e.laser_slam.rpe.segments;
   JsonErrors(json, "laser_slam", e.laser_slam);
   JsonErrors(json, "dead_reckoning", e.dead_reckoning);
-  json << "\n}\n";
-  std::ofstream(out / "summary.json") << json.str();
+  results::WriteJsonFile((out / "summary.json").string(), json);
 
   // Figures in the scene's frame, so the map looks like the floor plan.
   auto in_scene = [&](const std::vector<nav::Pose2>& track) {

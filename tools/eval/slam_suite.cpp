@@ -7,13 +7,13 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
 #include "importers.hpp"
 #include "program.hpp"
 #include "report_text.hpp"
+#include "results.hpp"
 #include "slam_config.hpp"
 #include "slam_plot.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -473,7 +473,8 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
     }
   }
   {
-    nlohmann::json j;
+    // Keys in the order they are set (`results` is the suite's results here: the writer by its full name).
+    snapnav::results::Json j;
     j["suite"] = suite.path;
     j["laser_slam_config"] = suite.laser_slam_config;
     j["laser_slam_overrides"] = options.overrides;
@@ -535,7 +536,7 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
         j[k + "graph_png"] = r.graph_png;
       }
     }
-    std::ofstream(out / "summary.json") << j.dump(2) << "\n";
+    snapnav::results::WriteJsonFile((out / "summary.json").string(), j);
   }
   if (options.progress) {
     if (graph_runs > 0) {

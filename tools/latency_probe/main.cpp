@@ -4,9 +4,9 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
-#include <sstream>
 
 #include "latency_probe.hpp"
+#include "results.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/channels.hpp"
 #include "snapnav/glue/flags.hpp"
@@ -77,8 +77,8 @@ int Main(int argc, char** argv) {
   const int64_t end = duration_s > 0 ? glue::MonotonicUtime() + static_cast<int64_t>(duration_s * 1e6) : 0;
   bus.Run([&] { return end == 0 || glue::MonotonicUtime() < end; });
 
-  std::ostringstream json;
-  json << std::fixed << std::setprecision(3) << "{\n  \"frames\": " << probe.frames();
+  results::Json json;
+  json["frames"] = probe.frames();
   std::cout << "latency-probe: " << probe.frames() << " frames on " << input << "\n"
             << std::left << std::setw(24) << "output" << std::right << std::setw(9) << "matched" << std::setw(11)
             << "median_ms" << std::setw(9) << "p95_ms" << std::setw(9) << "max_ms" << std::setw(11) << "unmatched"
@@ -89,21 +89,19 @@ int Main(int argc, char** argv) {
               << std::setprecision(1) << std::setw(11) << s.median_ms << std::setw(9) << s.p95_ms << std::setw(9)
               << s.max_ms << std::setw(11) << s.unmatched << "\n";
     const std::string k = Key(o.channel);
-    json << ",\n  \"" << k << "_messages\": " << s.outputs << ",\n  \"" << k << "_matched\": " << s.matched
-         << ",\n  \"" << k << "_unmatched\": " << s.unmatched << ",\n  \"" << k
-         << "_frames_without_output\": " << probe.frames_without(o.channel);
+    json[k + "_messages"] = s.outputs;
+    json[k + "_matched"] = s.matched;
+    json[k + "_unmatched"] = s.unmatched;
+    json[k + "_frames_without_output"] = probe.frames_without(o.channel);
     if (s.matched > 0) {
-      json << ",\n  \"" << k << "_latency_median_ms\": " << s.median_ms << ",\n  \"" << k
-           << "_latency_p95_ms\": " << s.p95_ms << ",\n  \"" << k << "_latency_max_ms\": " << s.max_ms << ",\n  \""
-           << k << "_latency_min_ms\": " << s.min_ms << ",\n  \"" << k << "_latency_mean_ms\": " << s.mean_ms;
+      json[k + "_latency_median_ms"] = results::Rounded(s.median_ms, 3);
+      json[k + "_latency_p95_ms"] = results::Rounded(s.p95_ms, 3);
+      json[k + "_latency_max_ms"] = results::Rounded(s.max_ms, 3);
+      json[k + "_latency_min_ms"] = results::Rounded(s.min_ms, 3);
+      json[k + "_latency_mean_ms"] = results::Rounded(s.mean_ms, 3);
     }
   }
-  json << "\n}\n";
-  if (!out_json.empty()) {
-    std::ofstream f(out_json);
-    f << json.str();
-    if (!f) throw std::runtime_error("cannot write " + out_json);
-  }
+  if (!out_json.empty()) results::WriteJsonFile(out_json, json);
   if (!csv.empty()) {
     std::ofstream f(csv);
     f << "output,latency_ms\n";

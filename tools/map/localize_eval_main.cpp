@@ -16,6 +16,7 @@
 #include "localize_config.hpp"
 #include "laser_slam_node.hpp"
 #include "map_export.hpp"
+#include "results.hpp"
 #include "slam_log.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
@@ -126,7 +127,7 @@ int Main(int argc, char** argv) {
   std::cerr << "localize-eval: " << referenced << " of " << scan_steps.size() << " scans have a reference pose\n";
   if (referenced == 0) throw std::runtime_error("no scan of " + log_path + " pairs with " + reference_path);
 
-  std::vector<StartResult> results;
+  std::vector<StartResult> start_results;
   for (int s = 0; s < starts; ++s) {
     StartResult r;
     r.start_scan = static_cast<int>(scan_steps.size() * static_cast<size_t>(s) / static_cast<size_t>(starts));
@@ -214,28 +215,46 @@ int Main(int argc, char** argv) {
               << "; ATE " << r.ate_rmse_m << " m over " << r.referenced_localized << " referenced scans; " << r.searches
               << " searches (mean " << r.mean_search_ms << " ms, max " << r.max_search_ms << " ms), " << r.relocalizations
               << " accepted (" << r.wrong_accepts << " wrong), " << r.losses << " losses; tracking " << r.mean_track_ms << " ms/scan\n";
-    results.push_back(r);
+    start_results.push_back(r);
   }
 
   std::filesystem::create_directories(out_dir);
   const std::filesystem::path out(out_dir);
   {
-    std::ofstream j(out / "localize.json");
-    j << std::setprecision(6) << "{\n  \"log\": \"" << log_path << "\",\n  \"map\": \"" << map_path << "\",\n  \"reference\": \""
-      << reference_path << "\",\n  \"config\": \"" << config_path << "\",\n  \"scans\": " << log.scans << ",\n  \"referenced_scans\": "
-      << referenced << ",\n  \"tol_m\": " << tol_m << ",\n  \"tol_deg\": " << tol_deg << ",\n  \"starts\": [\n";
-    for (size_t i = 0; i < results.size(); ++i) {
-      const StartResult& r = results[i];
-      j << "    {\"start_scan\": " << r.start_scan << ", \"relocalized\": " << (r.relocalized ? "true" : "false")
-        << ", \"time_s\": " << r.time_s << ", \"scans_to\": " << r.scans_to << ", \"path_m\": " << r.path_m
-        << ", \"compute_s\": " << r.compute_s << ", \"ate_rmse_m\": " << r.ate_rmse_m << ", \"ate_max_m\": " << r.ate_max_m
-        << ", \"heading_rmse_deg\": " << r.heading_rmse_deg << ", \"scans\": " << r.scans << ", \"localized_scans\": " << r.localized_scans
-        << ", \"referenced_localized\": " << r.referenced_localized << ", \"searches\": " << r.searches
-        << ", \"relocalizations\": " << r.relocalizations << ", \"wrong_accepts\": " << r.wrong_accepts << ", \"losses\": " << r.losses
-        << ", \"mean_search_ms\": " << r.mean_search_ms << ", \"max_search_ms\": " << r.max_search_ms
-        << ", \"mean_track_ms\": " << r.mean_track_ms << "}" << (i + 1 < results.size() ? "," : "") << "\n";
+    results::Json j;
+    j["log"] = log_path;
+    j["map"] = map_path;
+    j["reference"] = reference_path;
+    j["config"] = config_path;
+    j["scans"] = log.scans;
+    j["referenced_scans"] = referenced;
+    j["tol_m"] = results::Significant(tol_m);
+    j["tol_deg"] = results::Significant(tol_deg);
+    j["starts"] = results::Json::array();
+    for (const StartResult& r : start_results) {
+      results::Json s;
+      s["start_scan"] = r.start_scan;
+      s["relocalized"] = r.relocalized;
+      s["time_s"] = results::Significant(r.time_s);
+      s["scans_to"] = r.scans_to;
+      s["path_m"] = results::Significant(r.path_m);
+      s["compute_s"] = results::Significant(r.compute_s);
+      s["ate_rmse_m"] = results::Significant(r.ate_rmse_m);
+      s["ate_max_m"] = results::Significant(r.ate_max_m);
+      s["heading_rmse_deg"] = results::Significant(r.heading_rmse_deg);
+      s["scans"] = r.scans;
+      s["localized_scans"] = r.localized_scans;
+      s["referenced_localized"] = r.referenced_localized;
+      s["searches"] = r.searches;
+      s["relocalizations"] = r.relocalizations;
+      s["wrong_accepts"] = r.wrong_accepts;
+      s["losses"] = r.losses;
+      s["mean_search_ms"] = results::Significant(r.mean_search_ms);
+      s["max_search_ms"] = results::Significant(r.max_search_ms);
+      s["mean_track_ms"] = results::Significant(r.mean_track_ms);
+      j["starts"].push_back(s);
     }
-    j << "  ]\n}\n";
+    results::WriteJsonFile((out / "localize.json").string(), j);
   }
   {
     std::ofstream m(out / "localize.md");
@@ -244,7 +263,7 @@ int Main(int argc, char** argv) {
       << "| start scan | relocalized after | scans | path [m] | compute [s] | ATE RMSE [m] | ATE max [m] | heading RMSE [deg] | localized scans | searches (mean / max ms) | accepted (wrong) | losses | tracking ms/scan |\n"
       << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
       << std::fixed;
-    for (const StartResult& r : results) {
+    for (const StartResult& r : start_results) {
       m << "| " << r.start_scan << " | " << (r.relocalized ? std::to_string(r.time_s).substr(0, 6) + " s" : std::string("never"))
         << " | " << r.scans_to << " | " << std::setprecision(1) << r.path_m << " | " << std::setprecision(2) << r.compute_s << " | "
         << std::setprecision(3) << r.ate_rmse_m << " | " << r.ate_max_m << " | " << std::setprecision(2) << r.heading_rmse_deg

@@ -30,6 +30,7 @@
 #include "snapnav/omni_frame_t.hpp"
 #include "snapnav/pose_t.hpp"
 #include "process_logs.hpp"
+#include "results.hpp"
 #include "run_sections.hpp"
 
 namespace {
@@ -186,18 +187,19 @@ int Main(int argc, char** argv) {
   }
 
   // Trajectory errors against the ground truth.
-  std::ostringstream json;
-  json << std::fixed << std::setprecision(4) << "{\n  \"log\": \"" << log_path << "\",\n  \"log_bytes\": " << file_size
-       << ",\n  \"log_valid_bytes\": " << good_bytes
-       << ",\n  \"log_damaged_places\": " << log.damage().size();
+  results::Json json;
+  json["log"] = log_path;
+  json["log_bytes"] = file_size;
+  json["log_valid_bytes"] = good_bytes;
+  json["log_damaged_places"] = log.damage().size();
   std::ostringstream table;
   table << "| channel | messages | rate (Hz) | MB |\n|---|---|---|---|\n";
   for (const auto& [ch, ci] : info) {
     const double span = (ci.last_us - ci.first_us) * 1e-6;
     table << "| " << ch << " | " << ci.count << " | " << std::fixed << std::setprecision(1)
           << (span > 0 ? (ci.count - 1) / span : 0.0) << " | " << std::setprecision(2) << ci.bytes / 1e6 << " |\n";
-    json << ",\n  \"messages_" << ch << "\": " << ci.count;
-    if (ci.rejected > 0) json << ",\n  \"rejected_" << ch << "\": " << ci.rejected;
+    json["messages_" + ch] = ci.count;
+    if (ci.rejected > 0) json["rejected_" + ch] = ci.rejected;
   }
   std::ostringstream ate_table;
   const auto truth_it = poses.find(truth_channel);
@@ -214,8 +216,9 @@ int Main(int argc, char** argv) {
                 << aligned.rmse_m << " | " << raw.final_m << " |\n";
       std::string key = ch;
       for (auto& c : key) c = static_cast<char>(std::tolower(c));
-      json << ",\n  \"" << key << "_ate_rmse_m\": " << raw.rmse_m << ",\n  \"" << key
-           << "_aligned_ate_rmse_m\": " << aligned.rmse_m << ",\n  \"" << key << "_final_error_m\": " << raw.final_m;
+      json[key + "_ate_rmse_m"] = results::Rounded(raw.rmse_m, 4);
+      json[key + "_aligned_ate_rmse_m"] = results::Rounded(aligned.rmse_m, 4);
+      json[key + "_final_error_m"] = results::Rounded(raw.final_m, 4);
     }
   }
   // The navigation stack's outputs, judged against the ground truth; the delivery of every message.
@@ -242,11 +245,8 @@ int Main(int argc, char** argv) {
     sections.push_back(report::DeliverySection(process_logs, recorded));
     std::ofstream(fs::path(out_dir) / "delivery.csv") << report::DeliveryCsv(process_logs, recorded);
   }
-  for (const auto& section : sections) {
-    for (const auto& [k, v] : section.json) json << ",\n  \"" << k << "\": " << v;
-  }
-  json << "\n}\n";
-  std::ofstream(fs::path(out_dir) / "summary.json") << json.str();
+  for (const auto& section : sections) json.update(section.json);
+  results::WriteJsonFile((fs::path(out_dir) / "summary.json").string(), json);
   // The navigator's waypoints, for the map.
   std::vector<std::pair<int, Eigen::Vector2d>> waypoints;
   for (const auto& [_, sts] : statuses) {

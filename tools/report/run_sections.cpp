@@ -139,8 +139,8 @@ Section HomingSection(const std::string& channel, const std::vector<homing_vecto
   for (const auto& v : vectors) valid += v.valid;
   std::ostringstream md;
   md << "\n## Homing: " << channel << "\n\n" << vectors.size() << " vectors, " << valid << " valid";
-  s.json.emplace_back(key + "_vectors", std::to_string(vectors.size()));
-  s.json.emplace_back(key + "_valid", std::to_string(valid));
+  s.json[key + "_vectors"] = vectors.size();
+  s.json[key + "_valid"] = valid;
   if (!home || truth.empty()) {
     md << " (no " << (home ? "ground truth" : "home position (--home X,Y)") << ": directions not judged).\n";
     s.markdown = md.str();
@@ -152,10 +152,10 @@ Section HomingSection(const std::string& channel, const std::vector<homing_vecto
      << "| mean angular error (deg) | median (deg) | max (deg) | within 45 deg | within 90 deg |\n|---|---|---|---|---|\n| "
      << Fixed(h.mean_deg, 1) << " | " << Fixed(h.median_deg, 1) << " | " << Fixed(h.max_deg, 1) << " | "
      << Fixed(100 * h.within_45, 0) << " % | " << Fixed(100 * h.within_90, 0) << " % |\n";
-  s.json.emplace_back(key + "_evaluated", std::to_string(h.evaluated));
-  s.json.emplace_back(key + "_mean_error_deg", Fixed(h.mean_deg, 2));
-  s.json.emplace_back(key + "_median_error_deg", Fixed(h.median_deg, 2));
-  s.json.emplace_back(key + "_within_90_fraction", Fixed(h.within_90, 3));
+  s.json[key + "_evaluated"] = h.evaluated;
+  s.json[key + "_mean_error_deg"] = results::Rounded(h.mean_deg, 2);
+  s.json[key + "_median_error_deg"] = results::Rounded(h.median_deg, 2);
+  s.json[key + "_within_90_fraction"] = results::Rounded(h.within_90, 3);
   if (h.evaluated == 0) {
     s.markdown = md.str();
     return s;
@@ -223,8 +223,8 @@ Section PlaceCellSection(const std::string& channel, const std::vector<place_cel
   std::ostringstream md;
   md << "\n## Place cells: " << channel << "\n\n"
      << e.matches << " matches, " << e.unmatched << " views matched no cell";
-  s.json.emplace_back(key + "_matches", std::to_string(e.matches));
-  s.json.emplace_back(key + "_unmatched", std::to_string(e.unmatched));
+  s.json[key + "_matches"] = e.matches;
+  s.json[key + "_unmatched"] = e.unmatched;
   if (e.evaluated == 0) {
     md << (truth.empty() ? " (no ground truth)" : "") << ".\n";
     s.markdown = md.str();
@@ -233,9 +233,9 @@ Section PlaceCellSection(const std::string& channel, const std::vector<place_cel
   md << ". Distance from the matched cell to the true position (" << e.evaluated << " views):\n\n"
      << "| mean (m) | median (m) | max (m) |\n|---|---|---|\n| " << Fixed(e.mean_m, 3) << " | " << Fixed(e.median_m, 3)
      << " | " << Fixed(e.max_m, 3) << " |\n";
-  s.json.emplace_back(key + "_mean_cell_error_m", Fixed(e.mean_m, 4));
-  s.json.emplace_back(key + "_median_cell_error_m", Fixed(e.median_m, 4));
-  s.json.emplace_back(key + "_max_cell_error_m", Fixed(e.max_m, 4));
+  s.json[key + "_mean_cell_error_m"] = results::Rounded(e.mean_m, 4);
+  s.json[key + "_median_cell_error_m"] = results::Rounded(e.median_m, 4);
+  s.json[key + "_max_cell_error_m"] = results::Rounded(e.max_m, 4);
   const std::string chart = key + "_error.png";
   plot::Axes axes;
   axes.title = "Matched place cell against the true position (" + channel + ")";
@@ -265,10 +265,10 @@ Section NavigatorSection(const std::string& channel, const std::vector<navigator
      << " waypoints reached, " << last.laps << " laps completed, final state " << StateName(last.state) << "; place-cell fixes "
      << last.fixes_accepted << " accepted, " << last.fixes_rejected << " rejected, " << last.tracker_resets
      << " tracker resets.\n";
-  s.json.emplace_back(key + "_arrivals", std::to_string(last.arrivals));
-  s.json.emplace_back(key + "_laps", std::to_string(last.laps));
-  s.json.emplace_back(key + "_fixes_accepted", std::to_string(last.fixes_accepted));
-  s.json.emplace_back(key + "_fixes_rejected", std::to_string(last.fixes_rejected));
+  s.json[key + "_arrivals"] = last.arrivals;
+  s.json[key + "_laps"] = last.laps;
+  s.json[key + "_fixes_accepted"] = last.fixes_accepted;
+  s.json[key + "_fixes_rejected"] = last.fixes_rejected;
   // Arrivals (the count going up) and the tracked position against the truth.
   std::vector<double> t, dist, err;
   double err_sum = 0, err_max = 0;
@@ -297,8 +297,8 @@ Section NavigatorSection(const std::string& channel, const std::vector<navigator
   if (err_n > 0) {
     md << "\nTracked position against the true position: mean " << Fixed(err_sum / err_n, 3) << " m, max "
        << Fixed(err_max, 3) << " m (" << err_n << " statuses).\n";
-    s.json.emplace_back(key + "_mean_tracking_error_m", Fixed(err_sum / err_n, 4));
-    s.json.emplace_back(key + "_max_tracking_error_m", Fixed(err_max, 4));
+    s.json[key + "_mean_tracking_error_m"] = results::Rounded(err_sum / err_n, 4);
+    s.json[key + "_max_tracking_error_m"] = results::Rounded(err_max, 4);
   }
   if (!t.empty()) {
     const std::string chart = key + ".png";
@@ -373,17 +373,17 @@ Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std:
       lost_total += l;
       lost = std::to_string(l);
       if (d.recorded > d.published) lost += " (" + std::to_string(d.recorded - d.published) + " more recorded)";
-      s.json.emplace_back("delivery_" + Lower(d.channel) + "_published", std::to_string(d.published));
-      s.json.emplace_back("delivery_" + Lower(d.channel) + "_recorded", std::to_string(d.recorded));
+      s.json["delivery_" + Lower(d.channel) + "_published"] = d.published;
+      s.json["delivery_" + Lower(d.channel) + "_recorded"] = d.recorded;
     } else {
       lost = "unknown";
     }
     md << "| " << d.channel << " | " << pubs << " | " << (d.exact ? "" : ">= ") << d.published << " | " << d.recorded
        << " | " << lost << " | " << (recv.empty() ? "-" : recv) << " |\n";
   }
-  s.json.emplace_back("delivery_exact_channels", std::to_string(exact_channels));
-  s.json.emplace_back("delivery_lost_total", std::to_string(lost_total));
-  s.json.emplace_back("delivery_missed_by_subscribers_total", std::to_string(missed_total));
+  s.json["delivery_exact_channels"] = exact_channels;
+  s.json["delivery_lost_total"] = lost_total;
+  s.json["delivery_missed_by_subscribers_total"] = missed_total;
   // The runs of each process and the launcher's words about them.
   md << "\n| process | runs | runs that reported counts | launcher |\n|---|---|---|---|\n";
   int restarts = 0;
@@ -400,9 +400,9 @@ Section DeliverySection(const std::vector<ProcessLog>& logs, const std::map<std:
     }
     md << "| " << log.name << " | " << log.runs.size() << " | " << reported << " | " << (notes.empty() ? "-" : notes)
        << " |\n";
-    s.json.emplace_back("process_" + Lower(log.name) + "_runs", std::to_string(log.runs.size()));
+    s.json["process_" + Lower(log.name) + "_runs"] = log.runs.size();
   }
-  s.json.emplace_back("process_restarts_total", std::to_string(restarts));
+  s.json["process_restarts_total"] = restarts;
   s.markdown = md.str();
   return s;
 }
@@ -485,13 +485,13 @@ Section AteOverTimeSection(const std::map<std::string, std::vector<nav::StampedP
     md << "| " << ch << " | " << w.rmse_m.size() << " | " << Fixed(w.rmse_m.front(), 3) << " | "
        << Fixed(w.rmse_m.back(), 3) << " | " << Fixed(w.max_m, 3) << " | " << Fixed(w.mean_m, 3) << " | "
        << Fixed(w.trend_m_per_h, 3) << " | " << Fixed(w.growth_m, 3) << " |\n";
-    s.json.emplace_back(key + "_ate_windows", std::to_string(w.rmse_m.size()));
-    s.json.emplace_back(key + "_ate_window_first_m", Fixed(w.rmse_m.front(), 4));
-    s.json.emplace_back(key + "_ate_window_last_m", Fixed(w.rmse_m.back(), 4));
-    s.json.emplace_back(key + "_ate_window_max_m", Fixed(w.max_m, 4));
-    s.json.emplace_back(key + "_ate_window_mean_m", Fixed(w.mean_m, 4));
-    s.json.emplace_back(key + "_ate_trend_m_per_h", Fixed(w.trend_m_per_h, 4));
-    s.json.emplace_back(key + "_ate_growth_m", Fixed(w.growth_m, 4));
+    s.json[key + "_ate_windows"] = w.rmse_m.size();
+    s.json[key + "_ate_window_first_m"] = results::Rounded(w.rmse_m.front(), 4);
+    s.json[key + "_ate_window_last_m"] = results::Rounded(w.rmse_m.back(), 4);
+    s.json[key + "_ate_window_max_m"] = results::Rounded(w.max_m, 4);
+    s.json[key + "_ate_window_mean_m"] = results::Rounded(w.mean_m, 4);
+    s.json[key + "_ate_trend_m_per_h"] = results::Rounded(w.trend_m_per_h, 4);
+    s.json[key + "_ate_growth_m"] = results::Rounded(w.growth_m, 4);
     plot::Series line{ch, {}, w.rmse_m};
     for (size_t i = 0; i < w.rmse_m.size(); ++i) {
       line.x.push_back((w.start_s[i] + window_s / 2) / 60.0);
@@ -499,7 +499,7 @@ Section AteOverTimeSection(const std::map<std::string, std::vector<nav::StampedP
     }
     series.push_back(std::move(line));
   }
-  s.json.emplace_back("ate_window_s", Fixed(window_s, 1));
+  s.json["ate_window_s"] = results::Rounded(window_s, 1);
   std::ofstream(fs::path(out_dir) / "ate_windows.csv") << csv.str();
   if (!series.empty()) {
     plot::Axes axes;

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "process_logs.hpp"
+#include "results.hpp"
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/navigator_status_t.hpp"
 #include "snapnav/nav/trajectory.hpp"
@@ -21,11 +22,10 @@
 
 namespace snapnav::report {
 
-// Markdown, flat summary.json entries ("key": value, value already formatted) and PNG files
-// written into the output folder.
+// Markdown, flat summary.json entries and PNG files written into the output folder.
 struct Section {
   std::string markdown;
-  std::vector<std::pair<std::string, std::string>> json;
+  results::Json json = results::Json::object();
 };
 
 struct HomingErrors {
