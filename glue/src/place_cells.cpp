@@ -168,10 +168,8 @@ void PrintPlaceViewOptions(std::ostream& out, const nav::PlaceViewOptions& o) {
 }
 
 void PrintLocalizerOptions(std::ostream& out, const nav::LocalizerOptions& o) {
-  const auto& m = o.measure;
-  const auto& f = o.filter;
   out << "[matching]\n";
-  MatchOptionTable().Print(out, m.match);
+  MatchOptionTable().Print(out, o.measure.match);
   out << "[measure]\n";
   MeasureTable().Print(out, o.measure);
   out << "[distance_filter]\n";
