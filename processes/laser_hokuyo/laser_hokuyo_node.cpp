@@ -37,11 +37,7 @@ LaserHokuyoConfig LaserHokuyoConfig::FromIni(const glue::IniFile& ini, const std
   HokuyoTable().ReadKeys(ini, "hokuyo", &c);
   c.scan.range_min_m = kHokuyoRangeMinM;
   ini.CheckAllUsed();
-  try {
-    c.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ini.ValidationError(e.what());
-  }
+  ini.Check([&c] { c.Validate(); });
   return c;
 }
 

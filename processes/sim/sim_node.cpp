@@ -6,12 +6,15 @@
 #include <iostream>
 #include <ostream>
 #include <stdexcept>
+#include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "snapnav/glue/channels.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/options.hpp"
 #include "snapnav/glue/shutdown.hpp"
 #include "snapnav/glue/time.hpp"
 #include "snapnav/laser_scan_t.hpp"
@@ -31,49 +34,142 @@ int EveryNSteps(double physics_hz, double rate_hz, const char* what) {
   return static_cast<int>(std::round(n));
 }
 
+// The keys of [sim], [camera], [effects], [laser] and [robot], declared once: read, printed and
+// described from here ([mirror] and [panorama] are glue's; the presets' derived options are set
+// after reading).
+using Table = glue::OptionTable<SimConfig>;
+
+const Table& SimTable() {
+  using C = SimConfig;
+  static const auto table =
+      Table()
+          .Text("scene", &C::scene)
+          .Number("seed", "", &C::seed)
+          .Choice("mode", &C::realtime, std::vector<std::pair<std::string, bool>>{{"realtime", true}, {"lockstep", false}})
+          .Number("realtime_factor", "", &C::realtime_factor)
+          .Number("duration_s", "s", &C::duration_s)
+          .Custom(
+              "start_time_s", "s",
+              [](const glue::IniFile& ini, const std::string& s, const std::string& k, C& c) {
+                c.start_at_wall_clock = ini.GetString(s, k) == "now";
+                if (!c.start_at_wall_clock) c.start_utime = static_cast<int64_t>(ini.GetDouble(s, k) * 1e6);
+              },
+              [](std::ostream& out, const C& c) {
+                if (c.start_at_wall_clock) {
+                  out << "now";
+                } else {
+                  out << c.start_utime / 1'000'000;
+                  if (c.start_utime % 1'000'000) out << "." << std::setw(6) << std::setfill('0') << c.start_utime % 1'000'000 << std::setfill(' ');
+                }
+              })
+          .Custom(
+              "clock_offset_s", "s",
+              [](const glue::IniFile& ini, const std::string& s, const std::string& k, C& c) {
+                c.clock_offset_us = std::llround(ini.GetDouble(s, k) * 1e6);
+              },
+              [](std::ostream& out, const C& c) { out << c.clock_offset_us * 1e-6; })
+          .Number("physics_rate_hz", "Hz", &C::physics_rate_hz)
+          .Text("drive", &C::drive)
+          .Number("route_speed_mps", "m/s", &C::route_speed_mps)
+          .Number("route_tolerance_m", "m", &C::route_tolerance_m)
+          .Flag("route_loop", &C::route_loop)
+          .Number("command_timeout_s", "s", &C::command_timeout_s)
+          .Number("command_watchdog_s", "s", &C::command_watchdog_s)
+          .Number("command_max_age_s", "s", &C::command_max_age_s);
+  return table;
+}
+
+const Table& CameraTable() {
+  using C = SimConfig;
+  static const auto table =
+      Table()
+          .Text("preset", &C::camera_preset)
+          .Number("rate_hz", "Hz", &C::camera_rate_hz)
+          .Flag("publish_raw", &C::publish_raw)
+          .Flag("publish_panorama", &C::publish_panorama)
+          .Custom(
+              "encoding", "",
+              [](const glue::IniFile& ini, const std::string& s, const std::string& k, C& c) {
+                try {
+                  c.encoding = glue::ParseFrameEncoding(ini.GetString(s, k));
+                } catch (const std::invalid_argument& e) {
+                  ini.FailKey(s, k, e.what());
+                }
+              },
+              [](std::ostream& out, const C& c) { out << glue::FrameEncodingName(c.encoding); })
+          .Number("jpeg_quality", "", &C::jpeg_quality)
+          .Number("width_px", "px", [](auto& c) -> auto& { return c.camera.omni_width_px; })
+          .Number("height_px", "px", [](auto& c) -> auto& { return c.camera.omni_height_px; })
+          .Number("height_m", "m", [](auto& c) -> auto& { return c.camera.height_m; })
+          .Number("offset_x_m", "m", [](auto& c) -> auto& { return c.camera.offset_x_m; });
+  return table;
+}
+
+const Table& EffectsTable() {
+  static const auto table =
+      Table()
+          .Number("blur_sigma_px", "px", [](auto& c) -> auto& { return c.effects.blur_sigma_px; })
+          .Number("noise_sigma", "grey", [](auto& c) -> auto& { return c.effects.noise_sigma; })
+          .Number("salt_pepper_fraction", "", [](auto& c) -> auto& { return c.effects.salt_pepper_fraction; })
+          .Number("illumination_gain", "", [](auto& c) -> auto& { return c.effects.gain; })
+          .Number("illumination_offset", "grey", [](auto& c) -> auto& { return c.effects.offset; });
+  return table;
+}
+
+const Table& LaserTable() {
+  using C = SimConfig;
+  static const auto table = Table()
+                                .Number("rate_hz", "Hz", &C::laser_rate_hz)
+                                .Number("beams", "", [](auto& c) -> auto& { return c.laser.beams; })
+                                .Degrees("angle_min_deg", [](auto& c) -> auto& { return c.laser.angle_min_rad; })
+                                .Degrees("angle_max_deg", [](auto& c) -> auto& { return c.laser.angle_max_rad; })
+                                .Number("range_min_m", "m", [](auto& c) -> auto& { return c.laser.range_min_m; })
+                                .Number("range_max_m", "m", [](auto& c) -> auto& { return c.laser.range_max_m; })
+                                .Number("range_noise_m", "m", [](auto& c) -> auto& { return c.laser.range_noise_m; })
+                                .Number("mount_height_m", "m", [](auto& c) -> auto& { return c.laser.mount_height_m; })
+                                .Number("mount_x_m", "m", [](auto& c) -> auto& { return c.laser.mount_x_m; })
+                                .Text("preset", &C::laser_preset);
+  return table;
+}
+
+const Table& RobotTable() {
+  using C = SimConfig;
+  static const auto table =
+      Table()
+          .Number("odometry_rate_hz", "Hz", &C::odometry_rate_hz)
+          .Number("max_linear_mps", "m/s", [](auto& c) -> auto& { return c.drive_options.max_linear_mps; })
+          .Number("max_angular_radps", "rad/s", [](auto& c) -> auto& { return c.drive_options.max_angular_radps; })
+          .Number("heading_drift_deg_per_m", "deg/m", [](auto& c) -> auto& { return c.drive_options.heading_drift_deg_per_m; })
+          .Number("linear_noise_frac", "", [](auto& c) -> auto& { return c.drive_options.linear_noise_frac; })
+          .Number("angular_noise_radps", "rad/s", [](auto& c) -> auto& { return c.drive_options.angular_noise_radps; })
+          .Number("odometry_linear_noise_frac", "", [](auto& c) -> auto& { return c.drive_options.odometry_linear_noise_frac; })
+          .Number("odometry_angular_noise_frac", "", [](auto& c) -> auto& { return c.drive_options.odometry_angular_noise_frac; })
+          .Number("radius_m", "m", [](auto& c) -> auto& { return c.drive_options.robot_radius_m; })
+          .Number("kidnap_at_s", "s", [](auto& c) -> auto& { return c.kidnap.at_s; })
+          .Custom(
+              "kidnap_to", "m,m,deg",
+              [](const glue::IniFile& ini, const std::string& s, const std::string& k, C& c) {
+                const std::vector<double> to = ini.GetDoubleList(s, k);
+                if (to.size() != 3) {
+                  ini.FailKey(s, k, "expected x_m,y_m,theta_deg (3 values, got " + std::to_string(to.size()) + ")");
+                }
+                c.kidnap.to = {to[0], to[1], to[2] * kDeg};
+              },
+              [](std::ostream& out, const C& c) {
+                out << c.kidnap.to.x_m << "," << c.kidnap.to.y_m << "," << c.kidnap.to.theta_rad / kDeg;
+              });
+  return table;
+}
+
 }  // namespace
 
 SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix) {
   SimConfig c;
-  c.scene = ini.GetString("sim", "scene");
-  c.seed = static_cast<uint64_t>(ini.GetInt("sim", "seed"));
-  const std::string mode = ini.GetString("sim", "mode");
-  if (mode != "realtime" && mode != "lockstep") ini.FailKey("sim", "mode", "expected realtime | lockstep");
-  c.realtime = mode == "realtime";
-  c.realtime_factor = ini.GetDouble("sim", "realtime_factor");
-  c.duration_s = ini.GetDouble("sim", "duration_s");
-  if (ini.GetString("sim", "start_time_s") == "now") {
-    c.start_at_wall_clock = true;
-  } else {
-    c.start_utime = static_cast<int64_t>(ini.GetDouble("sim", "start_time_s") * 1e6);
-  }
-  c.clock_offset_us = std::llround(ini.GetDouble("sim", "clock_offset_s") * 1e6);
-  c.physics_rate_hz = ini.GetDouble("sim", "physics_rate_hz");
-  c.drive = ini.GetString("sim", "drive");
-  c.route_speed_mps = ini.GetDouble("sim", "route_speed_mps");
-  c.route_tolerance_m = ini.GetDouble("sim", "route_tolerance_m");
-  c.route_loop = ini.GetBool("sim", "route_loop");
-  c.command_timeout_s = ini.GetDouble("sim", "command_timeout_s");
-  c.command_watchdog_s = ini.GetDouble("sim", "command_watchdog_s");
-  c.command_max_age_s = ini.GetDouble("sim", "command_max_age_s");
-
-  c.camera_rate_hz = ini.GetDouble("camera", "rate_hz");
-  c.publish_raw = ini.GetBool("camera", "publish_raw");
-  c.publish_panorama = ini.GetBool("camera", "publish_panorama");
-  try {
-    c.encoding = glue::ParseFrameEncoding(ini.GetString("camera", "encoding"));
-  } catch (const std::invalid_argument& e) {
-    ini.FailKey("camera", "encoding", e.what());
-  }
-  c.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
+  SimTable().ReadKeys(ini, "sim", &c);
+  CameraTable().ReadKeys(ini, "camera", &c);
   auto& cam = c.camera;
-  cam.height_m = ini.GetDouble("camera", "height_m");
-  cam.offset_x_m = ini.GetDouble("camera", "offset_x_m");
-  cam.omni_width_px = ini.GetInt("camera", "width_px");
-  cam.omni_height_px = ini.GetInt("camera", "height_px");
   cam.mirror = glue::ReadMirrorConfig(ini);
   cam.panorama = glue::ReadPanoramaConfig(ini);
-  c.camera_preset = ini.GetString("camera", "preset");
   try {
     cam.optics = nav::sim::CameraOpticsPreset(c.camera_preset);
   } catch (const std::invalid_argument& e) {
@@ -82,44 +178,14 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   cam.optics.seed = c.seed ^ 0x0b71c5ULL;  // the sensor noise follows the seed
   // The realistic camera compresses its own frames (an MJPEG camera) at the frames' quality.
   if (cam.optics.enabled) cam.optics.jpeg_quality = c.jpeg_quality;
-  c.effects.blur_sigma_px = ini.GetDouble("effects", "blur_sigma_px");
-  c.effects.noise_sigma = ini.GetDouble("effects", "noise_sigma");
-  c.effects.salt_pepper_fraction = ini.GetDouble("effects", "salt_pepper_fraction");
-  c.effects.gain = ini.GetDouble("effects", "illumination_gain");
-  c.effects.offset = ini.GetDouble("effects", "illumination_offset");
-
-  c.laser_rate_hz = ini.GetDouble("laser", "rate_hz");
-  c.laser.beams = ini.GetInt("laser", "beams");
-  c.laser.angle_min_rad = ini.GetDouble("laser", "angle_min_deg") * kDeg;
-  c.laser.angle_max_rad = ini.GetDouble("laser", "angle_max_deg") * kDeg;
-  c.laser.range_min_m = ini.GetDouble("laser", "range_min_m");
-  c.laser.range_max_m = ini.GetDouble("laser", "range_max_m");
-  c.laser.range_noise_m = ini.GetDouble("laser", "range_noise_m");
-  c.laser.mount_height_m = ini.GetDouble("laser", "mount_height_m");
-  c.laser.mount_x_m = ini.GetDouble("laser", "mount_x_m");
-  c.laser_preset = ini.GetString("laser", "preset");
+  EffectsTable().ReadKeys(ini, "effects", &c);
+  LaserTable().ReadKeys(ini, "laser", &c);
   try {
     c.laser.faults = nav::sim::LaserFaultsPreset(c.laser_preset);
   } catch (const std::invalid_argument& e) {
     ini.FailKey("laser", "preset", e.what());
   }
-
-  c.odometry_rate_hz = ini.GetDouble("robot", "odometry_rate_hz");
-  auto& d = c.drive_options;
-  d.max_linear_mps = ini.GetDouble("robot", "max_linear_mps");
-  d.max_angular_radps = ini.GetDouble("robot", "max_angular_radps");
-  d.heading_drift_deg_per_m = ini.GetDouble("robot", "heading_drift_deg_per_m");
-  d.linear_noise_frac = ini.GetDouble("robot", "linear_noise_frac");
-  d.angular_noise_radps = ini.GetDouble("robot", "angular_noise_radps");
-  d.odometry_linear_noise_frac = ini.GetDouble("robot", "odometry_linear_noise_frac");
-  d.odometry_angular_noise_frac = ini.GetDouble("robot", "odometry_angular_noise_frac");
-  d.robot_radius_m = ini.GetDouble("robot", "radius_m");
-  c.kidnap.at_s = ini.GetDouble("robot", "kidnap_at_s");
-  const std::vector<double> to = ini.GetDoubleList("robot", "kidnap_to");
-  if (to.size() != 3) {
-    ini.FailKey("robot", "kidnap_to", "expected x_m,y_m,theta_deg (3 values, got " + std::to_string(to.size()) + ")");
-  }
-  c.kidnap.to = {to[0], to[1], to[2] * kDeg};
+  RobotTable().ReadKeys(ini, "robot", &c);
 
   c.omni_channel = prefix + ini.GetString("channels", "omni");
   c.panorama_channel = prefix + ini.GetString("channels", "panorama");
@@ -128,11 +194,7 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
   c.ground_truth_channel = prefix + ini.GetString("channels", "ground_truth");
   c.command_channel = prefix + ini.GetString("channels", "drive_command");
   ini.CheckAllUsed();
-  try {
-    c.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ini.ValidationError(e.what());
-  }
+  ini.Check([&c] { c.Validate(); });
   return c;
 }
 
@@ -166,47 +228,32 @@ void SimConfig::Validate() const {
 }
 
 void SimConfig::Print(std::ostream& o) const {
-  o << "scene=" << scene << " seed=" << seed << " mode=" << (realtime ? "realtime" : "lockstep")
-    << " realtime_factor=" << realtime_factor
-    << " duration_s=" << duration_s << " drive=" << drive << " physics_rate_hz=" << physics_rate_hz << "\n"
-    << "clock: start_time_s=" << (start_at_wall_clock ? std::string("now (the wall clock)") : std::to_string(start_utime / 1'000'000))
-    << " clock_offset_s=" << clock_offset_us * 1e-6 << " command_watchdog_s=" << command_watchdog_s
-    << " command_max_age_s=" << command_max_age_s << "\n"
-    << "camera: rate_hz=" << camera_rate_hz << " raw=" << publish_raw << " " << camera.omni_width_px << "x"
-    << camera.omni_height_px << " panorama=" << publish_panorama << " " << camera.panorama.width_px << "x"
-    << camera.panorama.height_px << " encoding=" << static_cast<int>(encoding) << " height_m=" << camera.height_m
-    << " (" << glue::FrameEncodingName(encoding) << (encoding == omni_frame_t::JPEG ? " quality " + std::to_string(jpeg_quality) : std::string()) << ")"
-    << " preset=" << camera_preset
-    << " mirror=(" << camera.mirror.center_x_px << "," << camera.mirror.center_y_px << ") r="
-    << camera.mirror.inner_radius_px << ".." << camera.mirror.outer_radius_px << "\n"
-    << (camera.optics.enabled
-            ? "camera optics (realistic): auto-exposure " + std::string(camera.optics.auto_exposure ? "on" : "off") +
-                  " (target grey " + std::to_string(static_cast<int>(camera.optics.exposure_target_grey)) + "), own JPEG quality " +
-                  std::to_string(camera.optics.jpeg_quality) + ", shutter " +
-                  std::to_string(static_cast<int>(std::lround(camera.optics.exposure_time_s * 1000))) +
-                  " ms (motion blur), calibration off by (" + std::to_string(camera.optics.calibration_error_x_px) + ", " +
-                  std::to_string(camera.optics.calibration_error_y_px) + ") px\n"
-            : std::string())
-    << "effects: blur_sigma_px=" << effects.blur_sigma_px << " noise_sigma=" << effects.noise_sigma
-    << " salt_pepper=" << effects.salt_pepper_fraction << " gain=" << effects.gain << " offset=" << effects.offset << "\n"
-    << "laser: rate_hz=" << laser_rate_hz << " beams=" << laser.beams << " range=" << laser.range_min_m << ".."
-    << laser.range_max_m << " noise_m=" << laser.range_noise_m << " preset=" << laser_preset
-    << (laser.faults.enabled
-            ? " (range x" + std::to_string(laser.faults.range_scale) + " + " + std::to_string(laser.faults.range_bias_m) +
-                  " m, mixed pixels at edges over " + std::to_string(laser.faults.mixed_pixel_jump_m) +
-                  " m, no return from surfaces darker than grey " + std::to_string(static_cast<int>(laser.faults.dark_grey)) +
-                  ", people as legs)"
-            : std::string())
-    << "\n"
-    << "robot: odometry_rate_hz=" << odometry_rate_hz << " heading_drift_deg_per_m="
-    << drive_options.heading_drift_deg_per_m << " odometry_noise=" << drive_options.odometry_linear_noise_frac << ","
-    << drive_options.odometry_angular_noise_frac << "\n"
-    << "kidnap: " << (kidnap.enabled() ? "at " + std::to_string(kidnap.at_s) + " s to (" + std::to_string(kidnap.to.x_m) +
-                                             ", " + std::to_string(kidnap.to.y_m) + ", " +
-                                             std::to_string(kidnap.to.theta_rad / kDeg) + " deg)"
-                                       : std::string("none")) << "\n"
-    << "channels: " << omni_channel << " " << panorama_channel << " " << scan_channel << " " << odometry_channel << " "
-    << ground_truth_channel << " <- " << command_channel << "\n";
+  o << "[sim]\n";
+  SimTable().Print(o, *this);
+  o << "[camera]\n";
+  CameraTable().Print(o, *this);
+  if (camera.optics.enabled) {
+    o << "; the realistic camera: auto-exposure " << (camera.optics.auto_exposure ? "on" : "off") << " (target grey "
+      << static_cast<int>(camera.optics.exposure_target_grey) << "), own JPEG quality " << camera.optics.jpeg_quality
+      << ", shutter " << std::lround(camera.optics.exposure_time_s * 1000) << " ms (motion blur), calibration off by ("
+      << camera.optics.calibration_error_x_px << ", " << camera.optics.calibration_error_y_px << ") px\n";
+  }
+  glue::PrintMirrorConfig(o, camera.mirror);
+  glue::PrintPanoramaConfig(o, camera.panorama);
+  o << "[effects]\n";
+  EffectsTable().Print(o, *this);
+  o << "[laser]\n";
+  LaserTable().Print(o, *this);
+  if (laser.faults.enabled) {
+    o << "; the realistic laser: range x" << laser.faults.range_scale << " + " << laser.faults.range_bias_m
+      << " m, mixed pixels at edges over " << laser.faults.mixed_pixel_jump_m << " m, no return from surfaces darker than grey "
+      << static_cast<int>(laser.faults.dark_grey) << ", people as legs\n";
+  }
+  o << "[robot]\n";
+  RobotTable().Print(o, *this);
+  o << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel << "\nscan = " << scan_channel
+    << "\nodometry = " << odometry_channel << "\nground_truth = " << ground_truth_channel
+    << "\ndrive_command = " << command_channel << "\n";
 }
 
 SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene& scene)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "../support/config_errors.hpp"
@@ -341,6 +342,40 @@ TEST(SceneFiles, ErrorsNameFileAndLine) {
     EXPECT_NE(std::string(e.what()).find("does-not-exist.jpg"), std::string::npos) << e.what();
   }
   EXPECT_THROW(LoadSceneFile("/nonexistent.scene"), std::runtime_error);
+}
+
+// Print writes the config in the file's form: read back, it gives the same options, the realistic
+// presets and a kidnapping included.
+TEST(SimConfig, PrintReadsBackAsTheSameConfig) {
+  std::string text;
+  {
+    std::ifstream in(SNAPNAV_CONFIG_DIR "/sim.ini");
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  auto ini = glue::IniFile::Parse(text, "sim.ini");
+  ini.Set("camera", "preset", "realistic", "test");
+  ini.Set("laser", "preset", "realistic", "test");
+  ini.Set("robot", "kidnap_at_s", "12.5", "test");
+  ini.Set("sim", "start_time_s", "1700000000.5", "test");
+  ini.Set("sim", "clock_offset_s", "-0.75", "test");
+  const SimConfig c = SimConfig::FromIni(ini, "");
+  std::ostringstream printed;
+  c.Print(printed);
+  EXPECT_NE(printed.str().find("[sim]\nscene = indoor13\n"), std::string::npos) << printed.str();
+  EXPECT_NE(printed.str().find("; the realistic camera:"), std::string::npos) << printed.str();
+  const SimConfig again = SimConfig::FromIni(glue::IniFile::Parse(printed.str(), "printed"), "");
+  std::ostringstream printed_again;
+  again.Print(printed_again);
+  EXPECT_EQ(printed_again.str(), printed.str());
+  EXPECT_EQ(again.start_utime, c.start_utime);
+  EXPECT_EQ(again.clock_offset_us, -750000);
+  EXPECT_EQ(again.seed, c.seed);
+  EXPECT_EQ(again.encoding, c.encoding);
+  EXPECT_DOUBLE_EQ(again.kidnap.at_s, 12.5);
+  EXPECT_NEAR(again.kidnap.to.theta_rad, c.kidnap.to.theta_rad, 1e-12);
+  EXPECT_DOUBLE_EQ(again.laser.angle_min_rad, c.laser.angle_min_rad);
+  EXPECT_TRUE(again.camera.optics.enabled);
+  EXPECT_TRUE(again.laser.faults.enabled);
 }
 
 TEST(SimConfig, ShippedConfigLoadsAndBadValuesAreErrors) {

@@ -36,7 +36,7 @@ namespace snapnav::glue {
 struct OptionInfo {
   std::string key;
   std::string unit;           // "m", "deg", "s", ... ("" for counts, ratios and names)
-  std::string kind;           // number | integer | flag | text | list | choice
+  std::string kind;           // number | integer | flag | text | list | choice | custom
   std::string default_value;  // the options struct's default, printed as in a config file
   std::string choices;        // "a | b | c" for a choice
 };
@@ -113,6 +113,15 @@ class OptionTable {
                  const auto& names = std::invoke(access, o);
                  for (size_t i = 0; i < names.size(); ++i) out << (i ? "," : "") << names[i];
                });
+  }
+  // A key with its own reader and printer (a value with a special word, a unit conversion of its
+  // own, a list of numbers): read(ini, section, key, o) and print(out, o).
+  template <class R, class P>
+  OptionTable& Custom(std::string key, std::string unit, R read, P print) {
+    const std::string k = key;
+    return Add({std::move(key), std::move(unit), "custom", "", ""},
+               [k, read](const IniFile& ini, const std::string& s, T& o) { read(ini, s, k, o); },
+               [print](std::ostream& out, const T& o) { print(out, o); });
   }
   // One of `choices` (name, value); anything else is an error listing them.
   template <class F, class E>
