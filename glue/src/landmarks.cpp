@@ -1,12 +1,14 @@
 #include "snapnav/glue/landmarks.hpp"
 
 #include <cmath>
+#include <ostream>
 #include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace snapnav::glue {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 void CheckFinite(float v, const char* what) {
   if (!std::isfinite(v)) throw std::invalid_argument(std::string("landmark set: non-finite ") + what);
@@ -16,6 +18,77 @@ nav::MatchOptions ReadMatching(const IniFile& ini, const std::string& section) {
   nav::MatchOptions m;
   MatchOptionTable().ReadKeys(ini, section, &m);
   return m;
+}
+
+// The keys of [vline], [sift], [surf] and [landmark_alv], declared once: read, printed and described
+// from here.
+using Extractor = nav::LandmarkExtractorConfig;
+
+const OptionTable<Extractor>& VlineTable() {
+  static const auto table =
+      OptionTable<Extractor>()
+          .Number("blur_sigma_px", "px", [](auto& c) -> auto& { return c.vline.blur_sigma_px; })
+          .Number("canny_low", "", [](auto& c) -> auto& { return c.vline.canny_low; })
+          .Number("canny_high", "", [](auto& c) -> auto& { return c.vline.canny_high; })
+          .Number("hough_threshold", "", [](auto& c) -> auto& { return c.vline.hough_threshold; })
+          .Number("min_segment_px", "px", [](auto& c) -> auto& { return c.vline.min_segment_px; })
+          .Number("max_gap_px", "px", [](auto& c) -> auto& { return c.vline.max_gap_px; })
+          .Number("max_tilt_deg", "deg", [](auto& c) -> auto& { return c.vline.max_tilt_deg; })
+          .Number("cluster_px", "px", [](auto& c) -> auto& { return c.vline.cluster_px; })
+          .Number("min_line_px", "px", [](auto& c) -> auto& { return c.vline.min_line_px; })
+          .Number("window_px", "px", [](auto& c) -> auto& { return c.vline.window_px; })
+          .Number("bins", "", [](auto& c) -> auto& { return c.vline.bins; })
+          .Flag("divided", [](auto& c) -> auto& { return c.vline.divided; });
+  return table;
+}
+
+const OptionTable<Extractor>& SiftTable() {
+  static const auto table =
+      OptionTable<Extractor>()
+          .Number("max_features", "", [](auto& c) -> auto& { return c.sift.max_features; })
+          .Number("octave_layers", "", [](auto& c) -> auto& { return c.sift.octave_layers; })
+          .Number("contrast_threshold", "", [](auto& c) -> auto& { return c.sift.contrast_threshold; })
+          .Number("edge_threshold", "", [](auto& c) -> auto& { return c.sift.edge_threshold; })
+          .Number("sigma", "px", [](auto& c) -> auto& { return c.sift.sigma; });
+  return table;
+}
+
+const OptionTable<Extractor>& SurfTable() {
+  static const auto table =
+      OptionTable<Extractor>()
+          .Number("hessian_threshold", "", [](auto& c) -> auto& { return c.surf.hessian_threshold; })
+          .Number("octaves", "", [](auto& c) -> auto& { return c.surf.octaves; })
+          .Number("intervals", "", [](auto& c) -> auto& { return c.surf.intervals; })
+          .Number("init_sample", "", [](auto& c) -> auto& { return c.surf.init_sample; })
+          .Flag("upright", [](auto& c) -> auto& { return c.surf.upright; })
+          .Number("max_keypoints", "", [](auto& c) -> auto& { return c.surf.max_keypoints; })
+          .Number("pad_px", "px", &Extractor::surf_pad_px);
+  return table;
+}
+
+const OptionTable<nav::LandmarkHomingConfig>& LandmarkAlvTable() {
+  using C = nav::LandmarkHomingConfig;
+  static const auto table =
+      OptionTable<C>()
+          .Choice("variant", [](auto& c) -> auto& { return c.alv.variant; },
+                  {nav::AlvVariant::kUnit, nav::AlvVariant::kWeighted, nav::AlvVariant::kScale}, nav::AlvVariantName)
+          .Choice("weight", [](auto& c) -> auto& { return c.alv.weight; },
+                  {nav::MatchWeight::kScore, nav::MatchWeight::kDistance}, nav::MatchWeightName)
+          .Number("top_n", "", [](auto& c) -> auto& { return c.alv.top_n; })
+          .Choice("difference", [](auto& c) -> auto& { return c.alv.difference; },
+                  std::vector<std::pair<std::string, nav::AlvDifference>>{
+                      {"current_minus_home", nav::AlvDifference::kCurrentMinusHome},
+                      {"home_minus_current", nav::AlvDifference::kHomeMinusCurrent}})
+          .Number("max_scale_ratio", "", [](auto& c) -> auto& { return c.alv.max_scale_ratio; })
+          .Number("min_landmarks", "", [](auto& c) -> auto& { return c.alv.min_landmarks; })
+          .Flag("consensus", [](auto& c) -> auto& { return c.alv.consensus; })
+          .Degrees("consensus_window_deg", [](auto& c) -> auto& { return c.alv.consensus_window_rad; })
+          .Degrees("rotation_refine_deg", [](auto& c) -> auto& { return c.alv.rotation_refine_rad; })
+          .Choice("rotation", &C::rotation,
+                  std::vector<std::pair<std::string, nav::RotationSource>>{{"matches", nav::RotationSource::kMatches},
+                                                                          {"none", nav::RotationSource::kNone}})
+          .Degrees("rotation_window_deg", &C::rotation_window_rad);
+  return table;
 }
 
 }  // namespace
@@ -110,33 +183,9 @@ nav::LandmarkExtractorConfig ReadLandmarkExtractor(const IniFile& ini) {
       ini, "landmarks", "method",
       {{"vline", nav::LandmarkMethod::kVline}, {"sift", nav::LandmarkMethod::kSift}, {"surf", nav::LandmarkMethod::kSurf}});
   c.equalize_histogram = ini.GetBool("landmarks", "equalize_histogram");
-  auto& v = c.vline;
-  v.blur_sigma_px = ini.GetDouble("vline", "blur_sigma_px");
-  v.canny_low = ini.GetDouble("vline", "canny_low");
-  v.canny_high = ini.GetDouble("vline", "canny_high");
-  v.hough_threshold = ini.GetInt("vline", "hough_threshold");
-  v.min_segment_px = ini.GetDouble("vline", "min_segment_px");
-  v.max_gap_px = ini.GetDouble("vline", "max_gap_px");
-  v.max_tilt_deg = ini.GetDouble("vline", "max_tilt_deg");
-  v.cluster_px = ini.GetDouble("vline", "cluster_px");
-  v.min_line_px = ini.GetDouble("vline", "min_line_px");
-  v.window_px = ini.GetInt("vline", "window_px");
-  v.bins = ini.GetInt("vline", "bins");
-  v.divided = ini.GetBool("vline", "divided");
-  auto& s = c.sift;
-  s.max_features = ini.GetInt("sift", "max_features");
-  s.octave_layers = ini.GetInt("sift", "octave_layers");
-  s.contrast_threshold = ini.GetDouble("sift", "contrast_threshold");
-  s.edge_threshold = ini.GetDouble("sift", "edge_threshold");
-  s.sigma = ini.GetDouble("sift", "sigma");
-  auto& u = c.surf;
-  u.hessian_threshold = ini.GetDouble("surf", "hessian_threshold");
-  u.octaves = ini.GetInt("surf", "octaves");
-  u.intervals = ini.GetInt("surf", "intervals");
-  u.init_sample = ini.GetInt("surf", "init_sample");
-  u.upright = ini.GetBool("surf", "upright");
-  u.max_keypoints = ini.GetInt("surf", "max_keypoints");
-  c.surf_pad_px = ini.GetInt("surf", "pad_px");
+  VlineTable().ReadKeys(ini, "vline", &c);
+  SiftTable().ReadKeys(ini, "sift", &c);
+  SurfTable().ReadKeys(ini, "surf", &c);
   try {
     c.vline.Validate();
     c.sift.Validate();
@@ -153,24 +202,7 @@ nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMe
   const auto keypoints = ReadMatching(ini, "matching");
   const auto lines = ReadMatching(ini, "vline_matching");
   c.match = method == nav::LandmarkMethod::kVline ? lines : keypoints;
-  auto& a = c.alv;
-  a.variant = ReadChoice<nav::AlvVariant>(
-      ini, "landmark_alv", "variant",
-      {{"unit", nav::AlvVariant::kUnit}, {"weighted", nav::AlvVariant::kWeighted}, {"scale", nav::AlvVariant::kScale}});
-  a.weight = ReadChoice<nav::MatchWeight>(ini, "landmark_alv", "weight",
-                                          {{"score", nav::MatchWeight::kScore}, {"distance", nav::MatchWeight::kDistance}});
-  a.top_n = ini.GetInt("landmark_alv", "top_n");
-  a.difference = ReadChoice<nav::AlvDifference>(ini, "landmark_alv", "difference",
-                                                {{"current_minus_home", nav::AlvDifference::kCurrentMinusHome},
-                                                 {"home_minus_current", nav::AlvDifference::kHomeMinusCurrent}});
-  a.max_scale_ratio = ini.GetDouble("landmark_alv", "max_scale_ratio");
-  a.min_landmarks = ini.GetInt("landmark_alv", "min_landmarks");
-  a.consensus = ini.GetBool("landmark_alv", "consensus");
-  a.consensus_window_rad = ini.GetDouble("landmark_alv", "consensus_window_deg") * kDeg;
-  a.rotation_refine_rad = ini.GetDouble("landmark_alv", "rotation_refine_deg") * kDeg;
-  c.rotation = ReadChoice<nav::RotationSource>(ini, "landmark_alv", "rotation",
-                                               {{"matches", nav::RotationSource::kMatches}, {"none", nav::RotationSource::kNone}});
-  c.rotation_window_rad = ini.GetDouble("landmark_alv", "rotation_window_deg") * kDeg;
+  LandmarkAlvTable().ReadKeys(ini, "landmark_alv", &c);
   try {
     keypoints.Validate();
     lines.Validate();
@@ -182,21 +214,17 @@ nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMe
 }
 
 void PrintLandmarkExtractorSections(std::ostream& out, const nav::LandmarkExtractorConfig& c) {
-  const auto& v = c.vline;
-  const auto& s = c.sift;
-  const auto& u = c.surf;
-  const auto b = [](bool x) { return x ? "true" : "false"; };
-  out << "[vline]\nblur_sigma_px = " << v.blur_sigma_px << "\ncanny_low = " << v.canny_low
-      << "\ncanny_high = " << v.canny_high << "\nhough_threshold = " << v.hough_threshold
-      << "\nmin_segment_px = " << v.min_segment_px << "\nmax_gap_px = " << v.max_gap_px
-      << "\nmax_tilt_deg = " << v.max_tilt_deg << "\ncluster_px = " << v.cluster_px << "\nmin_line_px = " << v.min_line_px
-      << "\nwindow_px = " << v.window_px << "\nbins = " << v.bins << "\ndivided = " << b(v.divided) << "\n"
-      << "[sift]\nmax_features = " << s.max_features << "\noctave_layers = " << s.octave_layers
-      << "\ncontrast_threshold = " << s.contrast_threshold << "\nedge_threshold = " << s.edge_threshold
-      << "\nsigma = " << s.sigma << "\n"
-      << "[surf]\nhessian_threshold = " << u.hessian_threshold << "\noctaves = " << u.octaves
-      << "\nintervals = " << u.intervals << "\ninit_sample = " << u.init_sample << "\nupright = " << b(u.upright)
-      << "\nmax_keypoints = " << u.max_keypoints << "\npad_px = " << c.surf_pad_px << "\n";
+  out << "[vline]\n";
+  VlineTable().Print(out, c);
+  out << "[sift]\n";
+  SiftTable().Print(out, c);
+  out << "[surf]\n";
+  SurfTable().Print(out, c);
+}
+
+void PrintLandmarkAlv(std::ostream& out, const nav::LandmarkHomingConfig& c) {
+  out << "[landmark_alv]\n";
+  LandmarkAlvTable().Print(out, c);
 }
 
 }  // namespace snapnav::glue

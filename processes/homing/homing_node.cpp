@@ -21,8 +21,6 @@
 namespace snapnav::processes {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-
 using glue::ReadChoice;
 
 void CheckBand(const nav::HogOptions& o, const nav::PanoramaModel& p, const std::string& section) {
@@ -257,15 +255,7 @@ void HomingConfig::Print(std::ostream& out) const {
   }
   PrintMatching(out, "matching", keypoint_homing.match);
   PrintMatching(out, "vline_matching", vline_homing.match);
-  const auto& a = keypoint_homing.alv;
-  out << "[landmark_alv]\nvariant = " << nav::AlvVariantName(a.variant) << "\nweight = " << nav::MatchWeightName(a.weight)
-      << "\ntop_n = " << a.top_n << "\ndifference = "
-      << (a.difference == nav::AlvDifference::kCurrentMinusHome ? "current_minus_home" : "home_minus_current")
-      << "\nmax_scale_ratio = " << a.max_scale_ratio << "\nmin_landmarks = " << a.min_landmarks
-      << "\nconsensus = " << (a.consensus ? "true" : "false") << "\nconsensus_window_deg = " << a.consensus_window_rad / kDeg
-      << "\nrotation_refine_deg = " << a.rotation_refine_rad / kDeg
-      << "\nrotation = " << (keypoint_homing.rotation == nav::RotationSource::kMatches ? "matches" : "none")
-      << "\nrotation_window_deg = " << keypoint_homing.rotation_window_rad / kDeg << "\n";
+  glue::PrintLandmarkAlv(out, keypoint_homing);
   out << "[view_fusion]\n";
   ViewFusionTable().Print(out, *this);
 }

@@ -35,5 +35,7 @@ const OptionTable<nav::MatchOptions>& MatchOptionTable();
 // [matching] (SIFT and SURF) or [vline_matching] (vertical lines), and [landmark_alv]; the
 // matching section of `method` is read, the other one is only checked for its keys.
 nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMethod method);
+// The [landmark_alv] section as ReadLandmarkHoming reads it (header line included).
+void PrintLandmarkAlv(std::ostream& out, const nav::LandmarkHomingConfig& config);
 
 }  // namespace snapnav::glue
