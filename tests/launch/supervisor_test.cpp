@@ -63,6 +63,29 @@ const ProcessStatus& Find(const RunResult& r, const std::string& name) {
 
 bool Alive(int pid) { return pid > 0 && ::kill(pid, 0) == 0; }
 
+// Processes of process group `pgid` that still run: those /proc lists with that group and a state
+// other than zombie (a killed process whose parent died stays a zombie until init reaps it, which
+// on a busy machine can take seconds, and kill(-pgid, 0) still finds it).
+int RunningInGroup(int pgid) {
+  int running = 0;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string name = entry.path().filename().string();
+    if (name.empty() || name.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::ifstream in(entry.path() / "stat");
+    std::string stat;
+    if (!std::getline(in, stat)) continue;  // gone meanwhile
+    // pid (comm) state ppid pgrp ...: comm may hold spaces, so parse after its closing ')'.
+    const auto close = stat.rfind(')');
+    if (close == std::string::npos) continue;
+    std::istringstream rest(stat.substr(close + 1));
+    char state = 0;
+    int ppid = 0, pgrp = 0;
+    rest >> state >> ppid >> pgrp;
+    if (pgrp == pgid && state != 'Z' && state != 'X') ++running;
+  }
+  return running;
+}
+
 fs::path TempDir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("snapnav_launch_test_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
@@ -213,11 +236,13 @@ TEST(Supervisor, StopsInReverseStartOrderAndKillsAfterTheGraceTime) {
   stubborn.stop_grace_s = 0.5;
   stubborn.required = false;
   ProcessSpec first = quitter("first"), second = quitter("second");
-  int pid_sleep_group = 0;
+  int pid_sleep_group = 0, running_before_stop = 0;
   const RunResult r = RunAll({first, second, stubborn}, {}, [&](Supervisor& s, double t) {
     pid_sleep_group = s.Status("stubborn").pid > 0 ? s.Status("stubborn").pid : pid_sleep_group;
+    if (t > 0.3 && t <= 0.5 && pid_sleep_group > 0) running_before_stop = RunningInGroup(pid_sleep_group);
     if (t > 0.5) s.RequestStop("test");
   });
+  EXPECT_GE(running_before_stop, 2);  // the shell and its sleep: what the check below must see end
   EXPECT_EQ(r.rc, 0) << r.err;  // the stubborn one is not required
   std::ifstream in(order);
   std::stringstream ss;
@@ -227,14 +252,16 @@ TEST(Supervisor, StopsInReverseStartOrderAndKillsAfterTheGraceTime) {
   EXPECT_NE(r.err.find("launch: stubborn: stopped (killed by SIGKILL"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("not a clean stop"), std::string::npos);
   EXPECT_LT(r.seconds, 0.5 + 0.5 + 1.5);
-  // Its whole process group went with it (the sleep child too, once init has reaped it).
+  // Its whole process group went with it: the sleep child too is killed (gone, or a zombie left
+  // for init to reap).
   EXPECT_FALSE(Alive(pid_sleep_group));
-  bool group_gone = false;
-  for (int i = 0; i < 100 && !group_gone; ++i) {
-    group_gone = ::kill(-pid_sleep_group, 0) != 0;
-    if (!group_gone) ::usleep(20000);
+  ASSERT_GT(pid_sleep_group, 0);
+  int running = -1;
+  for (int i = 0; i < 100 && running != 0; ++i) {
+    running = RunningInGroup(pid_sleep_group);
+    if (running != 0) ::usleep(20000);
   }
-  EXPECT_TRUE(group_gone);
+  EXPECT_EQ(running, 0) << "processes of the stubborn one's group still run";
   fs::remove_all(dir);
 }
 
