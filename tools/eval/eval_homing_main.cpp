@@ -219,6 +219,20 @@ results::Json R4(T v) {
   return results::Rounded(v, 4);
 }
 
+// The keys both grids' summary.json share: the home, the configuration and its errors.
+void WriteGridResultJson(results::Json& json, const eval::GridDatabase& db, const nav::HogHomingConfig& config,
+                         const eval::GridResult& result) {
+  json["home_x_m"] = R4(db.home.x_m);
+  json["home_y_m"] = R4(db.home.y_m);
+  json["configuration"] = Describe(config);
+  json["grid_positions"] = R4(result.positions);
+  json["average_angular_error_deg"] = R4(result.aae_deg);
+  json["median_angular_error_deg"] = R4(result.median_deg);
+  json["max_angular_error_deg"] = R4(result.max_deg);
+  json["positions_without_answer"] = R4(result.failures);
+  json["compass_mean_error_deg"] = R4(result.compass_mean_deg);
+}
+
 void WriteProtocolsJson(results::Json& json, const Protocols& p) {
   json["protocols"] = {"snapnav", "thesis-5x5"};
   json["thesis_5x5_positions"] = R4(p.five_result.positions);
@@ -313,15 +327,7 @@ int RunGridFolder(const std::string& dir, const nav::HogHomingConfig& config, co
   json["input"] = folder.raw ? "raw" : "panorama";
   json["grid_nx"] = R4(db.nx);
   json["grid_ny"] = R4(db.ny);
-  json["home_x_m"] = R4(db.home.x_m);
-  json["home_y_m"] = R4(db.home.y_m);
-  json["configuration"] = Describe(config);
-  json["grid_positions"] = R4(result.positions);
-  json["average_angular_error_deg"] = R4(result.aae_deg);
-  json["median_angular_error_deg"] = R4(result.median_deg);
-  json["max_angular_error_deg"] = R4(result.max_deg);
-  json["positions_without_answer"] = R4(result.failures);
-  json["compass_mean_error_deg"] = R4(result.compass_mean_deg);
+  WriteGridResultJson(json, db, config, result);
   json["thesis_configuration_aae_deg"] = R4(thesis_aae);
   json["thesis_reported_aae_deg"] = 18.11;
   if (protocol) WriteProtocolsJson(json, *protocol);
@@ -824,15 +830,7 @@ int Main(int argc, char** argv) {
                      {"illumination_offset", R4(pipeline.effects.offset)}};
   json["masked_fraction"] = R4(nav::MaskedFraction(mask));
   json["random_headings"] = random_headings;
-  json["home_x_m"] = R4(db.home.x_m);
-  json["home_y_m"] = R4(db.home.y_m);
-  json["configuration"] = Describe(config);
-  json["grid_positions"] = R4(result.positions);
-  json["average_angular_error_deg"] = R4(result.aae_deg);
-  json["median_angular_error_deg"] = R4(result.median_deg);
-  json["max_angular_error_deg"] = R4(result.max_deg);
-  json["positions_without_answer"] = R4(result.failures);
-  json["compass_mean_error_deg"] = R4(result.compass_mean_deg);
+  WriteGridResultJson(json, db, config, result);
   json["compass_pure_rotation_median_error_deg"] = R4(rotation_median);
   json["compass_pure_rotation_max_error_deg"] = R4(rotation_errors.back());
   json["thesis_configuration_aae_deg"] = R4(thesis_aae);
