@@ -66,6 +66,7 @@ const glue::OptionTable<FusedSlamConfig>& FusedSlamTable() {
       .Number("max_fix_age_s", "s", [](auto& o) -> auto& { return o.options.max_fix_age_s; })
       .Number("relocalize_window_s", "s", [](auto& o) -> auto& { return o.options.relocalize_window_s; })
       .Number("relocalize_max_fit_loss", "", [](auto& o) -> auto& { return o.options.relocalize_max_fit_loss; })
+      .Flag("relocalize_net_of_accepted", [](auto& o) -> auto& { return o.options.relocalize_net_of_accepted; })
       .Number("relocalize_min_distance_m", "m", [](auto& o) -> auto& { return o.options.relocalize_min_distance_m; })
       .Degrees("relocalize_min_heading_deg", [](auto& o) -> auto& { return o.options.relocalize_min_heading_rad; })
       .Number("suspect_after", "", [](auto& o) -> auto& { return o.options.suspect_after; })

@@ -206,6 +206,41 @@ TEST(FusedSlam, OutliersBetweenAgreeingRejectionsDoNotStopTheRelocalisation) {
   EXPECT_EQ(g.agreeing_rejections(), 1);
 }
 
+TEST(FusedSlam, AliasedFixesAmongAcceptedOnesDoNotRelocalise) {
+  // The filter is right at (1, 1); aliasing (views a metre ahead along a wall look alike) gives four
+  // fixes that agree with each other at x + 1.2 m, interleaved with three right fixes it accepts
+  // (people11, seed 1: such a run moved a right filter 1 m and it never came back). Net of the
+  // accepted ones the evidence is 1, below relocalize_after = 4. The same rejected fixes with no
+  // accepted ones between them (a kidnapping) relocalise; and so do these with the rule off.
+  const auto run = [](bool net_of_accepted, bool with_right_fixes) {
+    FusedSlamOptions o = PlainOptions();
+    o.relocalize_after = 4;
+    o.relocalize_net_of_accepted = net_of_accepted;
+    FusedSlam f(o, {1.0, 1.0, 0.0}, Diag(0.02, 0.01));
+    int64_t t = kT0;
+    double x = 1.0;
+    const bool wrong[] = {true, true, false, false, false, true, true};
+    std::vector<VisualOutcome> outcomes;
+    for (int k = 0; k < 7; ++k) {
+      if (k > 0) {
+        t += 500000;
+        x += 0.15;
+        f.Predict(t, {0.15, 0.0, 0.0});
+      }
+      if (!wrong[k] && !with_right_fixes) continue;
+      outcomes.push_back(f.AddVisual(t, {wrong[k] ? x + 1.2 : x, 1.0, 0.0}, Diag(0.08, 0.02)).outcome);
+    }
+    return std::make_pair(f.relocalizations(), outcomes);
+  };
+  const auto [aliased, outcomes] = run(true, true);
+  EXPECT_EQ(aliased, 0);
+  ASSERT_EQ(outcomes.size(), 7u);
+  for (int k : {2, 3, 4}) EXPECT_EQ(outcomes[static_cast<size_t>(k)], VisualOutcome::kAccepted) << k;
+  for (int k : {0, 1, 5, 6}) EXPECT_EQ(outcomes[static_cast<size_t>(k)], VisualOutcome::kRejected) << k;
+  EXPECT_EQ(run(true, false).first, 1);   // only the four agreeing rejections: a kidnapping
+  EXPECT_EQ(run(false, true).first, 1);   // the rule off: the aliasing relocalises
+}
+
 TEST(FusedSlam, LateMeasurementIsCarriedForwardByOdometry) {
   // A fix of the pose 0.3 s ago arrives after three odometry increments of 0.1 m: it is compared
   // with the current pose after moving it by those 0.3 m.

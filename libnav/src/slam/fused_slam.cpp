@@ -157,6 +157,7 @@ void FusedSlam::Predict(int64_t utime, const Pose2& delta) {
   while (!history_.empty() && history_.front().first < keep_from) history_.pop_front();
   const int64_t window_from = utime_ - static_cast<int64_t>(std::llround(options_.relocalize_window_s * 1e6));
   while (!rejected_window_.empty() && rejected_window_.front().utime < window_from) rejected_window_.pop_front();
+  while (!accepted_window_.empty() && accepted_window_.front() < window_from) accepted_window_.pop_front();
   Refresh();
 }
 
@@ -525,6 +526,7 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
       u_cov_ = Symmetric(u_cov_);
     }
     ++accepted_;
+    accepted_window_.push_back(utime);
     consecutive_rejections_ = 0;
     hypothesis_.reset();
     hypothesis_count_ = 0;
@@ -538,10 +540,17 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   // that agree with this one, fused with it.
   Hypothesis h{z, r};
   int count = 1;
+  int64_t oldest = utime;
   for (auto it = rejected_window_.rbegin(); it != rejected_window_.rend(); ++it) {
     if (Mahalanobis2(Difference(it->pose, z), it->covariance, r) > options_.agree_chi2) continue;
     h.pose = EkfPoseUpdate(h.pose, &h.covariance, it->pose, it->covariance);
     ++count;
+    oldest = std::min(oldest, it->utime);
+  }
+  // The measurements the filter accepted meanwhile: evidence that it is where it thinks.
+  int against = 0;
+  if (options_.relocalize_net_of_accepted) {
+    for (const int64_t t : accepted_window_) against += t >= oldest ? 1 : 0;
   }
   rejected_window_.push_back({utime, z, r});
   const size_t cap = static_cast<size_t>(std::max(8, 2 * options_.relocalize_after));
@@ -554,7 +563,7 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
   // scan does not fit the map clearly worse there than at the filter's pose (aliasing that moves
   // with the robot: views a metre behind along a straight wall look alike).
   const Eigen::Vector3d jump = Difference(h.pose, pose());
-  bool relocalize = options_.relocalize_after > 0 && count >= options_.relocalize_after &&
+  bool relocalize = options_.relocalize_after > 0 && count - against >= options_.relocalize_after &&
                     Mahalanobis2(jump, covariance(), h.covariance) > options_.gate_chi2;
   if (relocalize && jump.head<2>().norm() < options_.relocalize_min_distance_m &&
       std::abs(jump.z()) < options_.relocalize_min_heading_rad) {
@@ -603,6 +612,7 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
     ++relocalizations_;
     consecutive_rejections_ = 0;
     rejected_window_.clear();
+    accepted_window_.clear();
     hypothesis_.reset();
     hypothesis_count_ = 0;
     v.outcome = VisualOutcome::kRelocalized;

@@ -57,7 +57,11 @@
 //      jumping off it only corrupts it. No relocalisation either when the last scan fits the map
 //      clearly worse at the new pose than at the filter's (relocalize_max_fit_loss): aliasing
 //      that moves with the robot (the views a metre behind along a straight wall look alike)
-//      agrees with itself too.
+//      agrees with itself too. With relocalize_net_of_accepted, the measurements accepted since
+//      the oldest of the agreeing rejected ones count against them: a kidnapped filter rejects
+//      every measurement after the kidnapping, while aliasing interleaves its wrong measurements
+//      with right ones that the filter accepts (people11: four wrong fixes 1 m ahead among three
+//      accepted ones moved a filter that was right).
 // Dynamic obstacles: before the laser's update, every scan point is tested at the predicted pose
 // against the map points at least dynamic_map_age_s old. One the map does not explain (none within
 // dynamic_explain_m) but that stands in front of a mapped surface (a map point within
@@ -125,6 +129,9 @@ struct FusedSlamOptions {
   // near mapped parts at both poses; not judged when either pose sees less than 30 % mapped
   // parts). 1: never refuse.
   double relocalize_max_fit_loss = 0.2;
+  // The measurements accepted since the oldest agreeing rejected one count against the
+  // relocalisation: relocalise when the agreeing rejected ones outnumber them by relocalize_after.
+  bool relocalize_net_of_accepted = true;
   int suspect_after = 0;              // this many consecutive rejections: no points join the map; 0: never
   // The start pose's uncertainty in the world frame: the offset of the map first seen from it
   // [m, rad] (FusedSlam(options, start, covariance) takes a covariance instead).
@@ -325,6 +332,7 @@ class FusedSlam {
     Eigen::Matrix3d covariance;
   };
   std::deque<Rejected> rejected_window_;  // recent rejected measurements, carried forward by odometry
+  std::deque<int64_t> accepted_window_;   // the times of the measurements accepted in the same window
   std::optional<Hypothesis> hypothesis_;
   int hypothesis_count_ = 0;
   int consecutive_rejections_ = 0;
