@@ -6,6 +6,7 @@
 # SLAM's and dead reckoning's, and people were found (dynamic points). That gain is the people
 # test's, not the camera's: the ablation (fused SLAM without visual measurements) is as low, and
 # the visual fixes (4-8 cm among people) must not make it worse by more than a tenth of a millimetre.
+# The place-cell memory is explored at fused SLAM's poses (eval compare's default), as a robot does.
 set -euo pipefail
 BIN="$1"
 OUT="$(mktemp -d)"
@@ -20,6 +21,11 @@ ate = {m: s[m + "_ate_rmse_m"] for m in methods}
 ate_u = {m: s[m + "_ate_unaligned_rmse_m"] for m in methods}
 print("people11 ATE aligned: " + ", ".join(f"{m} {ate[m]:.5f}" for m in methods) + " m; scene frame: " +
       ", ".join(f"{m} {ate_u[m]:.5f}" for m in methods) + f" m; dynamic points {s['fused_slam_dynamic_points']}")
+# The memory was explored as a robot explores: its cells at fused SLAM's poses, off the truth.
+cell_error = s["memory_cell_error_mean_m"]
+print(f"memory: {s['memory_cells']} cells explored at the {s['explore_pose']} pose, {1000 * cell_error:.1f} mm off the truth on average")
+assert s["explore_pose"] == "fused-slam", s["explore_pose"]
+assert 0 < cell_error < 0.05, f"memory cells {cell_error} m off the truth: not the SLAM's poses, or a lost exploration"
 for m in methods[1:]:
     assert ate["fused_slam"] < ate[m] and ate_u["fused_slam"] < ate_u[m], f"fused SLAM not below {m}"
 # Clearly, not by noise (seed 1, 60 s: 4.3 mm against 8.6 mm aligned).

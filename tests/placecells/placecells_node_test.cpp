@@ -38,8 +38,10 @@ void HandleAll(glue::Bus& bus) {
   }
 }
 
+// The pose a cell is stored at, on the config's explore pose channel (the shipped one:
+// POSE_LASER_SLAM, what a robot has while it explores).
 pose_t TruthMsg(const nav::Pose2& p, int64_t utime) {
-  return glue::ToPoseMsg(utime, "ground_truth", "map", p, Eigen::Matrix3d::Zero());
+  return glue::ToPoseMsg(utime, "laser_slam", "map", p, Eigen::Matrix3d::Zero());
 }
 
 odometry_t OdometryMsg(const nav::Pose2& cumulative, int64_t utime) {
@@ -66,7 +68,7 @@ std::vector<place_cell_match_t> Explore(const std::string& prefix, const std::st
   auto& lab = Indoor13::Get();
   for (size_t i = 0; i < kCellPoses.size(); ++i) {
     const int64_t t = kStart + static_cast<int64_t>(i) * kSecond;
-    bus.Publish(prefix + "POSE_GROUND_TRUTH", TruthMsg(kCellPoses[i], t - 10000));
+    bus.Publish(config.explore_pose_channel, TruthMsg(kCellPoses[i], t - 10000));
     bus.Publish(prefix + "OMNI_PANORAMA", lab.PanoramaFrame(kCellPoses[i], t));
     HandleAll(bus);
   }
@@ -122,9 +124,9 @@ TEST(PlaceCellsNode, ExploreKnownPlaceAddsNoCellAndExtendsTheFile) {
   auto& lab = Indoor13::Get();
   const nav::Pose2 near_cell_4{3.53, 3.22, -2.5};  // 4 cm from cell 4, turned by 0.3 rad
   const nav::Pose2 new_place{3.0, 2.6, 0.0};        // 0.6 m and more from every cell
-  bus.Publish("E2b_POSE_GROUND_TRUTH", TruthMsg(near_cell_4, kStart));
+  bus.Publish(config.explore_pose_channel, TruthMsg(near_cell_4, kStart));
   bus.Publish("E2b_OMNI_PANORAMA", lab.PanoramaFrame(near_cell_4, kStart));
-  bus.Publish("E2b_POSE_GROUND_TRUTH", TruthMsg(new_place, kStart + kSecond));
+  bus.Publish(config.explore_pose_channel, TruthMsg(new_place, kStart + kSecond));
   bus.Publish("E2b_OMNI_PANORAMA", lab.PanoramaFrame(new_place, kStart + kSecond));
   HandleAll(bus);
   ASSERT_EQ(got.size(), 2u);
@@ -323,7 +325,7 @@ TEST(PlaceCellsNode, ExploreWithoutAPoseSkipsTheFrame) {
   PlaceCellsNode node(bus, config, log);
   auto& lab = Indoor13::Get();
   bus.Publish("X1_OMNI_PANORAMA", lab.PanoramaFrame({3.5, 2.0, 0}, kStart));  // no pose yet
-  bus.Publish("X1_POSE_GROUND_TRUTH", TruthMsg({3.5, 2.0, 0}, kStart + 5 * kSecond));
+  bus.Publish(config.explore_pose_channel, TruthMsg({3.5, 2.0, 0}, kStart + 5 * kSecond));
   bus.Publish("X1_OMNI_PANORAMA", lab.PanoramaFrame({3.5, 2.0, 0}, kStart + kSecond));  // 4 s from it
   HandleAll(bus);
   EXPECT_EQ(node.skipped().at("no explore pose"), 2);

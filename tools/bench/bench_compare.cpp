@@ -69,7 +69,7 @@ int Main(int argc, char** argv) {
   run.sim.duration_s = duration_s;
   run.sim.kidnap = {};
   std::cerr << "bench-compare: exploring " << scene << " for the place-cell memory\n";
-  const eval::RouteMemory memory = eval::ExploreRouteMemory(loaded, o, run.sim.drive);
+  const eval::RouteMemory memory = eval::ExploreRouteMemory(loaded, o, run.sim);
   std::cerr << "bench-compare: " << memory.memory->size() << " cells; " << runs << " runs of " << duration_s
             << " s simulated\n";
 

@@ -32,11 +32,12 @@ void PrintCompareOptions(std::ostream& out, const CompareConfigPaths& paths, con
       << "visual fixes " << o.visual_rate_hz << " Hz (" << (o.visual_prediction ? "fused pose as prediction" : "global")
       << "), RatSLAM frames " << o.ratslam_rate_hz << " Hz ("
       << (o.run_ratslam ? "on" : "off")
-      << "), cells every " << o.cell_spacing_m << " m (explore seed " << o.explore_seed << "), RPE per " << o.rpe_delta_m
+      << "), cells every " << o.cell_spacing_m << " m at the " << ExplorePoseName(o.explore_pose)
+      << " pose (explore seed " << o.explore_seed << "), RPE per " << o.rpe_delta_m
       << " m, recovery under " << o.recovery_error_m << " m for " << o.recovery_hold_s << " s\n"
       << "[fused_slam] gate_chi2 " << f.gate_chi2 << ", agree_chi2 " << f.agree_chi2 << ", relocalize_after "
       << f.relocalize_after << " within " << f.relocalize_window_s << " s (max fit loss " << f.relocalize_max_fit_loss
-      << "), relocalize sigma " << f.relocalize_sigma_xy_m << " m / " << f.relocalize_sigma_theta_rad
+      << (f.relocalize_net_of_accepted ? ", net of accepted" : "") << "), relocalize sigma " << f.relocalize_sigma_xy_m << " m / " << f.relocalize_sigma_theta_rad
       << " rad, fix sigma floor " << f.min_fix_sigma_xy_m << " m / " << f.min_fix_sigma_theta_rad << " rad, start sigma "
       << f.start_sigma_xy_m << " m / " << f.start_sigma_theta_rad << " rad, map offset cells " << f.map_cell_m
       << " m (drift " << f.map_drift_xy_m << " m / " << f.map_drift_theta_rad << " rad per sqrt m)"

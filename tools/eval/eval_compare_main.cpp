@@ -44,8 +44,9 @@ int Main(int argc, char** argv) {
       "eval-compare",
       "The SLAM comparison (issue 8; thesis 1.2, 5, 6.3.3): dead reckoning, laser-only SLAM, RatSLAM and fused\n"
       "visual + laser SLAM on the same simulated run with ground truth. A place-cell memory is explored first\n"
-      "in a separate run (the scene's route once, a cell every --cell-spacing-m at the true pose, seed\n"
-      "--explore-seed); the evaluated run drives the route (--laps or --duration-s) with the simulator's noise\n"
+      "in a separate run (the scene's route once, a cell every --cell-spacing-m at fused SLAM's pose during\n"
+      "that run (no memory yet: its laser), or see --explore-pose; seed --explore-seed); the evaluated run\n"
+      "drives the route (--laps or --duration-s) with the simulator's noise\n"
       "(--sim-config); dead reckoning and laser SLAM run over its odometry and scans as eval slam does, fused\n"
       "SLAM beside it with a place-cell fix every 1/--visual-rate-hz s, RatSLAM with every frame at\n"
       "--ratslam-rate-hz. Without --scene/--scenes the standard set runs: indoor13, people11 (walking people\n"
@@ -70,6 +71,11 @@ int Main(int argc, char** argv) {
   flags.AddInt("seed", &seed, "seed of the evaluated runs (default: the sim config's)");
   flags.AddInt("explore-seed", &explore_seed, "seed of the exploration run that builds the place-cell memory");
   flags.AddDouble("cell-spacing-m", &o.cell_spacing_m, "a place cell every this much travel of the exploration [m]");
+  std::string explore_pose = "fused-slam";
+  flags.AddString("explore-pose", &explore_pose,
+                  "where the exploration places its cells, as a robot without ground truth: fused-slam (fused SLAM's "
+                  "pose during the exploration, with no memory yet: its laser and people test) | laser-slam (laser-only "
+                  "SLAM's) | truth (the true pose: an upper bound no robot has)");
   flags.AddDouble("visual-rate-hz", &o.visual_rate_hz, "place-cell fixes per simulated second");
   flags.AddDouble("ratslam-rate-hz", &o.ratslam_rate_hz, "frames per simulated second given to RatSLAM");
   flags.AddBool("visual-prediction", &o.visual_prediction,
@@ -109,6 +115,13 @@ int Main(int argc, char** argv) {
   }
 
   o.explore_seed = static_cast<uint64_t>(explore_seed);
+  if (explore_pose == "truth") {
+    o.explore_pose = eval::CompareOptions::ExplorePose::kTruth;
+  } else if (explore_pose == "laser-slam") {
+    o.explore_pose = eval::CompareOptions::ExplorePose::kLaserSlam;
+  } else if (explore_pose != "fused-slam") {
+    throw glue::FlagError("--explore-pose takes laser-slam, fused-slam or truth, not '" + explore_pose + "'");
+  }
   o.run_ratslam = !no_ratslam;
   const processes::SimConfig sim_config = eval::LoadCompareConfigs(paths, &o);
   try {
@@ -181,9 +194,11 @@ int Main(int argc, char** argv) {
     auto log = [&](const std::string& text) { std::cerr << "eval-compare: " << r.name << ": " << text << "\n"; };
     if (!memories.count(scene.name)) {
       log("exploring the route for the place-cell memory");
-      memories[scene.name] = eval::ExploreRouteMemory(scene, o, r.sim.drive);
-      log(std::to_string(memories[scene.name].memory->size()) + " cells in " + eval::Fixed(memories[scene.name].seconds, 1) +
-          " s");
+      memories[scene.name] = eval::ExploreRouteMemory(scene, o, r.sim);
+      const eval::RouteMemory& m = memories[scene.name];
+      log(std::to_string(m.memory->size()) + " cells at the " + eval::ExplorePoseName(o.explore_pose) + " pose in " +
+          eval::Fixed(m.seconds, 1) + " s (cells off the truth by " + eval::Fixed(m.cell_error_mean_m, 3) + " m mean, " +
+          eval::Fixed(m.cell_error_max_m, 3) + " m max)");
     }
     eval::CompareRun run = eval::RunComparison(scene, memories[scene.name], r, o, log);
     const fs::path dir = runs.size() > 1 ? out / run.name : out;
@@ -230,6 +245,7 @@ int Main(int argc, char** argv) {
     j["runs"] = results::Json::array();
     for (const auto& run : compared) j["runs"].push_back(run.name);
     j["ratslam"] = o.run_ratslam ? "ran" : "off";
+    j["explore_pose"] = eval::ExplorePoseName(o.explore_pose);
     for (const auto& run : compared) {
       const std::string prefix = compared.size() > 1 ? run.name + "_" : "";
       if (compared.size() == 1) {

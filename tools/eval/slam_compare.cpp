@@ -140,27 +140,119 @@ const MethodResult& CompareRun::method(const std::string& name) const {
   throw std::invalid_argument("compare: no method " + name);
 }
 
-RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOptions& options,
-                               const nav::sim::DriveOptions& drive) {
+const char* ExplorePoseName(CompareOptions::ExplorePose p) {
+  switch (p) {
+    case CompareOptions::ExplorePose::kLaserSlam: return "laser-slam";
+    case CompareOptions::ExplorePose::kFusedSlam: return "fused-slam";
+    case CompareOptions::ExplorePose::kTruth: return "truth";
+  }
+  return "?";
+}
+
+namespace {
+
+// The exploration with a SLAM: the route driven once with the simulator's noise (as the evaluated
+// run, its own seed), laser-only SLAM (or fused SLAM, no visual fixes) over that run's odometry and
+// scans, and a sample every `spacing_m` of the SLAM's own travel, at the scan: the true pose (where
+// the camera is), the SLAM's pose (where the robot believes it is, scene frame) and the people then.
+struct SlamExploreSample {
+  ExploreSample sample;
+  nav::Pose2 estimate;
+};
+std::vector<SlamExploreSample> ExploreWithSlam(const nav::sim::Scene& scene, const CompareOptions& options,
+                                                    const SimSlamOptions& sim) {
+  SimSlamOptions explore = sim;
+  explore.seed = options.explore_seed;
+  // The route once and back to its first waypoint (a lap ends at the last waypoint): every part the
+  // run drives, as the exploration at the true pose.
+  explore.route = sim.route.empty() ? scene.route : sim.route;
+  if (!explore.route.empty()) explore.route.push_back(explore.route.front());
+  explore.laps = 1;
+  explore.duration_s = 0;
+  explore.kidnap = {};
+  explore.log_path.clear();
+  explore.drive.people_block_robot = false;  // as the evaluated run (RunComparison)
+  // The true pose and the people at every scan (the scan's step, then the physics step's observer).
+  std::map<int64_t, ExploreSample> at_scan;
+  int64_t pending_scan = -1;
+  explore.on_sensor = [&](const SlamStep& s) {
+    if (s.is_scan) pending_scan = s.utime;
+  };
+  explore.on_step = [&](int64_t utime, const nav::sim::World& world) {
+    if (utime != pending_scan) return;
+    ExploreSample& e = at_scan[utime];
+    e.truth = world.true_pose();
+    e.utime = utime;
+    e.people = world.people();
+  };
+  const SimulatedSlamLog log = SimulateSlamLog(explore);
+  // The SLAM's pose at every scan (scene frame) and the scan's time.
+  std::vector<nav::Pose2> poses;
+  std::vector<int64_t> utimes;
+  if (options.explore_pose == CompareOptions::ExplorePose::kFusedSlam) {
+    nav::FusedSlam fused(options.fused, log.start);
+    for (const SlamStep& s : log.log.steps) {
+      if (!s.is_scan) {
+        fused.Predict(s.utime, s.odometry_delta);
+        continue;
+      }
+      fused.Update(s.points);
+      poses.push_back(fused.pose());
+      utimes.push_back(s.utime);
+    }
+  } else {
+    const SlamRun run = RunSlam(log.log, options.laser);
+    for (const nav::Pose2& p : run.slam) poses.push_back(log.start.Compose(p));
+    utimes = run.utime;
+  }
+  std::vector<SlamExploreSample> out;
+  double travelled = 0, last = -1;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const nav::Pose2& estimate = poses[i];
+    if (i > 0) travelled += std::hypot(poses[i].x_m - poses[i - 1].x_m, poses[i].y_m - poses[i - 1].y_m);
+    if (last >= 0 && travelled - last < options.cell_spacing_m) continue;
+    const auto it = at_scan.find(utimes[i]);
+    if (it == at_scan.end()) throw std::logic_error("compare: no true pose at an exploration scan");
+    last = travelled;
+    out.push_back({it->second, estimate});
+  }
+  return out;
+}
+
+}  // namespace
+
+RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOptions& options, const SimSlamOptions& sim) {
   if (scene.route.empty()) throw std::runtime_error("scene '" + scene.name + "' has no route to explore");
   const auto t0 = Clock::now();
-  // From the start, along the route, back to its first waypoint: every part the run drives.
-  std::vector<Eigen::Vector2d> waypoints = {scene.start_pose.head<2>()};
-  for (const auto& w : scene.route) waypoints.push_back(w);
-  waypoints.push_back(scene.route.front());
-  const std::vector<ExploreSample> samples = DriveRoute(scene, waypoints, drive, options.cell_spacing_m, options.explore_seed);
+  std::vector<SlamExploreSample> samples;
+  if (options.explore_pose == CompareOptions::ExplorePose::kTruth) {
+    // From the start, along the route, back to its first waypoint: every part the run drives.
+    std::vector<Eigen::Vector2d> waypoints = {scene.start_pose.head<2>()};
+    for (const auto& w : scene.route) waypoints.push_back(w);
+    waypoints.push_back(scene.route.front());
+    for (const ExploreSample& s : DriveRoute(scene, waypoints, sim.drive, options.cell_spacing_m, options.explore_seed)) {
+      samples.push_back({s, s.truth});
+    }
+  } else {
+    samples = ExploreWithSlam(scene, options, sim);
+  }
   RouteMemory out;
   out.memory = std::make_unique<nav::PlaceCellMemory>(options.view, options.camera.panorama, options.vocabulary);
   ViewRenderer renderer(scene, options.camera, options.explore_seed);
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
-  for (const auto& s : samples) {
+  const auto t_views = Clock::now();
+  for (const auto& [s, estimate] : samples) {
     const cv::Mat panorama = renderer.ToPanorama(renderer.Sensor(s.truth, pipeline.input, s.people), pipeline);
-    out.memory->Add(s.truth, s.utime, nav::MakePlaceView(panorama, options.view));
+    out.memory->Add(estimate, s.utime, nav::MakePlaceView(panorama, options.view));
     out.cell_poses.push_back(s.truth);
+    out.cell_estimates.push_back(estimate);
+    const double e = std::hypot(estimate.x_m - s.truth.x_m, estimate.y_m - s.truth.y_m);
+    out.cell_error_mean_m += e / static_cast<double>(samples.size());
+    out.cell_error_max_m = std::max(out.cell_error_max_m, e);
   }
-  out.ms_per_view = samples.empty() ? 0 : Ms(t0) / static_cast<double>(samples.size());
+  out.ms_per_view = samples.empty() ? 0 : Ms(t_views) / static_cast<double>(samples.size());
   out.memory->BuildIndex();
   out.seconds = Ms(t0) / 1000;
   return out;
@@ -174,6 +266,9 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   out.name = run.name;
   out.scene = scene.name;
   out.memory_cells = memory.memory->size();
+  out.memory_cell_error_mean_m = memory.cell_error_mean_m;
+  out.memory_cell_error_max_m = memory.cell_error_max_m;
+  out.memory_explore_pose = ExplorePoseName(options.explore_pose);
   out.people = scene.people.count;
   out.recovery_error_m = options.recovery_error_m;
   SimSlamOptions sim = run.sim;
@@ -507,7 +602,9 @@ std::vector<std::pair<std::string, double>> SummaryKeys(const CompareRun& run) {
       {"frames_rendered", static_cast<double>(run.frames)},
       {"people", static_cast<double>(run.people)},
       {"blocked_steps", static_cast<double>(run.collisions)},
-      {"memory_cells", static_cast<double>(run.memory_cells)}};
+      {"memory_cells", static_cast<double>(run.memory_cells)},
+      {"memory_cell_error_mean_m", run.memory_cell_error_mean_m},
+      {"memory_cell_error_max_m", run.memory_cell_error_max_m}};
   for (const auto& m : run.methods) {
     const double nan = kNaN;
     auto v = [&](double x) { return m.ran ? x : nan; };
@@ -624,6 +721,7 @@ void WriteCompareRun(const CompareRun& run, const std::string& dir) {
     j["run"] = run.name;
     j["scene"] = run.scene;
     j["ratslam"] = run.method("ratslam").ran ? "ran" : run.method("ratslam").note;
+    j["explore_pose"] = run.memory_explore_pose;
     for (const auto& [key, value] : SummaryKeys(run)) j[key] = results::Significant(value);
     results::WriteJsonFile((out / "summary.json").string(), j);
   }
@@ -730,6 +828,13 @@ std::string CompareTableMarkdown(const std::vector<CompareRun>& runs, const std:
     const MethodResult& l = r.method("laser_slam");
     s << "| " << r.name << " | " << Fixed((f.errors.ate_aligned.rmse_m - a.errors.ate_aligned.rmse_m) * 1000, 2)
       << " mm | " << Fixed((a.errors.ate_aligned.rmse_m - l.errors.ate_aligned.rmse_m) * 1000, 2) << " mm |\n";
+  }
+  s << "\nThe place-cell memory of each run, explored beforehand along the route: where its cells are stored (laser-slam: "
+       "laser-only SLAM's pose during the exploration, as a robot explores; truth: the true pose, an upper bound) and "
+       "how far that is from the truth.\n\n| run | cells | stored at | off the truth, mean / max [m] |\n|---|---|---|---|\n";
+  for (const auto& r : runs) {
+    s << "| " << r.name << " | " << r.memory_cells << " | " << r.memory_explore_pose << " | "
+      << Fixed(r.memory_cell_error_mean_m, 3) << " / " << Fixed(r.memory_cell_error_max_m, 3) << " |\n";
   }
   s << "\nPer method: RPE translation [m] / rotation [deg] per metre, ms per update, ms per 10 Hz frame period "
        "(all of the method's work per scan; fused SLAM includes its place-cell views and queries).\n\n"

@@ -5,8 +5,12 @@
 //
 //   memory   a place-cell memory explored beforehand in a separate run with its own seed: the
 //            scene's route driven once (from the start pose, back to the first waypoint) with a
-//            cell every cell_spacing_m of travel at the true pose (as eval localization's route
-//            memory), views from raw omni images rendered and unwrapped (the real pipeline);
+//            cell every cell_spacing_m of travel, views from raw omni images rendered and
+//            unwrapped (the real pipeline). Each cell's pose is what a lab's robot knows while it
+//            explores (explore_pose = laser-slam or fused-slam: that SLAM's pose over the
+//            exploration's own noisy odometry and scans, as the placecells process stores
+//            POSE_LASER_SLAM or POSE_EKF) or, as a labelled upper bound, the true pose (truth: as
+//            eval localization's route memory);
 //   the run  eval::SimulateSlamLog drives the route with the sim's noise and control error (and
 //            an optional kidnapping); dead reckoning and laser SLAM run over its odometry and
 //            scans by eval::RunSlam, as eval-slam does; fused SLAM runs beside the simulation on
@@ -66,6 +70,11 @@ struct CompareOptions {
   nav::VocabularyOptions vocabulary;
   double cell_spacing_m = 0.25;         // a cell every this much travel of the exploration
   uint64_t explore_seed = 101;          // the exploration run's seed (not the evaluated run's)
+  // Where the exploration places its cells: laser-only SLAM's or fused SLAM's pose during the
+  // exploration (what a robot without ground truth has; fused SLAM with no memory yet is its laser
+  // with the people test, config/fused_slam.ini) or the true pose (an upper bound no robot has).
+  enum class ExplorePose { kLaserSlam, kFusedSlam, kTruth };
+  ExplorePose explore_pose = ExplorePose::kFusedSlam;
   // Localize with the fused pose as the distance filter's prediction. Off: every fix is a global
   // localization, independent of the filter (after a kidnapping a prediction from the lost pose
   // would deny the cells where the robot really is).
@@ -80,16 +89,21 @@ struct CompareOptions {
 };
 
 // A place-cell memory explored along a scene's route.
+const char* ExplorePoseName(CompareOptions::ExplorePose p);  // "laser-slam", "fused-slam", "truth"
+
 struct RouteMemory {
   std::unique_ptr<nav::PlaceCellMemory> memory;
   std::vector<nav::Pose2> cell_poses;  // true poses of the cells (scene frame)
+  std::vector<nav::Pose2> cell_estimates;  // the poses stored in the memory (= cell_poses with explore_pose truth)
+  // The stored poses' error against the truth [m]: mean and max (0 with explore_pose truth).
+  double cell_error_mean_m = 0, cell_error_max_m = 0;
   double seconds = 0;                  // rendering, views and index
   double ms_per_view = 0;              // rendering + MakePlaceView per cell
 };
-// Explores `scene`'s route (see the header comment). Throws std::runtime_error for a scene
-// without a route.
-RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOptions& options,
-                               const nav::sim::DriveOptions& drive);
+// Explores `scene`'s route (see the header comment) with the robot, laser and rates of `sim`
+// (its seed, stop condition and kidnapping are replaced: options.explore_seed, one lap, none).
+// Throws std::runtime_error for a scene without a route.
+RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOptions& options, const SimSlamOptions& sim);
 
 // One method's result on one run.
 struct MethodResult {
@@ -141,6 +155,8 @@ struct CompareRun {
   int64_t fused_degenerate_scans = 0;
   std::vector<Eigen::Vector2d> map;   // fused SLAM's map at the end
   int memory_cells = 0;
+  double memory_cell_error_mean_m = 0, memory_cell_error_max_m = 0;  // the cells' stored poses against the truth
+  std::string memory_explore_pose;    // ExplorePoseName of the exploration
   // Visual measurements of fused SLAM.
   int64_t visual_queries = 0, visual_no_answer = 0;
   int64_t visual_accepted = 0, visual_rejected = 0, relocalizations = 0, visual_stale = 0, unmapped_scans = 0;
