@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/options.hpp"
 #include "snapnav/glue/shutdown.hpp"
 #include "snapnav/glue/time.hpp"
 
@@ -29,29 +30,54 @@ void SleepUntil(int64_t due_utime) {
 
 }  // namespace
 
+namespace {
+
+// The [camera] keys, declared once: read, printed and described from here.
+const glue::OptionTable<OmniCameraConfig>& CameraTable() {
+  using C = OmniCameraConfig;
+  // A value that does not parse (an unknown source kind or encoding) names its file, line and key.
+  const auto parsed = [](const glue::IniFile& ini, const std::string& s, const std::string& k, auto parse) {
+    try {
+      return parse(ini.GetString(s, k));
+    } catch (const std::invalid_argument& e) {
+      ini.FailKey(s, k, e.what());
+    }
+  };
+  static const auto table =
+      glue::OptionTable<C>()
+          .Text("sensor_name", [](auto& c) -> auto& { return c.frame.sensor_name; })
+          .Custom(
+              "source", "",
+              [parsed](const glue::IniFile& ini, const std::string& s, const std::string& k, C& c) {
+                c.capture.source = parsed(ini, s, k, [](const std::string& v) { return FrameSourceSpec::Parse(v); });
+              },
+              [](std::ostream& out, const C& c) { out << c.capture.source.ToString(); })
+          .Number("width_px", "px", [](auto& c) -> auto& { return c.capture.width_px; })
+          .Number("height_px", "px", [](auto& c) -> auto& { return c.capture.height_px; })
+          .Number("rate_hz", "Hz", [](auto& c) -> auto& { return c.capture.rate_hz; })
+          .Flag("loop", [](auto& c) -> auto& { return c.capture.loop; })
+          .Custom(
+              "encoding", "",
+              [parsed](const glue::IniFile& ini, const std::string& s, const std::string& k, C& c) {
+                c.frame.encoding = parsed(ini, s, k, [](const std::string& v) { return glue::ParseFrameEncoding(v); });
+              },
+              [](std::ostream& out, const C& c) { out << glue::FrameEncodingName(c.frame.encoding); })
+          .Number("jpeg_quality", "", [](auto& c) -> auto& { return c.frame.jpeg_quality; });
+  return table;
+}
+
+}  // namespace
+
 OmniCameraConfig OmniCameraConfig::FromIni(const glue::IniFile& ini, const std::string& channel_prefix) {
   OmniCameraConfig c;
   c.frame_channel = channel_prefix + ini.GetString("channels", "frame");
-  c.frame.sensor_name = ini.GetString("camera", "sensor_name");
-  const std::string source = ini.GetString("camera", "source");
-  c.capture.width_px = ini.GetInt("camera", "width_px");
-  c.capture.height_px = ini.GetInt("camera", "height_px");
-  c.capture.rate_hz = ini.GetDouble("camera", "rate_hz");
-  c.capture.loop = ini.GetBool("camera", "loop");
-  const std::string encoding = ini.GetString("camera", "encoding");
-  c.frame.jpeg_quality = ini.GetInt("camera", "jpeg_quality");
+  CameraTable().ReadKeys(ini, "camera", &c);
   c.frame.mirror = glue::ReadMirrorConfig(ini);
   // The mask is for the processes that read the frames; the camera checks that it fits.
   c.mask_path = glue::ReadMirrorMask(ini, c.capture.width_px > 0 ? cv::Size(c.capture.width_px, c.capture.height_px)
                                                                  : cv::Size()).path;
   ini.CheckAllUsed();
-  try {
-    c.capture.source = FrameSourceSpec::Parse(source);
-    c.frame.encoding = glue::ParseFrameEncoding(encoding);
-    c.Validate();
-  } catch (const std::invalid_argument& e) {
-    throw ini.ValidationError(e.what());
-  }
+  ini.Check([&c] { c.Validate(); });
   return c;
 }
 
@@ -63,11 +89,8 @@ void OmniCameraConfig::Validate() const {
 }
 
 void OmniCameraConfig::Print(std::ostream& out) const {
-  out << "[channels]\nframe = " << frame_channel << "\n"
-      << "[camera]\nsensor_name = " << frame.sensor_name << "\nsource = " << capture.source.ToString()
-      << "\nwidth_px = " << capture.width_px << "\nheight_px = " << capture.height_px
-      << "\nrate_hz = " << capture.rate_hz << "\nloop = " << (capture.loop ? "true" : "false")
-      << "\nencoding = " << glue::FrameEncodingName(frame.encoding) << "\njpeg_quality = " << frame.jpeg_quality << "\n";
+  out << "[channels]\nframe = " << frame_channel << "\n[camera]\n";
+  CameraTable().Print(out, *this);
   glue::PrintMirrorConfig(out, frame.mirror, mask_path, "mirror");
 }
 
