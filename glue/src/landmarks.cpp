@@ -24,6 +24,18 @@ nav::MatchOptions ReadMatching(const IniFile& ini, const std::string& section) {
 // from here.
 using Extractor = nav::LandmarkExtractorConfig;
 
+// [landmarks]: which extractor, and the histogram equalisation before it (HOG is homing's own, not
+// one of these).
+const OptionTable<Extractor>& ExtractorTable() {
+  static const auto table =
+      OptionTable<Extractor>()
+          .Choice("method", &Extractor::method,
+                  {nav::LandmarkMethod::kVline, nav::LandmarkMethod::kSift, nav::LandmarkMethod::kSurf},
+                  nav::LandmarkMethodName)
+          .Flag("equalize_histogram", &Extractor::equalize_histogram);
+  return table;
+}
+
 const OptionTable<Extractor>& VlineTable() {
   static const auto table =
       OptionTable<Extractor>()
@@ -179,10 +191,7 @@ nav::LandmarkSet LandmarkSetFromMsg(const landmark_set_t& msg, const nav::Panora
 
 nav::LandmarkExtractorConfig ReadLandmarkExtractor(const IniFile& ini) {
   nav::LandmarkExtractorConfig c;
-  c.method = ReadChoice<nav::LandmarkMethod>(
-      ini, "landmarks", "method",
-      {{"vline", nav::LandmarkMethod::kVline}, {"sift", nav::LandmarkMethod::kSift}, {"surf", nav::LandmarkMethod::kSurf}});
-  c.equalize_histogram = ini.GetBool("landmarks", "equalize_histogram");
+  ExtractorTable().ReadKeys(ini, "landmarks", &c);
   VlineTable().ReadKeys(ini, "vline", &c);
   SiftTable().ReadKeys(ini, "sift", &c);
   SurfTable().ReadKeys(ini, "surf", &c);
@@ -211,6 +220,10 @@ nav::LandmarkHomingConfig ReadLandmarkHoming(const IniFile& ini, nav::LandmarkMe
     throw ini.ValidationError(e.what());
   }
   return c;
+}
+
+void PrintLandmarkExtractorKeys(std::ostream& out, const nav::LandmarkExtractorConfig& c) {
+  ExtractorTable().Print(out, c);
 }
 
 void PrintLandmarkExtractorSections(std::ostream& out, const nav::LandmarkExtractorConfig& c) {

@@ -20,8 +20,6 @@
 namespace snapnav::glue {
 namespace {
 
-const char* Bool(bool b) { return b ? "true" : "false"; }
-
 // Wraps a libnav validation error as a config error naming the file, the section and the key.
 template <class F>
 void Validated(const IniFile& ini, const char* section, F&& validate) {
@@ -160,8 +158,8 @@ nav::VocabularyOptions ReadVocabularyOptions(const IniFile& ini) {
 }
 
 void PrintPlaceViewOptions(std::ostream& out, const nav::PlaceViewOptions& o) {
-  out << "[landmarks]\nmethod = " << nav::LandmarkMethodName(o.features.method)
-      << "\nequalize_histogram = " << Bool(o.features.equalize_histogram) << "\n";
+  out << "[landmarks]\n";
+  PrintLandmarkExtractorKeys(out, o.features);
   PrintLandmarkExtractorSections(out, o.features);
   out << "[place_view]\n";
   PlaceViewTable().Print(out, o);

@@ -52,9 +52,8 @@ LandmarksConfig LandmarksConfig::FromIni(const glue::IniFile& ini, const std::st
 
 void LandmarksConfig::Print(std::ostream& out) const {
   out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel << "\nlandmarks = "
-      << landmarks_channel << "\n[landmarks]\ninput = " << (raw_input ? "raw" : "panorama")
-      << "\nmethod = " << nav::LandmarkMethodName(extractor.method)
-      << "\nequalize_histogram = " << (extractor.equalize_histogram ? "true" : "false") << "\n";
+      << landmarks_channel << "\n[landmarks]\ninput = " << (raw_input ? "raw" : "panorama") << "\n";
+  glue::PrintLandmarkExtractorKeys(out, extractor);
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
   glue::PrintLandmarkExtractorSections(out, extractor);

@@ -27,8 +27,11 @@ nav::LandmarkSet LandmarkSetFromMsg(const landmark_set_t& msg, const nav::Panora
 // [landmarks] method, equalize_histogram; [vline], [sift], [surf]: every key required.
 nav::LandmarkExtractorConfig ReadLandmarkExtractor(const IniFile& ini);
 // The extractors' sections as ReadLandmarkExtractor reads them: [vline], [sift], [surf] (the
-// [landmarks] keys belong to each process's own section printing).
+// [landmarks] keys: PrintLandmarkExtractorKeys, inside each process's own [landmarks]).
 void PrintLandmarkExtractorSections(std::ostream& out, const nav::LandmarkExtractorConfig& config);
+// The [landmarks] keys ReadLandmarkExtractor reads (method, equalize_histogram), one "key = value"
+// line each, no section header (a process's [landmarks] may have keys of its own).
+void PrintLandmarkExtractorKeys(std::ostream& out, const nav::LandmarkExtractorConfig& config);
 // The keys of [matching] and [vline_matching] (ratio, mutual, ...), declared once: placecells and
 // homing read and print them through this table.
 const OptionTable<nav::MatchOptions>& MatchOptionTable();
