@@ -1,5 +1,5 @@
 // eval-compare (./snapnav eval compare): dead reckoning, laser-only SLAM, RatSLAM and fused visual
-// + laser SLAM on the same simulated runs with ground truth (issue 8; tools/eval/slam_compare.hpp),
+// + laser SLAM on the same simulated runs with ground truth (issue 8; tools/eval/compare/slam_compare.hpp),
 // and the laser methods on recorded logs (--log).
 #include <cctype>
 #include <cmath>
