@@ -1,5 +1,9 @@
 #include "sim_config_use.hpp"
 
+#include <stdexcept>
+
+#include "snapnav/glue/flags.hpp"
+
 namespace snapnav::eval {
 
 namespace {
@@ -44,6 +48,23 @@ void RefuseUnusedSimKeys(const glue::IniFile& file, const glue::IniFile& shipped
                               (shipped.Has(section, key) ? " (" + shipped.GetString(section, key) + ")" : ""));
     }
   }
+}
+
+processes::SimConfig LoadSimConfigFor(const std::string& path, const SimConfigUse& use) {
+  const auto ini = glue::IniFile::Load(path);
+  auto sim = processes::SimConfig::FromIni(ini, "");
+  RefuseUnusedSimKeys(ini, glue::IniFile::Load(SNAPNAV_CONFIG_DIR "/sim.ini"), use);
+  return sim;
+}
+
+void ApplyCameraFlag(const std::string& preset, uint64_t seed, nav::sim::OmniCameraOptions* camera) {
+  if (preset.empty()) return;
+  try {
+    camera->optics = nav::sim::CameraOpticsPreset(preset);
+  } catch (const std::invalid_argument& e) {
+    throw glue::FlagError(std::string("--camera: ") + e.what());
+  }
+  camera->optics.seed = seed ^ 0x0b71c5ULL;
 }
 
 }  // namespace snapnav::eval

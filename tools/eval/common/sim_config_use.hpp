@@ -10,6 +10,7 @@
 #include <string>
 #include <utility>
 
+#include "sim_node.hpp"
 #include "snapnav/glue/ini.hpp"
 
 namespace snapnav::eval {
@@ -32,5 +33,14 @@ SimConfigUse LocalizationSimConfigUse();
 // first key of `file` that `use` does not use and whose value differs from `shipped`'s (or that
 // `shipped` does not have). The shipped file itself always passes.
 void RefuseUnusedSimKeys(const glue::IniFile& file, const glue::IniFile& shipped, const SimConfigUse& use);
+
+// An evaluation's --sim-config: the file read as the sim process reads it, then refused as above
+// against the shipped config/sim.ini.
+processes::SimConfig LoadSimConfigFor(const std::string& path, const SimConfigUse& use);
+
+// --camera PRESET (clean | realistic) over the config's [camera] preset; "" leaves `camera` as it
+// is. The preset's noise is seeded from the evaluation's --seed, so that one seed fixes every
+// random part of a run. An unknown preset is a glue::FlagError that names --camera.
+void ApplyCameraFlag(const std::string& preset, uint64_t seed, nav::sim::OmniCameraOptions* camera);
 
 }  // namespace snapnav::eval

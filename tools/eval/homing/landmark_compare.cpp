@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "landmark_eval.hpp"
+#include "progress.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
 #include "scene_file.hpp"
@@ -20,12 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-void Progress(const std::string& what, int done, int total) {
-  if (done == total || done % 10 == 0) {
-    std::cerr << "eval-homing: " << what << " " << done << "/" << total << (done == total ? "\n" : "\r") << std::flush;
-  }
-}
 
 nav::LandmarkHomingConfig WithAlv(nav::LandmarkHomingConfig c, nav::AlvVariant variant, int top_n) {
   c.alv.variant = variant;
@@ -105,7 +100,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
   const cv::Size raw_size(setup.camera.omni_width_px, setup.camera.omni_height_px);
   const cv::Mat mask = UseMask(setup.mask, renderer, raw_size);
   const Grid g = RenderScene(scene, MakeGridOptions(setup, setup.frames), renderer,
-                             [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
+                             [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
   const auto cache = ExtractAll(g.AllPanoramas(), extractor, mask);
   LandmarkMethod m(extractor, homing, setup.camera.panorama, &cache, setup.fusion);
   m.SetMask(mask);
@@ -124,7 +119,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
     ViewRenderer r2(quiet, setup.camera, setup.seed);
     UseMask(setup.mask, r2, raw_size);
     const Grid e = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
-                               [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
+                               [&](int d, int t) { Progress("eval-homing", "rendering " + quiet.name + " without people", d, t); });
     const auto empty_cache = ExtractAll(e.panos, extractor, mask);
     LandmarkMethod me(extractor, homing, setup.camera.panorama, &empty_cache);
     me.SetMask(mask);
@@ -142,7 +137,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
     returns = EvaluateReturn(g.db, live, renderer, pipeline,
                              WithFrames(setup.ret, setup.frames, setup.frames.home_frames, setup.frames.current_frames,
                                         setup.seed),
-                             [](int d, int t) { Progress("return runs", d, t); }, &g.frames);
+                             [](int d, int t) { Progress("eval-homing", "return runs", d, t); }, &g.frames);
     std::cerr << "eval-homing: return ratio " << Fixed(returns.ratio, 3) << " (" << returns.successes << "/"
               << returns.starts << ")\n";
   }
@@ -227,7 +222,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     const bool fused = people && fp.fused();
     ViewRenderer renderer(scene, setup.camera, setup.seed);
     const Grid g = RenderScene(scene, MakeGridOptions(setup, fused ? fp : FrameProtocol{}), renderer,
-                               [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
+                               [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
     // The same room without its people, for the degradation the people cause.
     std::optional<Grid> empty;
     if (people) {
@@ -235,7 +230,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       quiet.people.count = 0;
       ViewRenderer r2(quiet, setup.camera, setup.seed);
       empty = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
-                          [&](int d, int t) { Progress("rendering " + quiet.name + " without people", d, t); });
+                          [&](int d, int t) { Progress("eval-homing", "rendering " + quiet.name + " without people", d, t); });
     }
     const std::string header =
         std::string("| method | ALV | landmarks |") + (fused ? " fusion | frames home/current |" : "") +
@@ -281,7 +276,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       ReturnResult ret;
       if (options.returns) {
         ret = EvaluateReturn(g.db, hog, renderer, pipeline, WithFrames(setup.ret, fp, 1, 1, setup.seed),
-                             [](int d, int t) { Progress("return runs hog", d, t); }, &g.frames);
+                             [](int d, int t) { Progress("eval-homing", "return runs hog", d, t); }, &g.frames);
         r.ret = ret.ratio;
       }
       emit(r);
@@ -304,7 +299,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
         ReturnResult fret;
         if (options.returns) {
           fret = EvaluateReturn(g.db, fm, renderer, pipeline, WithFrames(setup.ret, fp, f.home, f.current, setup.seed),
-                                [&](int d, int t) { Progress("return runs " + q.Label(), d, t); }, &g.frames);
+                                [&](int d, int t) { Progress("eval-homing", "return runs " + q.Label(), d, t); }, &g.frames);
           q.ret = fret.ratio;
         }
         emit(q);
@@ -406,7 +401,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
           LandmarkMethod live(extractor, homing, setup.camera.panorama);
           const auto ret = EvaluateReturn(g.db, live, renderer, pipeline,
                                           WithFrames(setup.ret, fp, 1, 1, setup.seed),
-                                          [&](int d, int t) { Progress("return runs " + rows[row].Label(), d, t); },
+                                          [&](int d, int t) { Progress("eval-homing", "return runs " + rows[row].Label(), d, t); },
                                           &g.frames);
           rows[row].ret = ret.ratio;
           if (row == best_single.row) best_single_return = ret;
@@ -420,7 +415,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
         if (options.returns) {
           LandmarkMethod live(extractor, bf.homing, setup.camera.panorama, nullptr, bf.fusion);
           fret = EvaluateReturn(g.db, live, renderer, pipeline, WithFrames(setup.ret, fp, bf.home, bf.current, setup.seed),
-                                [&](int d, int t) { Progress("return runs " + rows[bf.row].Label(), d, t); },
+                                [&](int d, int t) { Progress("eval-homing", "return runs " + rows[bf.row].Label(), d, t); },
                                 &g.frames);
           rows[bf.row].ret = fret.ratio;
         }

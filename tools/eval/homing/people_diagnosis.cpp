@@ -10,6 +10,7 @@
 
 #include "landmark_eval.hpp"
 #include "people_view.hpp"
+#include "progress.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
 #include "scene_file.hpp"
@@ -22,12 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-void Progress(const std::string& what, int done, int total) {
-  if (done == total || done % 10 == 0) {
-    std::cerr << "eval-homing: " << what << " " << done << "/" << total << (done == total ? "\n" : "\r") << std::flush;
-  }
-}
 
 struct MethodRow {
   std::string label;
@@ -60,12 +55,12 @@ int RunPeopleDiagnosis(const LandmarkEvalSetup& setup, const std::string& scene_
   GridOptions framed = grid;  // the people grid with its frames of a still robot, for the fused views
   framed.frames = frames;
   const Grid g = RenderScene(scene, framed, renderer,
-                             [&](int d, int t) { Progress("rendering " + scene.name, d, t); });
+                             [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
   nav::sim::Scene quiet = scene;
   quiet.people.count = 0;
   ViewRenderer r2(quiet, setup.camera, setup.seed);
   const Grid e = RenderScene(quiet, grid, r2,
-                             [&](int d, int t) { Progress("rendering " + scene.name + " without people", d, t); });
+                             [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name + " without people", d, t); });
 
   // 1. Where the people are in each grid image.
   const PeopleView pv(scene, setup.camera);

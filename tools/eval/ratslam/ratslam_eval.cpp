@@ -16,6 +16,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "json_values.hpp"
 #include "results.hpp"
 #include "scene_file.hpp"
 #include "stats.hpp"
@@ -385,12 +386,6 @@ cv::Mat DrawExperienceMap(const RatSlamEvaluation& e, const std::string& title) 
 }
 
 namespace {
-
-// As the report prints it: 4 digits after the point.
-template <typename T>
-results::Json R4(T v) {
-  return results::Rounded(v, 4);
-}
 
 void JsonErrors(results::Json& j, const std::string& key, const TrajectoryErrors& e) {
   j[key + "_ate_rmse_m"] = R4(e.ate_aligned.rmse_m);
