@@ -155,108 +155,43 @@ SimCameraOptions SimCameraOptions::FromSimConfig(const processes::SimConfig& con
   return o;
 }
 
+namespace {
+
+// The harness's readings for a SimSensorSink: odometry from the second reading on (the first only
+// fixes the start, as in the processes), truth in the start frame, every frame.
+class SensorSinkAdapter : public SimDriveSink {
+ public:
+  explicit SensorSinkAdapter(SimSensorSink& sink) : sink_(sink) {}
+  void OnStart(const nav::sim::Scene&, const nav::Pose2& start) override { to_start_frame_ = start.Inverse(); }
+  void OnOdometry(const odometry_t& o, const nav::Pose2& truth) override {
+    if (started_) sink_.OnOdometry(o.utime, glue::OdometryDelta(o), o.delta_t_s, to_start_frame_.Compose(truth));
+    started_ = true;
+  }
+  void OnScan(const laser_scan_t& scan) override { sink_.OnScan(scan.utime, scan); }
+  bool WantsFrames() const override { return true; }
+  void OnFrame(int64_t utime, const cv::Mat& gray, const nav::Pose2& truth) override {
+    sink_.OnPanorama(utime, gray, to_start_frame_.Compose(truth));
+  }
+
+ private:
+  SimSensorSink& sink_;
+  nav::Pose2 to_start_frame_;
+  bool started_ = false;
+};
+
+}  // namespace
+
 SimCameraRun RunSimulatedSensors(const SimCameraOptions& options, SimSensorSink& sink,
                                  const std::function<void(double, int)>& progress) {
   options.Validate();
-  const SimSlamOptions& so = options.sim;
-  const nav::sim::Scene scene = processes::LoadSceneFile(processes::SceneFilePath(so.scene));
-  SimCameraRun out;
-  out.scene_name = scene.name;
-  out.route = so.route.empty() ? scene.route : so.route;
-  if (out.route.empty()) throw std::runtime_error("scene '" + scene.name + "' has no route and none was given");
-
-  // As SimulateSlamLog: the same world, driver, order of readings and random draws.
-  nav::sim::World world(scene, so.drive, so.laser, so.seed);
-  nav::sim::RouteDriver driver(out.route, so.route_speed_mps, so.route_tolerance_m, /*loop=*/true);
-  out.start = world.true_pose();
-  const nav::Pose2 to_start_frame = out.start.Inverse();
-  nav::sim::OmniRenderer renderer(scene, options.camera);
-  std::optional<nav::Unwrapper> unwrapper;
-  if (options.raw_frames) {
-    unwrapper.emplace(options.camera.ReportedMirror(), options.camera.panorama,
-                      cv::Size(options.camera.omni_width_px, options.camera.omni_height_px));
-  }
-  std::mt19937_64 effects_rng(so.seed ^ 0x9e3779b97f4a7c15ULL);  // as the sim process
-  const std::vector<nav::sim::Cylinder> nobody;
-
-  const int64_t dt_us = static_cast<int64_t>(std::llround(1e6 / so.physics_rate_hz));
-  const int odometry_every = EveryNSteps(so.physics_rate_hz, so.odometry_rate_hz, "odometry");
-  const int laser_every = EveryNSteps(so.physics_rate_hz, so.laser_rate_hz, "laser");
-  const int camera_every = EveryNSteps(so.physics_rate_hz, options.camera_rate_hz, "camera");
-  const Eigen::Vector2d start_xy(out.start.x_m, out.start.y_m);
-  const double expected_s =
-      ((out.route.front() - start_xy).norm() + so.laps * RouteLength(out.route)) / so.route_speed_mps;
-  const int64_t limit_us = so.duration_s > 0 ? static_cast<int64_t>(std::llround(so.duration_s * 1e6))
-                                             : static_cast<int64_t>(std::llround((3 * expected_s + 60) * 1e6));
-  const nav::sim::LaserOptions& laser = so.laser;
-  cv::Mat image, panorama, gray;
-  int64_t step = 0;
-  const int64_t progress_every = std::max<int64_t>(1, static_cast<int64_t>(10.0 * so.physics_rate_hz));
-  for (;; ++step) {
-    const int64_t t_us = step * dt_us;
-    if (t_us >= limit_us) {
-      if (so.duration_s > 0) break;
-      throw std::runtime_error("sim camera run: the robot completed " + std::to_string(driver.laps()) + " of " +
-                               std::to_string(so.laps) + " laps of the route in " + std::to_string(limit_us / 1000000) +
-                               " s (blocked?)");
-    }
-    const int64_t utime = so.start_utime + t_us;
-    const nav::Pose2 truth = to_start_frame.Compose(world.true_pose());
-    if (step % odometry_every == 0) {
-      const nav::sim::OdometryReading r = world.TakeOdometry();
-      // Through the message, as every consumer of ODOMETRY sees it.
-      const odometry_t o = glue::ToOdometryMsg(utime, "sim_wheels", r.cumulative, r.delta, r.dt_s);
-      if (step > 0) sink.OnOdometry(utime, glue::OdometryDelta(o), o.delta_t_s, truth);
-      ++out.odometry;
-    }
-    if (step % laser_every == 0) {
-      laser_scan_t m{};
-      m.utime = utime;
-      m.sensor_name = "sim_hokuyo";
-      m.sensor_x_m = static_cast<float>(laser.mount_x_m);
-      m.angle_min_rad = static_cast<float>(laser.angle_min_rad);
-      m.angle_increment_rad = static_cast<float>(laser.AngleIncrement());
-      m.range_min_m = static_cast<float>(laser.range_min_m);
-      m.range_max_m = static_cast<float>(laser.range_max_m);
-      m.ranges_m = world.Scan();
-      m.nranges = static_cast<int32_t>(m.ranges_m.size());
-      m.nintensities = 0;
-      sink.OnScan(utime, m);
-      ++out.scans;
-    }
-    if (step % camera_every == 0) {
-      const auto t0 = Clock::now();
-      const auto& people = options.people ? world.people() : nobody;
-      if (options.raw_frames) {
-        renderer.RenderOmni(world.true_pose(), people, &image);
-      } else {
-        renderer.RenderPanorama(world.true_pose(), people, &image);
-      }
-      nav::sim::ApplyImageEffects(options.effects, effects_rng, &image);
-      if (unwrapper) {
-        unwrapper->Unwrap(image, &panorama);
-      } else {
-        panorama = image;
-      }
-      if (panorama.channels() == 1) {
-        gray = panorama;
-      } else {
-        cv::cvtColor(panorama, gray, cv::COLOR_BGR2GRAY);
-      }
-      out.render_s += std::chrono::duration<double>(Clock::now() - t0).count();
-      sink.OnPanorama(utime, gray, truth);
-      ++out.frames;
-    }
-    const Eigen::Vector2d cmd = driver.Command(world.true_pose());
-    if (so.laps > 0 && driver.laps() >= so.laps) break;
-    world.Step(cmd.x(), cmd.y(), dt_us * 1e-6);
-    if (progress && step % progress_every == 0 && step > 0) progress(t_us * 1e-6, driver.laps());
-  }
-  out.laps = driver.laps();
-  out.duration_s = step * dt_us * 1e-6;
-  out.distance_m = world.distance_m();
-  out.collisions = world.collisions();
-  return out;
+  SimFrameOptions frames;
+  frames.rate_hz = options.camera_rate_hz;
+  frames.camera = options.camera;
+  frames.effects = options.effects;
+  frames.raw_frames = options.raw_frames;
+  frames.people = options.people;
+  SensorSinkAdapter adapter(sink);
+  return DriveSimulation(options.sim, &frames, adapter, "sim camera run", progress);
 }
 
 namespace {

@@ -4,9 +4,9 @@
 //
 // RunSimulatedSensors drives a scene's route with the sim process's physics, odometry, laser and
 // camera, and hands every reading to a SimSensorSink in time order: odometry increments at the
-// odometry rate, laser scans at the laser rate and grey panoramas at the camera rate. Its motion
-// loop is eval::SimulateSlamLog's (same options, same seed: the same odometry, scans and truth,
-// since the scans are drawn even when nobody wants them), with the camera added, so a comparison
+// odometry rate, laser scans at the laser rate and grey panoramas at the camera rate. It is the
+// evaluations' simulation harness (sim_harness.hpp) as eval::SimulateSlamLog drives it (same
+// options, same seed: the same odometry, scans and truth), with the camera added, so a comparison
 // can run laser SLAM, RatSLAM and dead reckoning on one run.
 //
 // EvaluateRatSlam feeds RatSlam (and dead reckoning) from such a run and measures both against the
@@ -59,17 +59,9 @@ class SimSensorSink {
   virtual void OnPanorama(int64_t /*utime*/, const cv::Mat& /*gray*/, const nav::Pose2& /*truth*/) {}
 };
 
-struct SimCameraRun {
-  std::string scene_name;
-  std::vector<Eigen::Vector2d> route;
-  nav::Pose2 start;          // true start pose in the scene [m, rad]
-  int laps = 0;
-  double duration_s = 0;     // simulated time [s]
-  double distance_m = 0;     // travelled (truth) [m]
-  int collisions = 0;
-  int64_t odometry = 0, scans = 0, frames = 0;  // readings given to the sink [count]
-  double render_s = 0;       // wall time spent rendering panoramas [s]
-};
+// The drive: scene, route, start, laps, simulated time, distance, readings (odometry counts the
+// first reading, which the sink does not get), time spent rendering.
+using SimCameraRun = SimDriveResult;
 
 // Runs the simulation; `progress` (may be empty) gets the simulated time and the laps done about
 // once per simulated 10 s. Throws as SimulateSlamLog.

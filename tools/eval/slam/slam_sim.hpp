@@ -7,7 +7,8 @@
 // can be replayed on the bus or read by eval-slam.
 //
 // The steps are made from the encoded messages exactly as eval::LoadSlamLog makes them from a
-// log, so the in-memory log and the written one give the same SLAM run.
+// log, so the in-memory log and the written one give the same SLAM run. The drive is the
+// evaluations' simulation harness (sim_harness.hpp), without the camera.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -15,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "sim_harness.hpp"
 #include "sim_node.hpp"
 #include "slam_log.hpp"
 #include "snapnav/glue/channels.hpp"
@@ -25,23 +27,10 @@
 
 namespace snapnav::eval {
 
-struct SimSlamOptions {
-  std::string scene = "corridor";             // name (config/scenes/NAME.scene) or path, as for sim
-  std::vector<Eigen::Vector2d> route;         // waypoints [m]; empty: the scene's route
-  int laps = 2;                               // stop after this many laps of the route; 0: no limit
-  double duration_s = 0;                      // stop after this much simulated time [s]; 0: no limit
-  uint64_t seed = 1;
-  int64_t start_utime = 1'700'000'000'000'000;  // utime of the first message [us]
-  double physics_rate_hz = 100;               // motion step; the sensor rates must divide it
-  double odometry_rate_hz = 50;
-  double laser_rate_hz = 10;
-  double route_speed_mps = 0.3;
-  double route_tolerance_m = 0.1;             // a waypoint is reached this close
-  nav::sim::DriveOptions drive;               // control error and odometry noise
-  nav::sim::LaserOptions laser;
+// The drive (scene, route, stop condition, seed, rates, robot, laser, kidnapping: SimDriveOptions)
+// and what is done with its readings.
+struct SimSlamOptions : SimDriveOptions {
   std::string log_path;                       // non-empty: also write the messages to this LCM log
-  nav::sim::KidnapOptions kidnap;             // a kidnapping (World::SetKidnap); the route goes on from the
-                                              // nearest waypoint ahead (RouteDriver::Restart)
   // Observers, for methods that run beside the simulation (eval compare): each odometry or scan
   // step as it joins the log, and every physics step after its sensors (time, the world).
   std::function<void(const SlamStep&)> on_sensor;
@@ -81,12 +70,6 @@ struct SimulatedSlamLog {
 // route (and none is given), or an LCM log that cannot be written; std::invalid_argument for
 // invalid options.
 SimulatedSlamLog SimulateSlamLog(const SimSlamOptions& options);
-
-// Physics steps per sensor reading; throws std::invalid_argument unless `rate_hz` divides the
-// physics rate (`what` names the sensor in the message).
-int EveryNSteps(double physics_hz, double rate_hz, const char* what);
-// The length of a closed route (back from the last waypoint to the first) [m].
-double RouteLength(const std::vector<Eigen::Vector2d>& route);
 
 // The errors of one estimator against the ground truth, at every scan.
 struct TrajectoryErrors {
