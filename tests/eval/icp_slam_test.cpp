@@ -1,4 +1,4 @@
-// MRPT's icp-slam beside our laser SLAM (tools/eval/icp_slam.hpp): the generated config, the
+// MRPT's icp-slam beside our laser SLAM (tools/eval/slam/icp_slam.hpp): the generated config, the
 // parsing of icp-slam's output files (fixtures written here), pairing by time, the errors when
 // the program is missing or fails, and, where Debian's mrpt-apps / mrpt-common are installed,
 // the rawlog stepping on the Malaga loop and the re-stamping of carmen2rawlog's output.

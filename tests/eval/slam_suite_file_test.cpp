@@ -1,4 +1,4 @@
-// The laser SLAM suite files (tools/eval/slam_suite): the shipped suites load with every entry the
+// The laser SLAM suite files (tools/eval/slam/slam_suite): the shipped suites load with every entry the
 // issue asks for; a bad suite file is an error naming the file and the key.
 #include <gtest/gtest.h>
 

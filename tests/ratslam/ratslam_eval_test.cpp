@@ -1,4 +1,4 @@
-// The RatSLAM evaluation's simulated runs (tools/eval/ratslam_eval): the camera run is the laser
+// The RatSLAM evaluation's simulated runs (tools/eval/ratslam/ratslam_eval): the camera run is the laser
 // SLAM evaluation's run (same odometry, scans and truth) with frames added, in time order; an
 // evaluation measures RatSLAM and dead reckoning on it and writes its files.
 #include "ratslam_eval.hpp"

@@ -1,4 +1,4 @@
-// Laser SLAM in the simulator with ground truth (tools/eval/slam_sim): the simulated log is
+// Laser SLAM in the simulator with ground truth (tools/eval/slam/slam_sim): the simulated log is
 // what eval-slam reads from a recorded one, and on a long corridor route laser SLAM stays on
 // the truth where dead reckoning drifts.
 
