@@ -10,15 +10,10 @@
 #include "exploration.hpp"
 #include "homing_eval.hpp"
 #include "slam_compare.hpp"
+#include "timing.hpp"
 #include "snapnav/nav/slam/fused_slam.hpp"
 
 namespace snapnav::eval {
-namespace {
-
-using Clock = std::chrono::steady_clock;
-double Ms(Clock::time_point since) { return std::chrono::duration<double, std::milli>(Clock::now() - since).count(); }
-
-}  // namespace
 
 const char* ExplorePoseName(CompareOptions::ExplorePose p) {
   switch (p) {
@@ -40,7 +35,7 @@ struct SlamExploreSample {
   nav::Pose2 estimate;
 };
 std::vector<SlamExploreSample> ExploreWithSlam(const nav::sim::Scene& scene, const CompareOptions& options,
-                                                    const SimSlamOptions& sim) {
+                                               const SimSlamOptions& sim) {
   SimSlamOptions explore = sim;
   explore.seed = options.explore_seed;
   // The route once and back to its first waypoint (a lap ends at the last waypoint): every part the
@@ -132,9 +127,9 @@ RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOption
     out.cell_error_mean_m += e / static_cast<double>(samples.size());
     out.cell_error_max_m = std::max(out.cell_error_max_m, e);
   }
-  out.ms_per_view = samples.empty() ? 0 : Ms(t_views) / static_cast<double>(samples.size());
+  out.ms_per_view = samples.empty() ? 0 : MsSince(t_views) / static_cast<double>(samples.size());
   out.memory->BuildIndex();
-  out.seconds = Ms(t0) / 1000;
+  out.seconds = MsSince(t0) / 1000;
   return out;
 }
 

@@ -19,6 +19,7 @@
 #include "results.hpp"
 #include "slam_plot.hpp"
 #include "stats.hpp"
+#include "timing.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/plot/plot.hpp"
@@ -28,10 +29,7 @@ namespace snapnav::eval {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-double Ms(Clock::time_point since) { return std::chrono::duration<double, std::milli>(Clock::now() - since).count(); }
 
 double Distance(const nav::Pose2& a, const nav::Pose2& b) { return std::hypot(a.x_m - b.x_m, a.y_m - b.y_m); }
 
@@ -104,7 +102,6 @@ double RecoveryTime(const std::vector<double>& time_s, const std::vector<double>
   }
   return kNaN;
 }
-
 
 }  // namespace
 
@@ -192,7 +189,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
         const double dt = last_odometry_utime < 0 ? 0.0 : (s.utime - last_odometry_utime) * 1e-6;
         const auto t0 = Clock::now();
         ratslam->Odometry(s.odometry_delta, dt);
-        ratslam_odometry_ms += Ms(t0);
+        ratslam_odometry_ms += MsSince(t0);
       }
       last_odometry_utime = s.utime;
       return;
@@ -201,7 +198,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     const auto update = [&](nav::FusedSlam* f, MethodResult* result, double* total_ms, double* max_ms) {
       const auto t0 = Clock::now();
       f->Update(s.points);
-      const double ms = Ms(t0);
+      const double ms = MsSince(t0);
       *total_ms += ms;
       *max_ms = std::max(*max_ms, ms);
       ++result->updates;
@@ -252,19 +249,19 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       next_visual_us += visual_period_us;
       t0 = Clock::now();
       const nav::PlaceView view = nav::MakePlaceView(panorama, options.view);
-      view_ms += Ms(t0);
+      view_ms += MsSince(t0);
       t0 = Clock::now();
       std::optional<nav::Pose2> prediction;
       if (options.visual_prediction) prediction = fused.pose();
       const auto loc = memory.memory->Localize(view, prediction, options.localizer);
-      localize_ms += Ms(t0);
+      localize_ms += MsSince(t0);
       ++out.visual_queries;
       if (!loc) {
         ++out.visual_no_answer;
       } else {
         t0 = Clock::now();
         const nav::VisualUpdate v = fused.AddVisual(utime, loc->pose, loc->covariance);
-        filter_visual_ms += Ms(t0);
+        filter_visual_ms += MsSince(t0);
         out.fixes.push_back(loc->pose);
         out.fix_outcomes.push_back(nav::VisualOutcomeName(v.outcome));
         out.fix_time_s.push_back(t_s);
@@ -295,7 +292,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       }
       t0 = Clock::now();
       ratslam->Frame(gray);
-      const double ms = Ms(t0);
+      const double ms = MsSince(t0);
       ratslam_frame_ms += ms;
       ratslam_max_ms = std::max(ratslam_max_ms, ms);
       ++ratslam_result.updates;
@@ -342,7 +339,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
       if (s.is_scan) continue;
       const auto t0 = Clock::now();
       timed.AddOdometry(s.odometry_delta);
-      const double ms = Ms(t0);
+      const double ms = MsSince(t0);
       total += ms;
       worst = std::max(worst, ms);
       ++dr.updates;
@@ -443,7 +440,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     out.visual_error_mean_m = sum / static_cast<double>(fix_errors.size());
     out.visual_error_median_m = Median(fix_errors, kNaN);
   }
-  out.seconds = Ms(wall0) / 1000;
+  out.seconds = MsSince(wall0) / 1000;
   return out;
 }
 

@@ -35,6 +35,7 @@
 #include "report_text.hpp"
 #include "results.hpp"
 #include "stats.hpp"
+#include "timing.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/nav/landmarks/surf.hpp"
 
@@ -54,12 +55,6 @@ constexpr double kRatio = 0.8;           // Lowe's ratio test
 
 const char* const kDefaultDataDir = "/usr/share/doc/opencv-doc/examples/data";
 const char* const kDefaultImages[] = {"graf1.png", "box.png", "building.jpg", "home.jpg", "baboon.jpg", "leuvenA.jpg"};
-
-double MsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-
 
 // Keypoints of one detector on one image: positions, sizes (each detector's own KeyPoint::size
 // convention; only compared within a detector) and descriptor rows.
@@ -245,7 +240,7 @@ std::map<std::string, Timing> TimeDetectors(const std::vector<Detector>& detecto
       const std::clock_t cpu_start = std::clock();
       const auto wall_start = std::chrono::steady_clock::now();
       (*features)[d.key] = d.run(gray);
-      wall[d.key].push_back(MsSince(wall_start));
+      wall[d.key].push_back(eval::MsSince(wall_start));
       cpu[d.key].push_back(1000.0 * static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
     }
   }
@@ -313,7 +308,6 @@ struct Row {
   std::string image, transform, group, detector;
   PairResult result;
 };
-
 
 }  // namespace
 

@@ -15,15 +15,13 @@
 #include "homing_eval.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
+#include "timing.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point since) { return std::chrono::duration<double, std::milli>(Clock::now() - since).count(); }
 
 Eigen::Vector2d Xy(const nav::Pose2& p) { return {p.x_m, p.y_m}; }
 
@@ -43,10 +41,10 @@ class ViewMaker {
     auto t0 = Clock::now();
     const cv::Mat panorama =
         renderer_.ToPanorama(renderer_.Sensor(pose, CameraPipeline::Input::kRaw, people), pipeline_);
-    if (render_ms) *render_ms += Ms(t0);
+    if (render_ms) *render_ms += MsSince(t0);
     t0 = Clock::now();
     nav::PlaceView v = nav::MakePlaceView(panorama, view_);
-    if (view_ms) *view_ms += Ms(t0);
+    if (view_ms) *view_ms += MsSince(t0);
     return v;
   }
   const nav::PanoramaModel& panorama() const { return renderer_.panorama_model(); }
@@ -154,7 +152,7 @@ RouteRun RunClosedLoop(const nav::sim::Scene& scene, const RouteEvalOptions& o, 
       } else {
         ++run.no_answer;
       }
-      run.ms_localize += Ms(t0);
+      run.ms_localize += MsSince(t0);
     }
     if (places) localization_due = (localization_due + 1) % o.localize_every;
 
@@ -177,7 +175,7 @@ RouteRun RunClosedLoop(const nav::sim::Scene& scene, const RouteEvalOptions& o, 
         in.arrived = o.homing_arrived_rad > 0 && seen && c.front().distance < o.homing_arrived_rad;
         follower.SetHoming(in);
       }
-      run.ms_homing += Ms(t0);
+      run.ms_homing += MsSince(t0);
       HomingSample hs;
       const Eigen::Vector2d to = route.waypoints[wp] - Xy(truth);
       hs.true_distance_m = to.norm();
@@ -221,12 +219,12 @@ RouteRun RunClosedLoop(const nav::sim::Scene& scene, const RouteEvalOptions& o, 
     ++run.control_steps;
     if (follower.state() == nav::FollowState::kFinished) {
       run.finished = true;
-      step_ms += Ms(t_step);
+      step_ms += MsSince(t_step);
       break;
     }
     for (int i = 0; i < physics_per_control; ++i) world.Step(command.linear_mps, command.angular_radps, dt);
     crowd.Advance(physics_per_control * dt);
-    step_ms += Ms(t_step);
+    step_ms += MsSince(t_step);
     if (world.time_s() >= next_report_s) {
       Say(progress,
           name + ": t=" + Fixed(world.time_s(), 0) + " s, lap " + std::to_string(follower.laps() + 1) + "/" +
