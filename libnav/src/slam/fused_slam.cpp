@@ -161,6 +161,8 @@ void FusedSlam::Predict(int64_t utime, const Pose2& delta) {
   Refresh();
 }
 
+size_t FusedSlam::EvidenceCap() const { return static_cast<size_t>(std::max(8, 2 * options_.relocalize_after)); }
+
 bool FusedSlam::suspect() const {
   return options_.suspect_after > 0 && consecutive_rejections_ >= options_.suspect_after;
 }
@@ -526,7 +528,10 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
       u_cov_ = Symmetric(u_cov_);
     }
     ++accepted_;
+    // Only the most recent can count against the agreeing rejected ones (at most EvidenceCap() + 1
+    // of those): bounded without odometry to prune by time too.
     accepted_window_.push_back(utime);
+    while (accepted_window_.size() > EvidenceCap() + 1) accepted_window_.pop_front();
     consecutive_rejections_ = 0;
     hypothesis_.reset();
     hypothesis_count_ = 0;
@@ -553,8 +558,7 @@ VisualUpdate FusedSlam::AddVisual(int64_t utime, const Pose2& z_in, const Eigen:
     for (const int64_t t : accepted_window_) against += t >= oldest ? 1 : 0;
   }
   rejected_window_.push_back({utime, z, r});
-  const size_t cap = static_cast<size_t>(std::max(8, 2 * options_.relocalize_after));
-  while (rejected_window_.size() > cap) rejected_window_.pop_front();
+  while (rejected_window_.size() > EvidenceCap()) rejected_window_.pop_front();
   hypothesis_ = h;
   hypothesis_count_ = count;
   v.agreeing_rejections = count;

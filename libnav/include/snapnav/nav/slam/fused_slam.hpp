@@ -333,6 +333,7 @@ class FusedSlam {
   };
   std::deque<Rejected> rejected_window_;  // recent rejected measurements, carried forward by odometry
   std::deque<int64_t> accepted_window_;   // the times of the measurements accepted in the same window
+  size_t EvidenceCap() const;             // rejected measurements kept as evidence (at least 8)
   std::optional<Hypothesis> hypothesis_;
   int hypothesis_count_ = 0;
   int consecutive_rejections_ = 0;
