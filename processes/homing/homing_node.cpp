@@ -71,7 +71,8 @@ Table& AddHog(Table& t, F hog) {
       .Choice("range", [hog](auto& c) -> auto& { return hog(c).range; },
               {nav::OrientationRange::kAll, nav::OrientationRange::kVertical, nav::OrientationRange::kHorizontal,
                nav::OrientationRange::kNarrowVertical},
-              nav::OrientationRangeName);
+              nav::OrientationRangeName)
+      .Number("max_masked_share", "", [hog](auto& c) -> auto& { return hog(c).max_masked_share; });
 }
 
 const Table& HomingTable() {

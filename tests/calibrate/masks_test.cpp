@@ -163,12 +163,24 @@ TEST(Masks, HogHomingIgnoresMaskedPixels) {
     cv::cvtColor(v.home, gray, cv::COLOR_BGR2GRAY);
     return gray;
   }());
-  const nav::ColumnHistograms h(g, c.hog, v.mask);
-  const auto cells = nav::CellsAtShift(h, c.hog.cell_size_px, 0);
-  ASSERT_FALSE(cells.valid.empty());
-  const int invalid = static_cast<int>(std::count(cells.valid.begin(), cells.valid.end(), 0));
-  EXPECT_GT(invalid, 0);
-  EXPECT_LT(invalid, static_cast<int>(cells.valid.size()) / 3);
+  auto left_out = [&](double max_masked_share) {
+    nav::HogOptions o = c.hog;
+    o.max_masked_share = max_masked_share;
+    const nav::ColumnHistograms h(g, o, v.mask);
+    EXPECT_DOUBLE_EQ(h.max_masked_share(), max_masked_share);
+    const auto cells = nav::CellsAtShift(h, o.cell_size_px, 0);
+    EXPECT_FALSE(cells.valid.empty());
+    return static_cast<int>(std::count(cells.valid.begin(), cells.valid.end(), 0));
+  };
+  const int cells_total = (c.hog.band_height_px > 0 ? c.hog.band_height_px : v.home.rows) / c.hog.cell_size_px *
+                          (v.home.cols / c.hog.cell_size_px);
+  const int strict = left_out(0.1), shipped = left_out(0.9);
+  EXPECT_GT(strict, 0);
+  EXPECT_LT(strict, cells_total / 3);
+  EXPECT_LT(shipped, strict);  // a partly masked cell counts, scaled up to the whole cell
+  nav::HogOptions bad = c.hog;
+  bad.max_masked_share = 1.0;  // a wholly masked cell cannot be scaled up
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
 }
 
 TEST(Masks, RatSlamTemplatesIgnoreMaskedPixels) {

@@ -429,7 +429,7 @@ TEST(HomingConfig, EveryShippedKeyIsRequired) {
       ++keys;
     }
   }
-  EXPECT_EQ(keys, 73);
+  EXPECT_EQ(keys, 75);
 }
 
 TEST(HomingConfig, BadValuesAndUnknownKeysAreErrors) {

@@ -37,6 +37,7 @@ void HogOptions::Validate() const {
   if (band_top_px < 0 || band_height_px < 0)
     throw std::invalid_argument("hog: band_top_px and band_height_px must not be negative");
   if (!(narrow_range_deg > 0 && narrow_range_deg <= 90)) throw std::invalid_argument("hog: narrow_range_deg in (0, 90]");
+  if (!(max_masked_share >= 0 && max_masked_share < 1)) throw std::invalid_argument("hog: max_masked_share in [0, 1)");
 }
 
 void HogAlvOptions::Validate() const {
@@ -98,6 +99,7 @@ void ColumnHistograms::Build(const Gradients& g, const HogOptions& o, const cv::
   cell_rows_ = band_h / o.cell_size_px;
   bins_ = o.bins;
   cell_size_ = o.cell_size_px;
+  max_masked_share_ = o.max_masked_share;
   prefix_.assign(static_cast<size_t>(cell_rows_) * (width_ + 1) * bins_, 0.0);
   if (use_mask) {
     masked_prefix_.assign(static_cast<size_t>(cell_rows_) * (width_ + 1), 0);
@@ -176,8 +178,8 @@ double ColumnHistograms::MaskedShare(int row, int x0, int n) const {
 namespace {
 
 // A cell's usability and the scale of its histogram (the usable share's inverse).
-inline bool CellUsable(double masked_share, double* scale) {
-  if (masked_share > ColumnHistograms::kMaxMaskedShare) return false;
+inline bool CellUsable(double masked_share, double max_masked_share, double* scale) {
+  if (masked_share > max_masked_share) return false;
   *scale = masked_share > 0 ? 1.0 / (1.0 - masked_share) : 1.0;
   return true;
 }
@@ -197,7 +199,7 @@ HogCells CellsAtShift(const ColumnHistograms& h, int cell_size_px, int shift_px)
       h.AddRun(r, shift_px + p * cell_size_px, cell_size_px, out);
       if (!h.masked()) continue;
       double scale = 1.0;
-      if (!CellUsable(h.MaskedShare(r, shift_px + p * cell_size_px, cell_size_px), &scale)) {
+      if (!CellUsable(h.MaskedShare(r, shift_px + p * cell_size_px, cell_size_px), h.max_masked_share(), &scale)) {
         c.valid[static_cast<size_t>(r) * c.cell_cols + p] = 0;
         std::fill(out, out + c.bins, 0.0);
       } else if (scale != 1.0) {
@@ -247,7 +249,7 @@ CompassResult VisualCompass(const ColumnHistograms& home, const ColumnHistograms
       current.AddRun(r, x, cell_size_px, out);
       if (!current.masked()) continue;
       double scale = 1.0;
-      start_usable[x] = CellUsable(current.MaskedShare(r, x, cell_size_px), &scale);
+      start_usable[x] = CellUsable(current.MaskedShare(r, x, cell_size_px), current.max_masked_share(), &scale);
       if (scale != 1.0) {
         for (int q = 0; q < bins; ++q) out[q] *= scale;
       }

@@ -38,6 +38,9 @@ struct HogOptions {
   int bins = 8;                 // orientation sectors over 360 degrees (36: the quantised variant)
   OrientationRange range = OrientationRange::kAll;
   double narrow_range_deg = 22.5;
+  // With a mask: a cell with more than this share of its pixels masked is left out; a cell with
+  // less counts with its histogram scaled up to the whole cell (ColumnHistograms). In [0, 1).
+  double max_masked_share = 0.9;
   void Validate() const;        // throws std::invalid_argument
 };
 
@@ -55,11 +58,10 @@ Gradients ComputeGradients(const cv::Mat& gray);
 //
 // With a mask (image_mask.hpp: non-zero usable, the panorama's size), masked pixels add nothing;
 // a cell's histogram is scaled up by the share of its pixels that are usable, and a cell with
-// more than kMaxMaskedShare of its pixels masked is left out (HogCells::valid): the compass and
-// the ALVs compare only cells usable in both views.
+// more than HogOptions::max_masked_share of its pixels masked is left out (HogCells::valid): the
+// compass and the ALVs compare only cells usable in both views.
 class ColumnHistograms {
  public:
-  static constexpr double kMaxMaskedShare = 0.34;
   // Throws std::invalid_argument when the band does not fit the image, or the mask is not of
   // the gradients' size.
   ColumnHistograms(const Gradients& gradients, const HogOptions& options, const cv::Mat& mask = cv::Mat());
@@ -71,6 +73,7 @@ class ColumnHistograms {
   int bins() const { return bins_; }
   int cell_size() const { return cell_size_; }
   bool masked() const { return !masked_prefix_.empty(); }
+  double max_masked_share() const { return max_masked_share_; }
   // Adds the histogram of columns [x0, x0 + n) (wrapping around) of cell row `row` to out[0..bins).
   void AddRun(int row, int x0, int n, double* out) const;
   // Share of the masked pixels of columns [x0, x0 + n) (wrapping) of cell row `row` (0 without a mask).
@@ -79,6 +82,7 @@ class ColumnHistograms {
  private:
   void Build(const Gradients& g, const HogOptions& o, const cv::Mat& mask);
   int width_ = 0, cell_rows_ = 0, bins_ = 0, cell_size_ = 0;
+  double max_masked_share_ = 0.9;
   std::vector<double> prefix_;  // [(row * (width + 1) + x) * bins + b]
   std::vector<int> masked_prefix_;  // [row * (width + 1) + x]: masked pixels of columns < x; empty without a mask
 };
