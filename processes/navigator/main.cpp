@@ -13,7 +13,7 @@ int Main(int argc, char** argv) {
   using namespace snapnav;
   glue::CommonFlags common;
   common.config = SNAPNAV_CONFIG_DIR "/navigator.ini";
-  std::string route;
+  std::string route, fixes;
   constexpr int kUnset = std::numeric_limits<int>::min();
   int laps = kUnset;
   glue::Flags flags("navigator",
@@ -24,9 +24,13 @@ int Main(int argc, char** argv) {
   flags.AddCommon(&common);
   flags.AddString("route", &route, "thesis1 | thesis2 | none: overrides [route] route");
   flags.AddInt("laps", &laps, "finish after this many laps, 0: no limit (overrides [route] laps)");
+  flags.AddString("fixes", &fixes,
+                  "pose_t channel of the fixes (overrides [channels] pose; --channel-prefix applies): e.g. POSE_EKF "
+                  "to drive on fused SLAM's pose while a place-cell memory is explored");
   if (!flags.Parse(argc, argv)) return 0;
   auto ini = glue::IniFile::Load(common.config);
   auto config = processes::NavigatorConfig::FromIni(ini, common.channel_prefix);
+  if (!fixes.empty()) config.pose_channel = common.channel_prefix + fixes;
   if (laps != kUnset) {
     if (laps < 0) throw glue::FlagError("--laps must be >= 0 (0: no limit)");
     config.route_laps = laps;

@@ -114,6 +114,9 @@ ROLES = {
 }
 # [channels] keys whose value is a regular expression.
 REGEX_KEYS = {("viewer", "poses"), ("viewer", "landmarks")}
+# Channel keys a command-line flag overrides: (program, key) -> flag (navigator --fixes POSE_EKF).
+CHANNEL_FLAGS = {("navigator", "pose"): "fixes"}
+
 # Recorders: they subscribe to a regex (--channel, both; every channel by default).
 RECORDERS = {"recorder": "channel", "lcm-logger": "channel"}
 # Programs without a [channels] config: what they do on the bus.
@@ -298,7 +301,8 @@ def read_channels(root, config_dir, p):
             raise Error(f"{ini.display}: missing [channels] {key} ({program})")
         if not condition(cfg):
             continue
-        channel = prefix + channels[key][0]
+        flag = CHANNEL_FLAGS.get((program, key))
+        channel = prefix + (p["flags"][flag] if flag and p["flags"].get(flag) else channels[key][0])
         if program == "landmarks" and "%s" in channel:
             method = p["flags"].get("method") or cfg.get("landmarks", "method")
             channel = channel.replace("%s", method.upper())
