@@ -42,3 +42,23 @@ assert clean["effects"]["noise_sigma"] == 0 and clean["effects"]["blur_sigma_px"
 assert noisy["effects"]["noise_sigma"] == 40 and noisy["effects"]["blur_sigma_px"] == 3, noisy["effects"]
 assert abs(noisy["average_angular_error_deg"] - clean["average_angular_error_deg"]) > 1.0, "the [effects] were not applied"
 PY
+
+# The realistic camera's optics act on the raw image: an evaluation that would render panoramas
+# directly refuses it (eval homing --input panorama) or renders raw frames (eval ratslam): never
+# is the preset dropped silently.
+sed '0,/^preset = clean /s//preset = realistic /' "$CONFIG/sim.ini" > "$OUT/realistic.ini"
+[ "$(grep -c '^preset = realistic' "$OUT/realistic.ini")" = 1 ]
+if "$BIN/eval-homing" --sim-config "$OUT/realistic.ini" --input panorama --quick --out "$OUT/rp" 2>"$OUT/stderr"; then
+  echo "FAIL: eval-homing rendered panoramas directly with the realistic camera"; exit 1
+fi
+grep -qF "without the realistic camera's optics" "$OUT/stderr" || { cat "$OUT/stderr"; exit 1; }
+echo "ok: eval-homing --input panorama refuses the realistic camera"
+"$BIN/eval-ratslam" --config "$OUT/realistic.ini" --scene indoor13 --laps 0 --duration-s 2 --out "$OUT/rs" \
+  >/dev/null 2>"$OUT/rs.log" || { cat "$OUT/rs.log"; exit 1; }
+grep -q "realistic (raw, unwrapped)" "$OUT/rs.log" || { head -3 "$OUT/rs.log"; exit 1; }
+python3 - "$OUT/rs/summary.json" <<'PY'
+import json, sys
+s = json.load(open(sys.argv[1]))
+assert s["camera"] == "realistic" and s["raw_frames"] is True, (s["camera"], s["raw_frames"])
+print("ok: eval-ratslam renders the realistic camera's raw frames")
+PY

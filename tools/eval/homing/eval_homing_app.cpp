@@ -411,6 +411,10 @@ int EvalHomingApp::Run() {
     sim.camera_preset = camera;
   }
   if (mask_source != "none" && input != "raw") throw glue::FlagError("--mask needs --input raw (the mask is of raw images)");
+  if (sim.camera.optics.enabled && input != "raw") {
+    throw glue::FlagError("--input panorama renders panoramas directly, without the realistic camera's optics (they act on "
+                          "the raw image): use --input raw, or --camera clean");
+  }
   const auto homing_ini = glue::IniFile::Load(config_path);
   const auto homing = processes::HomingConfig::FromIni(homing_ini, "");
   const nav::PanoramaModel& pm = sim.camera.panorama;

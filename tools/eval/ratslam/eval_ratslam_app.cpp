@@ -102,7 +102,9 @@ bool EvalRatSlamApp::Initialize(int argc, char** argv) {
   flags.AddInt("laps", &laps, "laps of the scene's route (0: use --duration-s)");
   flags.AddDouble("duration-s", &duration_s, "simulated seconds to drive (0: use --laps)");
   flags.AddInt("seed", &seed, "random seed (default: the config's)");
-  flags.AddBool("raw", &raw, "render raw catadioptric frames and unwrap them (as OMNI_FRAME) instead of panoramas");
+  flags.AddBool("raw", &raw,
+                "render raw catadioptric frames and unwrap them (as OMNI_FRAME) instead of panoramas; always with the "
+                "realistic camera ([camera] preset), whose optics act on the raw image");
   flags.AddBool("no-people", &no_people, "leave the scene's walking people out of the camera's view");
   flags.AddDouble("rpe-delta-m", &rpe_delta_m, "travelled distance of the relative pose error [m]");
   flags.AddString("sweep", &sweep,
@@ -123,7 +125,7 @@ int EvalRatSlamApp::Run() {
   options.run.sim.laps = laps;
   options.run.sim.duration_s = duration_s;
   if (seed >= 0) options.run.sim.seed = static_cast<uint64_t>(seed);
-  options.run.raw_frames = raw;
+  options.run.raw_frames = options.run.raw_frames || raw;  // the realistic camera: raw frames always
   options.run.people = !no_people;
   options.rpe_delta_m = rpe_delta_m;
   const std::string ratslam_text = ReadText(ratslam_config);
@@ -133,7 +135,8 @@ int EvalRatSlamApp::Run() {
             << options.run.sim.seed << ", heading drift " << options.run.sim.drive.heading_drift_deg_per_m
             << " deg/m, odometry " << options.run.sim.odometry_rate_hz << " Hz, camera " << options.run.camera_rate_hz
             << " Hz " << options.run.camera.panorama.width_px << "x" << options.run.camera.panorama.height_px
-            << (raw ? " (raw, unwrapped)" : " (panoramas)") << "\neval-ratslam: " << ratslam_config << ":\n";
+            << (options.run.camera.optics.enabled ? ", realistic" : ", clean")
+            << (options.run.raw_frames ? " (raw, unwrapped)" : " (panoramas)") << "\neval-ratslam: " << ratslam_config << ":\n";
   glue::PrintRatSlamOptions(std::cerr, options.ratslam);
   const auto progress = [](double t_s, int laps_done) {
     std::cerr << "eval-ratslam: " << t_s << " s simulated, " << laps_done << " laps\r" << std::flush;

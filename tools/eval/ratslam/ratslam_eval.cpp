@@ -144,6 +144,10 @@ void SimCameraOptions::Validate() const {
   EveryNSteps(sim.physics_rate_hz, camera_rate_hz, "camera");
   camera.Validate();
   effects.Validate();
+  if (camera.optics.enabled && !raw_frames) {
+    throw std::invalid_argument(
+        "the realistic camera's optics act on the raw image: a run with it renders raw frames and unwraps them (raw_frames)");
+  }
 }
 
 SimCameraOptions SimCameraOptions::FromSimConfig(const processes::SimConfig& config) {
@@ -152,6 +156,7 @@ SimCameraOptions SimCameraOptions::FromSimConfig(const processes::SimConfig& con
   o.camera_rate_hz = config.camera_rate_hz;
   o.camera = config.camera;
   o.effects = config.effects;
+  o.raw_frames = config.camera.optics.enabled;  // the realistic camera exists only in raw frames
   return o;
 }
 
@@ -397,6 +402,7 @@ void WriteRatSlamEvaluation(const RatSlamEvaluation& e, const RatSlamEvalOptions
   json["frames"] = R4(e.run.frames);
   json["odometry"] = R4(e.run.odometry);
   json["raw_frames"] = options.run.raw_frames;
+  json["camera"] = options.run.camera.optics.enabled ? "realistic" : "clean";
   json["heading_drift_deg_per_m"] = R4(options.run.sim.drive.heading_drift_deg_per_m);
   json["ratslam_templates"] = R4(e.templates);
   json["ratslam_experiences"] = e.experiences.size();

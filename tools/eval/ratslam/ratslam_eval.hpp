@@ -37,7 +37,8 @@ struct SimCameraOptions {
   nav::sim::OmniCameraOptions camera;    // camera geometry; its panorama model is the panorama's
   nav::sim::ImageEffectsOptions effects; // blur, noise, illumination (applied to the rendered image)
   // Render the raw catadioptric image and unwrap it (what the ratslam process sees on OMNI_FRAME)
-  // instead of rendering the panorama directly (OMNI_PANORAMA). Slower, blurrier.
+  // instead of rendering the panorama directly (OMNI_PANORAMA). Slower, blurrier. Required by the
+  // realistic camera (camera.optics.enabled), whose optics act on the raw image; FromSimConfig sets it then.
   bool raw_frames = false;
   bool people = true;                    // the scene's walking people (if any) occlude the camera
   void Validate() const;                 // throws std::invalid_argument
