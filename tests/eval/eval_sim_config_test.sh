@@ -53,12 +53,18 @@ if "$BIN/eval-homing" --sim-config "$OUT/realistic.ini" --input panorama --quick
 fi
 grep -qF "without the realistic camera's optics" "$OUT/stderr" || { cat "$OUT/stderr"; exit 1; }
 echo "ok: eval-homing --input panorama refuses the realistic camera"
-"$BIN/eval-ratslam" --config "$OUT/realistic.ini" --scene indoor13 --laps 0 --duration-s 2 --out "$OUT/rs" \
+"$BIN/eval-ratslam" --config "$OUT/realistic.ini" --scene indoor13 --laps 0 --duration-s 2 --mask truth --out "$OUT/rs" \
   >/dev/null 2>"$OUT/rs.log" || { cat "$OUT/rs.log"; exit 1; }
-grep -q "realistic (raw, unwrapped)" "$OUT/rs.log" || { head -3 "$OUT/rs.log"; exit 1; }
+grep -q "realistic (raw, unwrapped), mask truth" "$OUT/rs.log" || { head -3 "$OUT/rs.log"; exit 1; }
 python3 - "$OUT/rs/summary.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[1]))
-assert s["camera"] == "realistic" and s["raw_frames"] is True, (s["camera"], s["raw_frames"])
-print("ok: eval-ratslam renders the realistic camera's raw frames")
+assert s["camera"] == "realistic" and s["raw_frames"] is True and s["mask"] == "truth", (s["camera"], s["raw_frames"], s["mask"])
+print("ok: eval-ratslam renders the realistic camera's raw frames, with the robot's parts masked")
 PY
+# A mask is of raw frames: panoramas rendered directly (the clean camera without --raw) refuse it.
+if "$BIN/eval-ratslam" --scene indoor13 --laps 0 --duration-s 2 --mask truth --out "$OUT/rs2" 2>"$OUT/stderr"; then
+  echo "FAIL: eval-ratslam took a mask without raw frames"; exit 1
+fi
+grep -qF "needs --raw or the realistic camera" "$OUT/stderr" || { cat "$OUT/stderr"; exit 1; }
+echo "ok: eval-ratslam refuses a mask without raw frames"

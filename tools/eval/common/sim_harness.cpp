@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "scene_file.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/nav/homing/unwrap.hpp"
 
@@ -56,6 +57,13 @@ SimDriveResult DriveSimulation(const SimDriveOptions& options, const SimFrameOpt
     if (frames->raw_frames) {
       unwrapper.emplace(frames->camera.ReportedMirror(), frames->camera.panorama,
                         cv::Size(frames->camera.omni_width_px, frames->camera.omni_height_px));
+      const cv::Mat raw_mask = frames->truth_mask ? nav::GrowMasked(renderer->PartsMask(), 2, false) : frames->raw_mask;
+      if (!raw_mask.empty()) {
+        unwrapper->SetMask(raw_mask);
+        if (!unwrapper->panorama_mask().empty()) sink.OnPanoramaMask(unwrapper->panorama_mask());
+      }
+    } else if (frames->truth_mask || !frames->raw_mask.empty()) {
+      throw std::invalid_argument("a mask is of raw images: it needs raw frames");
     }
     camera_every = EveryNSteps(options.physics_rate_hz, frames->rate_hz, "camera");
   }

@@ -55,6 +55,11 @@ struct SimFrameOptions {
   // of rendering the panorama directly (OMNI_PANORAMA). Slower, blurrier.
   bool raw_frames = false;
   bool people = true;                     // the scene's walking people (if any) occlude the camera
+  // The raw image's self-occlusion mask (raw frames only; image_mask.hpp: non-zero usable, the raw
+  // image's size; empty: none), or truth_mask: the renderer's robot parts grown by 2 px. Unwrapped
+  // as the processes do (masked panorama pixels filled); the sink gets the panorama's mask.
+  cv::Mat raw_mask;
+  bool truth_mask = false;
 };
 
 // What the drive emits, in publishing order. Poses are true poses in the scene.
@@ -70,6 +75,8 @@ class SimDriveSink {
   virtual bool WantsFrames() const { return false; }
   // A grey panorama (CV_8UC1, the camera's panorama model: columns over 360 degrees).
   virtual void OnFrame(int64_t /*utime*/, const cv::Mat& /*gray*/, const nav::Pose2& /*truth*/) {}
+  // With a mask (SimFrameOptions), before the first frame: the panorama's mask (non-zero usable).
+  virtual void OnPanoramaMask(const cv::Mat& /*mask*/) {}
   // Every physics step after its sensors, before the robot moves (time, the world).
   virtual void OnStep(int64_t /*utime*/, const nav::sim::World& /*world*/) {}
 };

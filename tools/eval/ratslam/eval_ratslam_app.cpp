@@ -14,6 +14,8 @@
 #include <sstream>
 #include <vector>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "ratslam_eval.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -105,6 +107,9 @@ bool EvalRatSlamApp::Initialize(int argc, char** argv) {
   flags.AddBool("raw", &raw,
                 "render raw catadioptric frames and unwrap them (as OMNI_FRAME) instead of panoramas; always with the "
                 "realistic camera ([camera] preset), whose optics act on the raw image");
+  flags.AddString("mask", &mask,
+                  "self-occlusion mask of the raw frames: none | truth (the renderer's robot parts, grown by 2 px) | "
+                  "FILE (black = masked, the raw image's size, e.g. calibrate-mirror's); RatSLAM's templates ignore it");
   flags.AddBool("no-people", &no_people, "leave the scene's walking people out of the camera's view");
   flags.AddDouble("rpe-delta-m", &rpe_delta_m, "travelled distance of the relative pose error [m]");
   flags.AddString("sweep", &sweep,
@@ -126,6 +131,21 @@ int EvalRatSlamApp::Run() {
   options.run.sim.duration_s = duration_s;
   if (seed >= 0) options.run.sim.seed = static_cast<uint64_t>(seed);
   options.run.raw_frames = options.run.raw_frames || raw;  // the realistic camera: raw frames always
+  if (mask != "none") {
+    if (!options.run.raw_frames) throw glue::FlagError("--mask is of raw frames: it needs --raw or the realistic camera");
+    if (mask == "truth") {
+      options.run.truth_mask = true;
+    } else {
+      options.run.raw_mask = cv::imread(mask, cv::IMREAD_GRAYSCALE);
+      if (options.run.raw_mask.empty()) throw glue::FlagError("--mask " + mask + ": missing or not an image");
+      const int w = options.run.camera.omni_width_px, h = options.run.camera.omni_height_px;
+      if (options.run.raw_mask.cols != w || options.run.raw_mask.rows != h) {
+        throw glue::FlagError("--mask " + mask + " is " + std::to_string(options.run.raw_mask.cols) + "x" +
+                              std::to_string(options.run.raw_mask.rows) + ", the raw frames are " + std::to_string(w) +
+                              "x" + std::to_string(h));
+      }
+    }
+  }
   options.run.people = !no_people;
   options.rpe_delta_m = rpe_delta_m;
   const std::string ratslam_text = ReadText(ratslam_config);
@@ -136,7 +156,7 @@ int EvalRatSlamApp::Run() {
             << " deg/m, odometry " << options.run.sim.odometry_rate_hz << " Hz, camera " << options.run.camera_rate_hz
             << " Hz " << options.run.camera.panorama.width_px << "x" << options.run.camera.panorama.height_px
             << (options.run.camera.optics.enabled ? ", realistic" : ", clean")
-            << (options.run.raw_frames ? " (raw, unwrapped)" : " (panoramas)") << "\neval-ratslam: " << ratslam_config << ":\n";
+            << (options.run.raw_frames ? " (raw, unwrapped)" : " (panoramas)") << ", mask " << mask << "\neval-ratslam: " << ratslam_config << ":\n";
   glue::PrintRatSlamOptions(std::cerr, options.ratslam);
   const auto progress = [](double t_s, int laps_done) {
     std::cerr << "eval-ratslam: " << t_s << " s simulated, " << laps_done << " laps\r" << std::flush;

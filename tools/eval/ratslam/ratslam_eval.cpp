@@ -69,9 +69,10 @@ class RatSlamSink : public SimSensorSink {
     }
   }
 
+  void OnPanoramaMask(const cv::Mat& mask) override { mask_ = mask.clone(); }
   void OnPanorama(int64_t utime, const cv::Mat& gray, const nav::Pose2& truth) override {
     const auto t0 = Clock::now();
-    const nav::RatSlamViewResult v = slam_.OnImage(gray);
+    const nav::RatSlamViewResult v = slam_.OnImage(gray, mask_);
     image_ms_.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     RatSlamEvaluation::FrameTrace f;
     f.template_id = v.template_id;
@@ -106,6 +107,7 @@ class RatSlamSink : public SimSensorSink {
 
  private:
   nav::RatSlam slam_;
+  cv::Mat mask_;  // the panoramas' self-occlusion mask (empty: none)
   RatSlamEvaluation* out_;
   nav::Pose2 dead_reckoning_, last_truth_;
   bool have_truth_ = false;
@@ -177,6 +179,7 @@ class SensorSinkAdapter : public SimDriveSink {
   void OnFrame(int64_t utime, const cv::Mat& gray, const nav::Pose2& truth) override {
     sink_.OnPanorama(utime, gray, to_start_frame_.Compose(truth));
   }
+  void OnPanoramaMask(const cv::Mat& mask) override { sink_.OnPanoramaMask(mask); }
 
  private:
   SimSensorSink& sink_;
@@ -195,6 +198,8 @@ SimCameraRun RunSimulatedSensors(const SimCameraOptions& options, SimSensorSink&
   frames.effects = options.effects;
   frames.raw_frames = options.raw_frames;
   frames.people = options.people;
+  frames.raw_mask = options.raw_mask;
+  frames.truth_mask = options.truth_mask;
   SensorSinkAdapter adapter(sink);
   return DriveSimulation(options.sim, &frames, adapter, "sim camera run", progress);
 }
@@ -210,6 +215,9 @@ class FanOut : public SimSensorSink {
   }
   void OnPanorama(int64_t utime, const cv::Mat& gray, const nav::Pose2& truth) override {
     for (auto& s : *sinks_) s->OnPanorama(utime, gray, truth);
+  }
+  void OnPanoramaMask(const cv::Mat& mask) override {
+    for (auto& s : *sinks_) s->OnPanoramaMask(mask);
   }
 
  private:
@@ -403,6 +411,7 @@ void WriteRatSlamEvaluation(const RatSlamEvaluation& e, const RatSlamEvalOptions
   json["odometry"] = R4(e.run.odometry);
   json["raw_frames"] = options.run.raw_frames;
   json["camera"] = options.run.camera.optics.enabled ? "realistic" : "clean";
+  json["mask"] = options.run.truth_mask ? "truth" : (options.run.raw_mask.empty() ? "none" : "file");
   json["heading_drift_deg_per_m"] = R4(options.run.sim.drive.heading_drift_deg_per_m);
   json["ratslam_templates"] = R4(e.templates);
   json["ratslam_experiences"] = e.experiences.size();

@@ -41,6 +41,8 @@ struct SimCameraOptions {
   // realistic camera (camera.optics.enabled), whose optics act on the raw image; FromSimConfig sets it then.
   bool raw_frames = false;
   bool people = true;                    // the scene's walking people (if any) occlude the camera
+  cv::Mat raw_mask;                      // the raw image's mask (SimFrameOptions::raw_mask); raw frames only
+  bool truth_mask = false;               // ... or the renderer's robot parts
   void Validate() const;                 // throws std::invalid_argument
   // From the sim process's configuration (config/sim.ini): SimSlamOptions::FromSimConfig plus the
   // camera rate, geometry and effects.
@@ -58,6 +60,8 @@ class SimSensorSink {
   virtual void OnScan(int64_t /*utime*/, const laser_scan_t& /*scan*/) {}
   // A grey panorama (CV_8UC1, the camera's panorama model: columns over 360 degrees).
   virtual void OnPanorama(int64_t /*utime*/, const cv::Mat& /*gray*/, const nav::Pose2& /*truth*/) {}
+  // The panoramas' self-occlusion mask (non-zero usable), before the first panorama, when there is one.
+  virtual void OnPanoramaMask(const cv::Mat& /*mask*/) {}
 };
 
 // The drive: scene, route, start, laps, simulated time, distance, readings (odometry counts the
