@@ -5,9 +5,9 @@
 #include <cmath>
 #include <limits>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/nav/homing/image_mask.hpp"
 
 #include "snapnav/nav/sim/world.hpp"
@@ -81,13 +81,7 @@ cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_
   if (source == "truth") {
     raw = nav::GrowMasked(renderer.PartsMask(), 2, false);
   } else {
-    raw = cv::imread(source, cv::IMREAD_GRAYSCALE);
-    if (raw.empty()) throw std::runtime_error("mask " + source + ": missing or not an image");
-    if (raw.size() != raw_size) {
-      throw std::runtime_error("mask " + source + " is " + std::to_string(raw.cols) + "x" + std::to_string(raw.rows) +
-                               ", the camera's images " + std::to_string(raw_size.width) + "x" +
-                               std::to_string(raw_size.height));
-    }
+    raw = glue::LoadMask(source, raw_size);  // no such file, not an image, another size: an error naming it
   }
   renderer.SetMask(raw);
   return renderer.panorama_mask();

@@ -14,10 +14,9 @@
 #include <sstream>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "ratslam_eval.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/ini.hpp"
 #include "snapnav/glue/ratslam_options.hpp"
 
@@ -136,13 +135,11 @@ int EvalRatSlamApp::Run() {
     if (mask == "truth") {
       options.run.truth_mask = true;
     } else {
-      options.run.raw_mask = cv::imread(mask, cv::IMREAD_GRAYSCALE);
-      if (options.run.raw_mask.empty()) throw glue::FlagError("--mask " + mask + ": missing or not an image");
-      const int w = options.run.camera.omni_width_px, h = options.run.camera.omni_height_px;
-      if (options.run.raw_mask.cols != w || options.run.raw_mask.rows != h) {
-        throw glue::FlagError("--mask " + mask + " is " + std::to_string(options.run.raw_mask.cols) + "x" +
-                              std::to_string(options.run.raw_mask.rows) + ", the raw frames are " + std::to_string(w) +
-                              "x" + std::to_string(h));
+      try {
+        options.run.raw_mask =
+            glue::LoadMask(mask, cv::Size(options.run.camera.omni_width_px, options.run.camera.omni_height_px));
+      } catch (const std::runtime_error& e) {
+        throw glue::FlagError(std::string("--mask: ") + e.what());
       }
     }
   }
