@@ -9,8 +9,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "scene_file.hpp"
-#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/glue/conversions.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/homing/unwrap.hpp"
 
 namespace snapnav::eval {

@@ -412,8 +412,9 @@ int EvalHomingApp::Run() {
   }
   if (mask_source != "none" && input != "raw") throw glue::FlagError("--mask needs --input raw (the mask is of raw images)");
   if (sim.camera.optics.enabled && input != "raw") {
-    throw glue::FlagError("--input panorama renders panoramas directly, without the realistic camera's optics (they act on "
-                          "the raw image): use --input raw, or --camera clean");
+    throw glue::FlagError(
+        "--input panorama renders panoramas directly, without the realistic camera's optics (they act on the raw "
+        "image): use --input raw, or --camera clean");
   }
   const auto homing_ini = glue::IniFile::Load(config_path);
   const auto homing = processes::HomingConfig::FromIni(homing_ini, "");

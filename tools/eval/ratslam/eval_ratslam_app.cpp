@@ -108,7 +108,8 @@ bool EvalRatSlamApp::Initialize(int argc, char** argv) {
                 "realistic camera ([camera] preset), whose optics act on the raw image");
   flags.AddString("mask", &mask,
                   "self-occlusion mask of the raw frames: none | truth (the renderer's robot parts, grown by 2 px) | "
-                  "FILE (black = masked, the raw image's size, e.g. calibrate-mirror's); RatSLAM's templates ignore it");
+                  "FILE (black = masked, the raw image's size, e.g. calibrate-mirror's); RatSLAM's templates "
+                  "ignore it");
   flags.AddBool("no-people", &no_people, "leave the scene's walking people out of the camera's view");
   flags.AddDouble("rpe-delta-m", &rpe_delta_m, "travelled distance of the relative pose error [m]");
   flags.AddString("sweep", &sweep,
@@ -131,7 +132,9 @@ int EvalRatSlamApp::Run() {
   if (seed >= 0) options.run.sim.seed = static_cast<uint64_t>(seed);
   options.run.raw_frames = options.run.raw_frames || raw;  // the realistic camera: raw frames always
   if (mask != "none") {
-    if (!options.run.raw_frames) throw glue::FlagError("--mask is of raw frames: it needs --raw or the realistic camera");
+    if (!options.run.raw_frames) {
+      throw glue::FlagError("--mask is of raw frames: it needs --raw or the realistic camera");
+    }
     if (mask == "truth") {
       options.run.truth_mask = true;
     } else {
@@ -153,7 +156,8 @@ int EvalRatSlamApp::Run() {
             << " deg/m, odometry " << options.run.sim.odometry_rate_hz << " Hz, camera " << options.run.camera_rate_hz
             << " Hz " << options.run.camera.panorama.width_px << "x" << options.run.camera.panorama.height_px
             << (options.run.camera.optics.enabled ? ", realistic" : ", clean")
-            << (options.run.raw_frames ? " (raw, unwrapped)" : " (panoramas)") << ", mask " << mask << "\neval-ratslam: " << ratslam_config << ":\n";
+            << (options.run.raw_frames ? " (raw, unwrapped)" : " (panoramas)") << ", mask " << mask
+            << "\neval-ratslam: " << ratslam_config << ":\n";
   glue::PrintRatSlamOptions(std::cerr, options.ratslam);
   const auto progress = [](double t_s, int laps_done) {
     std::cerr << "eval-ratslam: " << t_s << " s simulated, " << laps_done << " laps\r" << std::flush;

@@ -148,7 +148,8 @@ void SimCameraOptions::Validate() const {
   effects.Validate();
   if (camera.optics.enabled && !raw_frames) {
     throw std::invalid_argument(
-        "the realistic camera's optics act on the raw image: a run with it renders raw frames and unwraps them (raw_frames)");
+        "the realistic camera's optics act on the raw image: a run with it renders raw frames and unwraps them "
+        "(raw_frames)");
   }
 }
 
