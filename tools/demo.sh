@@ -3,8 +3,7 @@
 #  1. bus health: probe frames of 100 B..1 MB from a publisher to a subscriber process,
 #     recorded by lcm-logger and replayed by lcm-logplayer, checked byte for byte;
 #  2. the place-cell memory: `launch config/deploy/demo.deploy --group explore` (gridgen renders
-#     the scene's grid for the home snapshot; the robot drives the route once with laser SLAM and
-#     fused SLAM, and placecells explores at fused SLAM's pose);
+#     the scene's grid, placecells explores it);
 #  3. the simulated lab in real time: `launch config/deploy/demo.deploy --group lab` (sim driven by
 #     the navigator, homing, landmarks, place cells, laser SLAM, dead reckoning, RatSLAM, fused
 #     SLAM, the viewer's snapshots, the recorder); with --fault, one process is killed with SIGKILL
@@ -52,8 +51,7 @@ usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROC
                     recorder must lose nothing (the report compares published and recorded counts)
   --fault-at-s T    when to kill it, seconds after sim started (default: half the duration)
   --explored DIR    reuse the place-cell memory and grid of an earlier demo's folder DIR (same
-                    scene): skips step 2 (which drives the route once for the lab's duration + 20 s,
-                    at most 80 s: one lap)
+                    scene): skips step 2
   --no-bus-health   skip step 1
   --drop-log        delete run.lcmlog after the report
   --two-host        two hosts on this machine: sim in a "robot" network namespace, the recorder,
@@ -172,10 +170,7 @@ if [ -n "$EXPLORED" ]; then
 else
   step "2/$STEPS place-cell memory of '$SCENE': launch $(basename "$DEPLOY") --group explore"
   set +e
-  # The exploring drive covers what the lab drives: its duration and 20 s more, at most a lap (80 s).
-  EXPLORE_DURATION=$(awk -v d="$DURATION" 'BEGIN { e = d + 20; print (e > 80 || d == 0) ? 80 : e }')
-  (at base "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE" \
-    "explore_duration_s=$EXPLORE_DURATION") 2>&1 |
+  (at base "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE") 2>&1 |
     quiet grep --line-buffered -vE '^ {11}|^launch: variable ' | quiet sed -u 's/^/  /'
   explore_rc=${PIPESTATUS[0]}
   set -e
@@ -349,9 +344,7 @@ fi
   echo "## 2. Place-cell memory ($(verdict $explore_rc))"
   echo
   [ -z "$EXPLORED" ] || printf 'Reused from `%s` (--explored).\n\n' "$EXPLORED"
-  grep -hE "^gridgen: scene|^placecells: explore, memory|^navigator: [0-9]+ drive|^sim: done" "$EXPLORE_OUT/explore/gridgen.log" \
-    "$EXPLORE_OUT/explore/sim.log" "$EXPLORE_OUT/explore/navigator.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null |
-    sed 's/^/    /' || true
+  grep -hE "^gridgen: scene|^placecells: explore, memory" "$EXPLORE_OUT/explore/gridgen.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
   echo
   echo "## 3. Simulated lab: scene $SCENE, $DURATION s ($(verdict $lab_rc))"
   echo

@@ -45,23 +45,13 @@ class ChannelGraphOfTheDemo(unittest.TestCase):
 
     def test_flags_of_the_command_override_the_config(self):
         # placecells --mode localize publishes poses and takes no explore poses; the explore instance
-        # (--mode explore, on the bus) takes fused SLAM's pose and publishes none
+        # (--mode explore, from a file:// log) the other way round
         self.assertIn("POSE_PLACE_CELLS", self.p["placecells"]["pub"])
-        self.assertNotIn("POSE_EKF", self.p["placecells"]["sub"])
-        self.assertIn("POSE_EKF", self.p["explore.placecells"]["sub"])
+        self.assertNotIn("POSE_GROUND_TRUTH", self.p["placecells"]["sub"])
+        self.assertIn("POSE_GROUND_TRUTH", self.p["explore.placecells"]["sub"])
         self.assertNotIn("POSE_PLACE_CELLS", self.p["explore.placecells"]["pub"])
-        self.assertFalse(self.p["explore.placecells"]["note"])
-        # navigator --fixes POSE_EKF: the exploring drive follows fused SLAM's pose, the lab's the fixes
-        self.assertIn("POSE_EKF", self.p["explore.navigator"]["sub"])
-        self.assertNotIn("POSE_PLACE_CELLS", self.p["explore.navigator"]["sub"])
-        self.assertIn("POSE_PLACE_CELLS", self.p["navigator"]["sub"])
+        self.assertIn("not the bus", self.p["explore.placecells"]["note"])
         self.assertEqual(self.p["landmarks"]["pub"], ["LANDMARKS_SURF"])
-
-    def test_a_process_reading_a_log_is_not_on_the_bus(self):
-        # explore.deploy (the memory at the grid's true poses): placecells explores gridgen's log
-        p = by_name(channel_graph.read_deployment(ROOT, "config/deploy/explore.deploy"))
-        self.assertIn("POSE_GROUND_TRUTH", p["placecells"]["sub"])
-        self.assertIn("not the bus", p["placecells"]["note"])
 
     def test_regular_expressions_match_the_published_channels(self):
         text = channel_graph.render(list(self.p.values()), "config/deploy/demo.deploy")
