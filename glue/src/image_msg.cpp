@@ -272,6 +272,12 @@ MirrorMask ReadMirrorMask(const IniFile& ini, cv::Size expected, const std::stri
   return m;
 }
 
+void ApplyMaskFlag(const std::string& mask_file, IniFile* ini, const std::string& section) {
+  if (mask_file.empty()) return;
+  if (!std::filesystem::exists(mask_file)) throw ConfigError("--mask " + mask_file + ": no such file");
+  ini->Set(section, "mask", std::filesystem::absolute(mask_file).lexically_normal().string(), "--mask");
+}
+
 void PrintPanoramaConfig(std::ostream& out, const nav::PanoramaModel& p, const std::string& section) {
   constexpr double kDeg = M_PI / 180;
   out << "[" << section << "]\nwidth_px = " << p.width_px << "\nheight_px = " << p.height_px

@@ -5,6 +5,7 @@
 #include "homing_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/run_node.hpp"
 
 namespace {
@@ -20,12 +21,16 @@ int Main(int argc, char** argv) {
                     "here, or panorama; [homing] input) with the home snapshot and publishes one homing_vector_t per\n"
                     "frame. The home comes from HOME_SNAPSHOT, an image file, or the first frame ([homing] home).");
   flags.AddCommon(&common);
+  std::string mask;
+  flags.AddString("mask", &mask, glue::kMaskFlagHelp);
   flags.AddString("home-image", &home_image,
                   "image file of the home snapshot (sets [homing] home = image; relative to the working folder)");
   flags.AddBool("home-first", &home_first_flag, "the first frame becomes the home (sets [homing] home = first)");
   if (!flags.Parse(argc, argv)) return 0;
 
-  auto config = processes::HomingConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
+  auto ini = glue::IniFile::Load(common.config);
+  glue::ApplyMaskFlag(mask, &ini);
+  auto config = processes::HomingConfig::FromIni(ini, common.channel_prefix);
   if (!home_image.empty()) {
     config.home = processes::HomeSource::kImage;
     config.home_image = home_image;

@@ -4,6 +4,7 @@
 #include "landmarks_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/run_node.hpp"
 
 namespace {
@@ -18,9 +19,13 @@ int Main(int argc, char** argv) {
                     "[landmarks] input) yields one landmark_set_t of vertical lines, SIFT or SURF keypoints on\n"
                     "[channels] landmarks. Run one instance per method for several methods.");
   flags.AddCommon(&common);
+  std::string mask;
+  flags.AddString("mask", &mask, glue::kMaskFlagHelp);
   flags.AddString("method", &method, "vline | sift | surf (overrides [landmarks] method)");
   if (!flags.Parse(argc, argv)) return 0;
-  const auto config = processes::LandmarksConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix, method);
+  auto ini = glue::IniFile::Load(common.config);
+  glue::ApplyMaskFlag(mask, &ini);
+  const auto config = processes::LandmarksConfig::FromIni(ini, common.channel_prefix, method);
   return glue::RunNode<processes::LandmarksNode>(
       "landmarks", common.config, config, common.lcm_url, [&](const processes::LandmarksNode&, const glue::Bus& bus) {
         return "frames from " + config.input_channel() + ", " + nav::LandmarkMethodName(config.extractor.method) +

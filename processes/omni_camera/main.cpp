@@ -4,6 +4,7 @@
 #include "omni_camera_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/shutdown.hpp"
 
 namespace {
@@ -18,11 +19,15 @@ int Main(int argc, char** argv) {
                     "images ([camera] source) and publishes them as omni_frame_t (RAW_OMNI) with the mirror\n"
                     "calibration. utime is the wall-clock capture time, for files and folders too (live source).");
   flags.AddCommon(&common);
+  std::string mask;
+  flags.AddString("mask", &mask, glue::kMaskFlagHelp);
   flags.AddInt("max-frames", &max_frames, "stop after publishing this many frames (0: no limit)");
   if (!flags.Parse(argc, argv)) return 0;
   if (max_frames < 0) throw glue::FlagError("--max-frames must be >= 0");
 
-  const auto config = processes::OmniCameraConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
+  auto ini = glue::IniFile::Load(common.config);
+  glue::ApplyMaskFlag(mask, &ini);
+  const auto config = processes::OmniCameraConfig::FromIni(ini, common.channel_prefix);
   std::cerr << "omni-camera: config " << common.config << "\n";
   config.Print(std::cerr);
   glue::InstallShutdownHandlers();

@@ -5,6 +5,7 @@
 #include "placecells_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/run_node.hpp"
 
 namespace {
@@ -22,11 +23,15 @@ int Main(int argc, char** argv) {
                     "(place_cell_match_t on [channels] match) and a pose with covariance (pose_t on [channels] pose).\n"
                     "Frames are processed at most every min_interval_s of message time or min_travel_m of odometry.");
   flags.AddCommon(&common);
+  std::string mask;
+  flags.AddString("mask", &mask, glue::kMaskFlagHelp);
   flags.AddString("mode", &mode, "explore | localize (overrides [placecells] mode)");
   flags.AddString("memory", &memory, "place-cell memory file (overrides [placecells] memory_file)");
   if (!flags.Parse(argc, argv)) return 0;
 
-  auto config = processes::PlaceCellsConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
+  auto ini = glue::IniFile::Load(common.config);
+  glue::ApplyMaskFlag(mask, &ini);
+  auto config = processes::PlaceCellsConfig::FromIni(ini, common.channel_prefix);
   if (!mode.empty()) {
     if (mode == "explore") {
       config.mode = processes::PlaceCellsMode::kExplore;

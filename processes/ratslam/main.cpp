@@ -5,6 +5,7 @@
 #include "ratslam_node.hpp"
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/run_node.hpp"
 
 namespace {
@@ -21,8 +22,12 @@ int Main(int argc, char** argv) {
                     "[node] experience_map_interval_s of message time. The first odometry message fixes the start:\n"
                     "the map frame is the odometry frame. [ratslam] keys are OpenRatSLAM's (see config/ratslam.ini).");
   flags.AddCommon(&common);
+  std::string mask;
+  flags.AddString("mask", &mask, glue::kMaskFlagHelp);
   if (!flags.Parse(argc, argv)) return 0;
-  const auto config = processes::RatSlamConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
+  auto ini = glue::IniFile::Load(common.config);
+  glue::ApplyMaskFlag(mask, &ini);
+  const auto config = processes::RatSlamConfig::FromIni(ini, common.channel_prefix);
   return glue::RunNode<processes::RatSlamNode>(
       "ratslam", common.config, config, common.lcm_url,
       [&](const processes::RatSlamNode&, const glue::Bus& bus) {

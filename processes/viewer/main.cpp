@@ -10,6 +10,7 @@
 
 #include "snapnav/glue/app.hpp"
 #include "snapnav/glue/flags.hpp"
+#include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/place_cells.hpp"
 #include "snapnav/glue/shutdown.hpp"
 #include "snapnav/glue/time.hpp"
@@ -51,6 +52,8 @@ int Main(int argc, char** argv) {
                     "[viewer] refresh_hz; --png DIR writes snapshots every png_interval_s of message time and at\n"
                     "exit, and needs no display.");
   flags.AddCommon(&common);
+  std::string mask;
+  flags.AddString("mask", &mask, glue::kMaskFlagHelp);
   flags.AddString("png", &png_dir, "write PNG snapshots into this folder (created); no window unless a display is set");
   flags.AddDouble("png-interval-s", &png_interval_s,
                   "a snapshot every this much message time [s] (overrides [viewer] png_interval_s; 0: at exit only)");
@@ -65,7 +68,8 @@ int Main(int argc, char** argv) {
   std::vector<std::string> prefixes = glue::SplitList(prefixes_text);
   if (!prefixes.empty() && !common.channel_prefix.empty()) throw glue::FlagError("give --prefixes or --channel-prefix, not both");
   if (prefixes.empty()) prefixes.push_back(common.channel_prefix);
-  const auto ini = glue::IniFile::Load(common.config);
+  auto ini = glue::IniFile::Load(common.config);
+  glue::ApplyMaskFlag(mask, &ini);
   auto config = processes::ViewerConfig::FromIni(ini, prefixes.front());
   if (png_interval_s >= 0) config.png_interval_s = png_interval_s;
   const bool window = HaveDisplay() && !no_window;

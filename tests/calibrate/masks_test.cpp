@@ -274,5 +274,40 @@ TEST(MaskConfig, ReadFromTheConfigsFolderAndRefusedWithFileLineAndKey) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(MaskConfig, TheMaskFlagOverridesTheConfigsKeyOrNamesWhatIsWrong) {
+  const auto dir = std::filesystem::temp_directory_path() / ("mask_flag_test." + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "configs");
+  cv::imwrite((dir / "flag.png").string(), cv::Mat(48, 64, CV_8UC1, cv::Scalar(0)));
+  const std::string path = (dir / "configs" / "c.ini").string();
+  std::ofstream(path) << "[mirror]\nmask =\n";
+  auto ini = glue::IniFile::Load(path);
+  glue::ApplyMaskFlag("", &ini);  // no flag: the config's (none)
+  EXPECT_TRUE(glue::ReadMirrorMask(ini).mask.empty());
+  // A path relative to the working folder, not to the config's folder.
+  const auto cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir);
+  glue::ApplyMaskFlag("flag.png", &ini);
+  std::filesystem::current_path(cwd);
+  const glue::MirrorMask m = glue::ReadMirrorMask(ini, cv::Size(64, 48));
+  EXPECT_EQ(m.path, (dir / "flag.png").string());
+  EXPECT_EQ(cv::countNonZero(m.mask), 0);
+  try {
+    glue::ApplyMaskFlag((dir / "nosuch.png").string(), &ini);
+    ADD_FAILURE() << "a missing mask file was taken";
+  } catch (const glue::ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "--mask " + (dir / "nosuch.png").string() + ": no such file");
+  }
+  std::ofstream(path) << "[mirror]\ncenter_x_px = 1\n";  // a config without the key
+  auto no_key = glue::IniFile::Load(path);
+  try {
+    glue::ApplyMaskFlag((dir / "flag.png").string(), &no_key);
+    ADD_FAILURE() << "a config without [mirror] mask took the flag";
+  } catch (const glue::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("--mask: "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("has no key 'mask'"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace snapnav::testing

@@ -15,6 +15,7 @@
 
 #include "../drivers/driver_test_util.hpp"
 #include "calibrate_mirror.hpp"
+#include "calibrated_mask.hpp"
 #include "realistic_render.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -195,6 +196,33 @@ TEST(SelfOcclusionMask, FramesOfAMovingRobotFindTheRobotsParts) {
   EXPECT_THROW(nav::SelfOcclusionMask({frames[0], frames[1]}, cal->mirror, {}), std::invalid_argument);
 }
 
+// --mask calibrated of the evaluations: calibrate-mirror's mask of 60 frames rendered over the grid
+// finds the renderer's parts (which it is not given); the clean camera's frames mask nothing.
+TEST(EvalCalibratedMask, FindsTheRobotsPartsOfTheRealisticCameraAndNothingOfTheCleanOne) {
+  RenderCase c;
+  const auto& scene = SharedScene(c.scene);
+  const nav::sim::OmniCameraOptions camera = RealisticCamera(c);
+  std::string note;
+  const cv::Mat mask = eval::CalibratedMask(scene, camera, 3, 60, &note);
+  EXPECT_NE(note.find("from 60 frames"), std::string::npos) << note;
+  const cv::Mat parts = nav::sim::OmniRenderer(scene, camera).PartsMask() == 0;
+  cv::Mat ring(mask.size(), CV_8U, cv::Scalar(0));
+  cv::circle(ring, {320, 240}, static_cast<int>(c.radius - 3), cv::Scalar(255), cv::FILLED);
+  cv::circle(ring, {320, 240}, static_cast<int>(0.4 * c.radius + 4), cv::Scalar(0), cv::FILLED);
+  const cv::Mat in_parts = parts & ring, masked = (mask == 0) & ring;
+  cv::Mat parts_grown;
+  cv::dilate(in_parts, parts_grown, cv::getStructuringElement(cv::MORPH_ELLIPSE, {9, 9}));
+  const double recall = static_cast<double>(cv::countNonZero(in_parts & masked)) / cv::countNonZero(in_parts);
+  const double precision =
+      static_cast<double>(cv::countNonZero(masked & parts_grown)) / std::max(1, cv::countNonZero(masked));
+  std::cerr << "calibrated mask: " << note << ", recall " << recall << ", precision " << precision << "\n";
+  EXPECT_GT(recall, 0.9);
+  EXPECT_GT(precision, 0.8);
+  nav::sim::OmniCameraOptions clean = camera;
+  clean.optics = nav::sim::CameraOpticsPreset("clean");
+  EXPECT_LT(nav::MaskedFraction(eval::CalibratedMask(scene, clean, 3)), 0.001);
+}
+
 TEST(CalibrateMirrorTool, WritesTheConfigTheOverlayAndTheMask) {
   ScratchDir dir;
   RenderCase c;
@@ -228,10 +256,12 @@ TEST(CalibrateMirrorTool, WritesTheConfigTheOverlayAndTheMask) {
       log.Write("OMNI_FRAME", msg);
     }
   }
-  const auto r2 =
-      RunCommand(BinDir() + "/calibrate-mirror --log " + (dir / "run.lcmlog") + " --out " + (dir / "cam2.ini"));
+  // Into folders that do not exist yet: made.
+  const auto r2 = RunCommand(BinDir() + "/calibrate-mirror --log " + (dir / "run.lcmlog") + " --out " +
+                             (dir / "new/cam2.ini") + " --png " + (dir / "other/overlay.png"));
   ASSERT_EQ(r2.exit_status, 0) << r2.output;
-  const auto ini2 = glue::IniFile::Load(dir / "cam2.ini");
+  EXPECT_FALSE(cv::imread(dir / "other/overlay.png").empty());
+  const auto ini2 = glue::IniFile::Load(dir / "new/cam2.ini");
   EXPECT_EQ(ini2.GetString("mirror", "mask"), "cam2_mask.png");
   const cv::Mat mask = glue::LoadMask(glue::ReadMirrorMaskPath(ini2), image.size());
   EXPECT_GT(nav::MaskedFraction(mask), 0.01);

@@ -146,6 +146,39 @@ class SoakCheckTest(unittest.TestCase):
         self.assertEqual(rc, 1, out)
         self.assertIn("growing: POSE_RATSLAM", out)
 
+    def write_windows(self, d, per_channel, window_s=10):
+        """log-report's ate_windows.csv: {channel: [RMSE of each window]}."""
+        with open(os.path.join(d, "ate_windows.csv"), "w") as f:
+            f.write("channel,window_start_s,window_end_s,poses,rmse_m\n")
+            for ch, values in per_channel.items():
+                for i, v in enumerate(values):
+                    f.write(f"{ch},{i * window_s},{(i + 1) * window_s},100,{v}\n")
+
+    def test_growth_is_judged_after_the_warm_up_from_the_windows(self):
+        d = self.make_run()
+        # Laser SLAM's error high during the warm-up (20 s), then flat: passes; RatSLAM flat, then rising.
+        self.write_windows(d, {"POSE_LASER_SLAM": [0.2, 0.1, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005, 0.005],
+                               "POSE_RATSLAM": [0.05] * 5 + [0.2, 0.3, 0.4, 0.5]})
+        rc, out = self.soak(d)
+        self.assertEqual(rc, 1, out)
+        self.assertIn("growing: POSE_RATSLAM", out)
+        self.assertIn("POSE_LASER_SLAM: window RMSE", out)
+        self.assertIn("growth after 20 s +0.000 m over 7 windows", out)
+        with open(os.path.join(d, "soak.json")) as f:
+            # after 20 s: 0.05, 0.05, 0.05, 0.2, 0.3, 0.4, 0.5; thirds of 2: (0.4 + 0.5) / 2 - 0.05
+            self.assertAlmostEqual(json.load(f)["pose_ratslam_ate_growth_after_warmup_m"], 0.40, places=3)
+
+    def test_an_estimator_with_a_longer_warm_up_than_the_run_is_shown_not_judged(self):
+        d = self.make_run(ratslam_last=0.30)
+        self.write_windows(d, {"POSE_LASER_SLAM": [0.005] * 9, "POSE_RATSLAM": [0.05, 0.1, 0.15, 0.2, 0.25, 0.3]})
+        rc, out = run_check("soak", d, "--warmup-s", "20", "--estimator-warmup", "POSE_RATSLAM=600")
+        self.assertEqual(rc, 0, out)
+        self.assertIn("not judged: its warm-up of 600 s leaves 0 windows of this run", out)
+        # The same run with RatSLAM's warm-up the run's: it grows.
+        rc, out = self.soak(d)
+        self.assertEqual(rc, 1, out)
+        self.assertIn("growing: POSE_RATSLAM", out)
+
 
 class RobotsCheckTest(unittest.TestCase):
     PREFIXES = ("R1_", "R2_")

@@ -55,6 +55,14 @@ cv::Mat ReadImage(const std::string& path) {
   return image;
 }
 
+// The folder an output file goes into, made when it does not exist (as every tool's --out).
+void MakeParentFolder(const std::string& path) {
+  const fs::path parent = fs::absolute(path).parent_path();
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec) throw std::runtime_error("cannot make the folder " + parent.string() + " for " + path + ": " + ec.message());
+}
+
 int Main(int argc, char** argv) {
   int device = -1, frames_wanted = 0;
   std::string log_path, channel = "OMNI_FRAME", out_path, png_path, mask_path, mask_out;
@@ -184,6 +192,7 @@ int Main(int argc, char** argv) {
       mask_file = fs::absolute(mask_path).lexically_normal().string();
     } else if (!mask_out.empty() || !out_path.empty()) {
       mask_file = !mask_out.empty() ? mask_out : (fs::path(out_path).replace_extension().string() + "_mask.png");
+      MakeParentFolder(mask_file);
       if (!cv::imwrite(mask_file, mask)) throw std::runtime_error("cannot write " + mask_file);
       std::cout << "wrote " << mask_file << "\n";
     }
@@ -202,6 +211,7 @@ int Main(int argc, char** argv) {
     text << in.rdbuf();
     bool mask_written = false;
     const std::string out_text = calibrate::WithMirrorSection(text.str(), m, mask_key, &mask_written);
+    MakeParentFolder(out_path);
     std::ofstream out(out_path);
     out << out_text;
     if (!out) throw std::runtime_error("cannot write " + out_path);
@@ -213,6 +223,7 @@ int Main(int argc, char** argv) {
     }
   }
   if (!png_path.empty()) {
+    MakeParentFolder(png_path);
     if (!cv::imwrite(png_path, nav::DrawCalibrationOverlay(mean, m, mask)))
       throw std::runtime_error("cannot write " + png_path);
     std::cout << "wrote " << png_path << "\n";

@@ -63,7 +63,8 @@ SECONDS=0
 EXPLORE_OUT="$OUT"
 if [ -n "$EXPLORED" ]; then
   EXPLORE_OUT="$EXPLORED"
-  [ -s "$EXPLORED/placecells.mem" ] || { echo "robots: --explored $EXPLORED: no placecells.mem there" >&2; exit 2; }
+  [ -s "$EXPLORED/placecells.mem" ] && [ -s "$EXPLORED/camera_mask.png" ] ||
+    { echo "robots: --explored $EXPLORED: no placecells.mem or camera_mask.png there" >&2; exit 2; }
 else
   echo "robots: the place-cell memory of '$SCENE' (launch robots.deploy --group explore)"
   "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 0 "scene=$SCENE" >"$OUT/explore.log" 2>&1 ||
@@ -79,7 +80,7 @@ python3 "$ROOT/tools/deploy/process_stats.py" sample --out "$OUT/processes.csv" 
 sampler_pid=$!; pids+=($sampler_pid)
 "$BIN/launch" "$DEPLOY" --group lab --out "$OUT" --status-every-s 0 --status-file "$STATUS" \
   "robots=$PREFIXES" "scene=$SCENE" "duration_s=$DURATION" "realtime_factor=$FACTOR" "frame_encoding=$FRAME_ENCODING" \
-  "memory=$EXPLORE_OUT/placecells.mem" "home_image=$EXPLORE_OUT/grid/images/6_6.png" >"$OUT/launch.log" 2>&1 &
+  "memory=$EXPLORE_OUT/placecells.mem" "mask=$EXPLORE_OUT/camera_mask.png" "home_image=$EXPLORE_OUT/grid/images/6_6.png" >"$OUT/launch.log" 2>&1 &
 launch_pid=$!; pids+=($launch_pid)
 # The run ends when every sim has ended (each runs duration_s from its own start).
 sims_done() {

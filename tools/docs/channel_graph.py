@@ -124,6 +124,7 @@ OTHER = {
     "recorder": "records every channel",
     "lcm-logger": "records every channel",
     "gridgen": "no bus: writes the grid database and its log (`--out`)",
+    "calibrate-mirror": "no bus: reads the grid's log (`--log`), writes the `[mirror]` calibration and the mask",
 }
 
 

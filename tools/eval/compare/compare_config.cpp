@@ -27,7 +27,8 @@ processes::SimConfig LoadCompareConfigs(const CompareConfigPaths& paths, Compare
 
 void PrintCompareOptions(std::ostream& out, const CompareConfigPaths& paths, const CompareOptions& o) {
   const nav::FusedSlamOptions& f = o.fused;
-  out << "sim config " << paths.sim << ", fused config " << paths.fused << ", laser config " << paths.laser
+  out << "sim config " << paths.sim << " (camera " << (o.camera.optics.enabled ? "realistic" : "clean") << ", mask "
+      << o.mask << "), fused config " << paths.fused << ", laser config " << paths.laser
       << ", place-cell config " << paths.placecells << ", RatSLAM config " << paths.ratslam << "\n"
       << "visual fixes " << o.visual_rate_hz << " Hz (" << (o.visual_prediction ? "fused pose as prediction" : "global")
       << "), RatSLAM frames " << o.ratslam_rate_hz << " Hz ("

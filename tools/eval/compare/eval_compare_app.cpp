@@ -14,9 +14,11 @@
 #include <opencv2/core.hpp>
 
 #include "compare_config.hpp"
+#include "homing_eval.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
 #include "scene_file.hpp"
+#include "sim_config_use.hpp"
 #include "sim_node.hpp"
 #include "slam_compare.hpp"
 #include "snapnav/glue/flags.hpp"
@@ -82,6 +84,11 @@ bool EvalCompareApp::Initialize(int argc, char** argv) {
   flags.AddDouble("recovery-error-m", &o.recovery_error_m, "kidnapping: recovered when the fused error stays below this [m]");
   flags.AddDouble("recovery-hold-s", &o.recovery_hold_s, "... for this long [s]");
   flags.AddString("sim-config", &paths.sim, "simulator config (robot noise, laser, camera, rates, seed)");
+  flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: realistic | clean");
+  flags.AddString("mask", &mask_source,
+                  "self-occlusion mask of the raw frames (place cells, RatSLAM): calibrated (calibrate-mirror's, from 60 "
+                  "frames of the camera) | none | truth (the renderer's robot parts) | FILE; default: calibrated with the "
+                  "realistic camera, none with the clean one");
   flags.AddString("fused-config", &paths.fused, "fused-slam config ([laser_slam], [fused_slam])");
   flags.AddString("laser-config", &paths.laser, "laser-slam config of laser-only SLAM ([laser_slam])");
   flags.AddString("ratslam-config", &paths.ratslam, "RatSLAM config ([ratslam])");
@@ -125,6 +132,8 @@ int EvalCompareApp::Run() {
   }
   o.run_ratslam = !no_ratslam;
   const processes::SimConfig sim_config = eval::LoadCompareConfigs(paths, &o);
+  eval::ApplyCameraFlag(camera, sim_config.seed, &o.camera);
+  o.mask = !mask_source.empty() ? mask_source : eval::DefaultMask(o.camera.optics.enabled ? "realistic" : "clean");
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {
@@ -247,6 +256,8 @@ int EvalCompareApp::Run() {
     for (const auto& run : compared) j["runs"].push_back(run.name);
     j["ratslam"] = o.run_ratslam ? "ran" : "off";
     j["explore_pose"] = eval::ExplorePoseName(o.explore_pose);
+    j["camera"] = o.camera.optics.enabled ? "realistic" : "clean";
+    j["mask"] = o.mask == "none" || o.mask == "calibrated" || o.mask == "truth" ? o.mask : "file";
     for (const auto& run : compared) {
       const std::string prefix = compared.size() > 1 ? run.name + "_" : "";
       if (compared.size() == 1) {

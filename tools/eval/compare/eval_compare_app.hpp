@@ -20,7 +20,7 @@ class EvalCompareApp {
   int Run();
 
   // The flags' values (Initialize sets them; a caller may set them itself and call Run).
-  std::string scene_name, scenes, out_dir, log_path, reference_path, kidnap_to_text;
+  std::string scene_name, scenes, out_dir, log_path, reference_path, kidnap_to_text, mask_source, camera;
   std::string explore_pose = "fused-slam";  // --explore-pose, read into o.explore_pose by Run
   CompareConfigPaths paths;
   int laps = 0, seed = -1, explore_seed = 101, threads = 1;

@@ -114,13 +114,15 @@ RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOption
   RouteMemory out;
   out.memory = std::make_unique<nav::PlaceCellMemory>(options.view, options.camera.panorama, options.vocabulary);
   ViewRenderer renderer(scene, options.camera, options.explore_seed);
+  const cv::Mat mask = UseMask(options.mask, renderer,
+                               cv::Size(options.camera.omni_width_px, options.camera.omni_height_px), sim.seed);
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
   const auto t_views = Clock::now();
   for (const auto& [s, estimate] : samples) {
     const cv::Mat panorama = renderer.ToPanorama(renderer.Sensor(s.truth, pipeline.input, s.people), pipeline);
-    out.memory->Add(estimate, s.utime, nav::MakePlaceView(panorama, options.view));
+    out.memory->Add(estimate, s.utime, nav::MakePlaceView(panorama, options.view, mask));
     out.cell_poses.push_back(s.truth);
     out.cell_estimates.push_back(estimate);
     const double e = std::hypot(estimate.x_m - s.truth.x_m, estimate.y_m - s.truth.y_m);

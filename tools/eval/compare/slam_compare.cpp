@@ -38,7 +38,7 @@ class RatSlamRunner {
  public:
   RatSlamRunner(const nav::RatSlamOptions& options, const nav::Pose2& start) : slam_(options, start) {}
   void Odometry(const nav::Pose2& delta, double dt_s) { slam_.OnOdometry(delta, dt_s); }
-  void Frame(const cv::Mat& gray) { slam_.OnImage(gray); }
+  void Frame(const cv::Mat& gray, const cv::Mat& mask) { slam_.OnImage(gray, mask); }
   nav::Pose2 pose() const { return slam_.pose(); }
   int64_t loop_closures() const { return static_cast<int64_t>(slam_.loop_closures()); }
   int64_t experiences() const { return static_cast<int64_t>(slam_.experience_map().experiences().size()); }
@@ -158,6 +158,8 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   const nav::Pose2 start{scene.start_pose.x(), scene.start_pose.y(), scene.start_pose.z()};
 
   ViewRenderer renderer(scene, options.camera, sim.seed ^ 0x5eedULL);
+  const cv::Mat mask = UseMask(options.mask, renderer, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
+                               sim.seed);
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
@@ -248,7 +250,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     if (visual_due) {
       next_visual_us += visual_period_us;
       t0 = Clock::now();
-      const nav::PlaceView view = nav::MakePlaceView(panorama, options.view);
+      const nav::PlaceView view = nav::MakePlaceView(panorama, options.view, mask);
       view_ms += MsSince(t0);
       t0 = Clock::now();
       std::optional<nav::Pose2> prediction;
@@ -291,7 +293,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
         gray = panorama;
       }
       t0 = Clock::now();
-      ratslam->Frame(gray);
+      ratslam->Frame(gray, mask);
       const double ms = MsSince(t0);
       ratslam_frame_ms += ms;
       ratslam_max_ms = std::max(ratslam_max_ms, ms);

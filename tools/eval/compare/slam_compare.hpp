@@ -60,6 +60,7 @@ bool RatSlamAvailable();
 
 struct CompareOptions {
   nav::sim::OmniCameraOptions camera;   // the simulator's camera, mirror and panorama
+  std::string mask = "none";            // the raw frames' self-occlusion mask (homing_eval.hpp UseMask)
   nav::sim::ImageEffectsOptions effects;
   double visual_rate_hz = 2;            // place-cell fixes per second of simulated time
   double ratslam_rate_hz = 10;          // frames to RatSLAM per second

@@ -360,7 +360,9 @@ bool EvalHomingApp::Initialize(int argc, char** argv) {
   flags.AddString("input", &input, "raw (render catadioptric images and unwrap) or panorama (render panoramas)");
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
   flags.AddString("mask", &mask_source,
-                  "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE (black = masked)");
+                  "self-occlusion mask of the raw images: calibrated (calibrate-mirror's, from 60 frames of the camera) | "
+                  "none | truth (the renderer's robot parts) | FILE (black = masked); default: calibrated with the "
+                  "realistic camera, none with the clean one");
   flags.AddString("protocols", &protocols,
                   "HOG: snapnav (the scene's whole grid; always run) and/or thesis-5x5 (thesis 3.1.4: the 5x5 positions "
                   "around the home): AAE of the shipped configuration and of the thesis' at 20, 40 and 60 px cells under each");
@@ -410,6 +412,9 @@ int EvalHomingApp::Run() {
     ApplyCameraFlag(camera, static_cast<uint64_t>(seed), &sim.camera);
     sim.camera_preset = camera;
   }
+  if (mask_source.empty()) {  // the default: as a lab calibrates its camera (modes without masks: none)
+    mask_source = people_diagnosis || !grid_dir.empty() || input != "raw" ? "none" : eval::DefaultMask(sim.camera_preset);
+  }
   if (mask_source != "none" && input != "raw") throw glue::FlagError("--mask needs --input raw (the mask is of raw images)");
   if (sim.camera.optics.enabled && input != "raw") {
     throw glue::FlagError(
@@ -450,8 +455,8 @@ int EvalHomingApp::RunLandmarkMethods(const processes::SimConfig& sim, const pro
   setup.ret.start_stride = return_stride;
   setup.seed = static_cast<uint64_t>(seed);
   setup.mask = mask_source;
-  if (mask_source != "none" && (compare || people_diagnosis)) {
-    throw glue::FlagError("--mask is for a single method's evaluation (not --compare or --people-diagnosis)");
+  if (mask_source != "none" && people_diagnosis) {
+    throw glue::FlagError("--mask is not for --people-diagnosis (it looks at the people, the robot's parts aside)");
   }
   setup.fusion.mode = homing.fusion.mode;
   setup.fusion.persistence = homing.fusion.persistence;
@@ -512,7 +517,8 @@ int EvalHomingApp::RunScene(const processes::SimConfig& sim, const nav::HogHomin
   std::cerr << "eval-homing: scene " << scene.name << ", " << scene.grid.nx << "x" << scene.grid.ny << " grid, input "
             << input << ", " << Describe(config) << "\n";
   eval::ViewRenderer renderer(scene, sim.camera, static_cast<uint64_t>(seed));
-  const cv::Mat mask = eval::UseMask(mask_source, renderer, cv::Size(sim.camera.omni_width_px, sim.camera.omni_height_px));
+  const cv::Mat mask = eval::UseMask(mask_source, renderer, cv::Size(sim.camera.omni_width_px, sim.camera.omni_height_px),
+                                     static_cast<uint64_t>(seed));
   std::cerr << "eval-homing: camera " << sim.camera_preset << ", mask " << mask_source << " ("
             << Fixed(100 * nav::MaskedFraction(mask), 1) << " % of the panorama)\n";
   const auto db = eval::RenderGrid(scene, renderer, grid, [](int d, int t) { Progress("eval-homing", "rendering grid", d, t); });

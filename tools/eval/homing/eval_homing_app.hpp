@@ -42,7 +42,7 @@ class EvalHomingApp {
   bool people_diagnosis = false, return_best_only = false;
   int home_frames = -1, current_frames = -1, return_stride = 1;
   double home_interval_s = -1, current_interval_s = -1;
-  std::string fusion, camera, mask_source = "none", protocols = "snapnav", grid_dir;
+  std::string fusion, camera, mask_source, protocols = "snapnav", grid_dir;
   double min_fraction = -1;
   FrameProtocol fused{9, 1.0, 3, 0.5};
   int seed = 1;

@@ -7,6 +7,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "calibrated_mask.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/nav/homing/image_mask.hpp"
 
@@ -72,13 +73,19 @@ void HomingMethod::SetMask(const cv::Mat& panorama_mask) {
   if (!panorama_mask.empty()) throw std::logic_error(name() + " does not take a mask");
 }
 
-cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size) {
+std::string DefaultMask(const std::string& camera_preset) {
+  return camera_preset == "realistic" ? "calibrated" : "none";
+}
+
+cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size, uint64_t seed) {
   cv::Mat raw;
   if (source == "none" || source.empty()) {
     renderer.SetMask(cv::Mat());
     return {};
   }
-  if (source == "truth") {
+  if (source == "calibrated") {
+    raw = CalibratedMask(renderer.scene(), renderer.camera(), seed);
+  } else if (source == "truth") {
     raw = nav::GrowMasked(renderer.PartsMask(), 2, false);
   } else {
     raw = glue::LoadMask(source, raw_size);  // no such file, not an image, another size: an error naming it

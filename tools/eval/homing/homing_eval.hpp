@@ -82,6 +82,7 @@ class ViewRenderer {
   const cv::Mat& panorama_mask() const { return unwrapper_.panorama_mask(); }
   // The robot's parts the renderer draws (the realistic optics; all usable for the clean camera).
   cv::Mat PartsMask() const { return renderer_.PartsMask(); }
+  const nav::sim::OmniCameraOptions& camera() const { return camera_; }
 
  private:
   const nav::sim::Scene* scene_;
@@ -91,11 +92,15 @@ class ViewRenderer {
   std::mt19937_64 rng_;
 };
 
-// The mask the evaluation's processing side uses, by `source`: "none" (empty), "truth" (the
-// renderer's robot parts grown by 2 px, the margin calibrate-mirror adds), or a mask image file
-// (image_mask.hpp's convention, black = masked; of the raw image's size). Set on `renderer`;
-// returns the panorama mask (empty for none). Throws std::runtime_error on a bad file.
-cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size);
+// The mask the evaluation's processing side uses, by `source`: "none" (empty), "calibrated"
+// (calibrate-mirror's mask of 60 frames of the camera, calibrated_mask.hpp; `seed` their headings),
+// "truth" (the renderer's robot parts grown by 2 px, the margin calibrate-mirror adds), or a mask
+// image file (image_mask.hpp's convention, black = masked; of the raw image's size). Set on
+// `renderer`; returns the panorama mask (empty for none). Throws std::runtime_error on a bad file.
+cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size, uint64_t seed = 1);
+// --mask's default: "calibrated" for the realistic camera (a lab calibrates its camera), "none"
+// for the clean one (no robot parts in view).
+std::string DefaultMask(const std::string& camera_preset);
 
 // How many frames of one view a still robot takes (people walking between them): the home
 // view (taken once, the robot can stand for a while) and each current view (a robot that

@@ -98,7 +98,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
             << "\n";
   ViewRenderer renderer(scene, setup.camera, setup.seed);
   const cv::Size raw_size(setup.camera.omni_width_px, setup.camera.omni_height_px);
-  const cv::Mat mask = UseMask(setup.mask, renderer, raw_size);
+  const cv::Mat mask = UseMask(setup.mask, renderer, raw_size, setup.seed);
   const Grid g = RenderScene(scene, MakeGridOptions(setup, setup.frames), renderer,
                              [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
   const auto cache = ExtractAll(g.AllPanoramas(), extractor, mask);
@@ -117,7 +117,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
     nav::sim::Scene quiet = scene;
     quiet.people.count = 0;
     ViewRenderer r2(quiet, setup.camera, setup.seed);
-    UseMask(setup.mask, r2, raw_size);
+    UseMask(setup.mask, r2, raw_size, setup.seed);
     const Grid e = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
                                [&](int d, int t) { Progress("eval-homing", "rendering " + quiet.name + " without people", d, t); });
     const auto empty_cache = ExtractAll(e.panos, extractor, mask);
@@ -204,6 +204,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
   std::vector<std::string> figures;
   std::ostringstream md;
   md << "# Homing with feature landmarks: HOG, vertical lines, SIFT, SURF (thesis 4.1-4.3)\n\n"
+     << "Camera: " << (setup.camera.optics.enabled ? "realistic" : "clean") << ", mask " << setup.mask << ".\n\n"
      << "AAE over each scene's grid (home at the centre, all views at heading 0, the rotation estimated from the\n"
      << "matches), return ratio of closed-loop runs (step " << setup.ret.step_m << " m, people walking "
      << setup.ret.people_dt_s << " s per step around the robot) for each method and ALV at its best landmark count"
@@ -221,6 +222,8 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     const bool people = scene.people.count > 0;
     const bool fused = people && fp.fused();
     ViewRenderer renderer(scene, setup.camera, setup.seed);
+    const cv::Size raw_size(setup.camera.omni_width_px, setup.camera.omni_height_px);
+    const cv::Mat mask = UseMask(setup.mask, renderer, raw_size, setup.seed);
     const Grid g = RenderScene(scene, MakeGridOptions(setup, fused ? fp : FrameProtocol{}), renderer,
                                [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
     // The same room without its people, for the degradation the people cause.
@@ -229,6 +232,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       nav::sim::Scene quiet = scene;
       quiet.people.count = 0;
       ViewRenderer r2(quiet, setup.camera, setup.seed);
+      UseMask(setup.mask, r2, raw_size, setup.seed);
       empty = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
                           [&](int d, int t) { Progress("eval-homing", "rendering " + quiet.name + " without people", d, t); });
     }
@@ -265,6 +269,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     // HOG (chapter 3) with the homing config; fused by the median panorama.
     {
       HogMethod hog(setup.hog, setup.camera.panorama);
+      hog.SetMask(mask);
       const auto res = EvaluatePanoramas(g.db, g.panos, hog);
       Row r{scene.name, "hog", "hog", "cells"};
       r.aae = res.aae_deg;
@@ -286,6 +291,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       for (const auto& f : fusions) {
         if (f.mode != nav::ViewFusion::kMedian) continue;
         HogMethod fm(setup.hog, setup.camera.panorama, true);
+        fm.SetMask(mask);
         const auto fr = EvaluateFrames(g.db, g.Frames(f.home, f.current), fm);
         Row q = r;
         q.fusion = "median";
@@ -311,9 +317,9 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       nav::LandmarkExtractorConfig extractor = setup.extractor;
       extractor.method = method;
       const std::string mname = nav::LandmarkMethodName(method);
-      const auto cache = ExtractAll(g.AllPanoramas(), extractor);
+      const auto cache = ExtractAll(g.AllPanoramas(), extractor, mask);
       std::optional<LandmarkCache> empty_cache;
-      if (empty) empty_cache = ExtractAll(empty->panos, extractor);
+      if (empty) empty_cache = ExtractAll(empty->panos, extractor, mask);
       std::cerr << "eval-homing: " << scene.name << " " << mname << ": " << Fixed(cache.mean_landmarks, 1)
                 << " landmarks per view, " << Fixed(cache.ms_per_panorama()) << " ms extraction\n";
       plot::BarGroup group{mname, {}};
@@ -342,6 +348,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
           auto homing = WithAlv(setup.homing(method), variant, n);
           homing.alv.consensus = alv.consensus;
           LandmarkMethod m(extractor, homing, setup.camera.panorama, &cache);
+          m.SetMask(mask);
           const auto res = EvaluatePanoramas(g.db, g.panos, m);
           Row r{scene.name, mname, alv.label, NText(n)};
           r.aae = res.aae_deg;
@@ -353,6 +360,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
           r.matches = m.estimates() ? static_cast<double>(m.matches()) / m.estimates() : 0;
           if (empty) {
             LandmarkMethod me(extractor, homing, setup.camera.panorama, &*empty_cache);
+            me.SetMask(mask);
             r.aae_without_people = EvaluatePanoramas(empty->db, empty->panos, me).aae_deg;
           }
           if (vrows.empty() || r.aae < vrows[best].aae) best = static_cast<int>(vrows.size());
@@ -376,6 +384,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
           FrameFusion fusion = setup.fusion;
           fusion.mode = f.mode;
           LandmarkMethod m(extractor, best_homing, setup.camera.panorama, &cache, fusion);
+          m.SetMask(mask);
           const auto res = EvaluateFrames(g.db, g.Frames(f.home, f.current), m);
           Row r = vrows[best];
           r.fusion = nav::ViewFusionName(f.mode);
@@ -399,6 +408,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       if (options.returns) {
         for (const auto& [row, homing] : returns_wanted) {
           LandmarkMethod live(extractor, homing, setup.camera.panorama);
+          live.SetMask(mask);
           const auto ret = EvaluateReturn(g.db, live, renderer, pipeline,
                                           WithFrames(setup.ret, fp, 1, 1, setup.seed),
                                           [&](int d, int t) { Progress("eval-homing", "return runs " + rows[row].Label(), d, t); },
@@ -414,6 +424,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
         ReturnResult fret;
         if (options.returns) {
           LandmarkMethod live(extractor, bf.homing, setup.camera.panorama, nullptr, bf.fusion);
+          live.SetMask(mask);
           fret = EvaluateReturn(g.db, live, renderer, pipeline, WithFrames(setup.ret, fp, bf.home, bf.current, setup.seed),
                                 [&](int d, int t) { Progress("eval-homing", "return runs " + rows[bf.row].Label(), d, t); },
                                 &g.frames);
@@ -545,6 +556,8 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     return j;
   };
   results::Json json;
+  json["camera"] = setup.camera.optics.enabled ? "realistic" : "clean";
+  json["mask"] = setup.mask;
   json["best_per_scene"] = best_map(best_per_scene);
   json["best_fused_per_scene"] = best_map(best_fused_per_scene);
   json["rows"] = results::Json::array();

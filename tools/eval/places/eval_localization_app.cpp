@@ -68,7 +68,10 @@ bool EvalLocalizationApp::Initialize(int argc, char** argv) {
   flags.AddString("sim-config", &sim_config_path, "simulator config: its camera, [mirror], [panorama], [effects], seed and robot noise apply; a changed key "
                   "it does not use is refused");
   flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: clean | realistic");
-  flags.AddString("mask", &o.mask, "self-occlusion mask of the raw images: none | truth (the renderer's robot parts) | FILE");
+  flags.AddString("mask", &mask_source,
+                  "self-occlusion mask of the raw images: calibrated (calibrate-mirror's, from 60 frames of the camera) | "
+                  "none | truth (the renderer's robot parts) | FILE; default: calibrated with the realistic camera, none "
+                  "with the clean one");
   flags.AddString("features", &features, "override [landmarks] method: sift | surf");
   flags.AddString("protocols", &protocols,
                   "snapnav (random off-grid test positions, the whole grid kept; always run) and/or leave-one-out "
@@ -143,6 +146,7 @@ int EvalLocalizationApp::Run() {
   const auto sim = eval::LoadSimConfigFor(sim_config_path, eval::LocalizationSimConfigUse());
   o.camera = sim.camera;
   eval::ApplyCameraFlag(camera, o.seed, &o.camera);
+  o.mask = !mask_source.empty() ? mask_source : eval::DefaultMask(o.camera.optics.enabled ? "realistic" : "clean");
   o.effects = sim.effects;
   o.drive = sim.drive_options;
   const auto ini = glue::IniFile::Load(config_path);

@@ -50,7 +50,7 @@ class EvalLocalizationApp {
   std::string features, memories = "grid,route,random", measures = "bearing-smallest,bearing-ransac,count,vline";
   std::string filters = "on,off", pose_source = "truth", thresholds = "0.08,0.05,0.03", explore_measure = "bearing-smallest";
   int threads = 1, seed = 1;
-  std::string camera, protocols = "snapnav", grid_dir;
+  std::string camera, mask_source, protocols = "snapnav", grid_dir;
   LocalizationEvalOptions o;
   LocalizerOverrides ov;
 };

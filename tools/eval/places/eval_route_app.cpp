@@ -9,8 +9,10 @@
 
 #include "navigator_node.hpp"
 #include "report_text.hpp"
+#include "homing_eval.hpp"
 #include "route_eval.hpp"
 #include "scene_file.hpp"
+#include "sim_config_use.hpp"
 #include "sim_node.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -56,6 +58,11 @@ bool EvalRouteApp::Initialize(int argc, char** argv) {
   flags.AddDouble("max-time-s", &max_time_s, "simulated time limit [s]; 0: from the route length");
   flags.AddInt("threads", &threads, "OpenCV threads");
   flags.AddString("sim-config", &sim_config_path, "simulator config (camera, mirror, panorama, robot noise, rates)");
+  flags.AddString("camera", &camera, "camera preset, overrides --sim-config's [camera] preset: realistic | clean");
+  flags.AddString("mask", &mask_source,
+                  "self-occlusion mask of the raw frames: calibrated (calibrate-mirror's, from 60 frames of the camera) | "
+                  "none | truth (the renderer's robot parts) | FILE; default: calibrated with the realistic camera, none "
+                  "with the clean one");
   flags.AddString("placecells-config", &places_config_path, "place-cell config (view, measure, filter, localizer)");
   flags.AddString("homing-config", &homing_config_path, "homing config ([matching], [landmark_alv])");
   flags.AddString("navigator-config", &navigator_config_path,
@@ -74,6 +81,8 @@ int EvalRouteApp::Run() {
   eval::RouteEvalOptions o;
   const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
   o.camera = sim.camera;
+  eval::ApplyCameraFlag(camera, static_cast<uint64_t>(seed), &o.camera);
+  o.mask = !mask_source.empty() ? mask_source : eval::DefaultMask(o.camera.optics.enabled ? "realistic" : "clean");
   o.drive = sim.drive_options;
   o.physics_rate_hz = sim.physics_rate_hz;
   o.control_rate_hz = sim.camera_rate_hz;

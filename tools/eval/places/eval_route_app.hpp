@@ -13,7 +13,7 @@ class EvalRouteApp {
   int Run();
 
   // The flags' values (Initialize sets them; a caller may set them itself and call Run).
-  std::string scene_name = "indoor13", out_dir, alv = "scale";
+  std::string scene_name = "indoor13", out_dir, alv = "scale", mask_source, camera;
   std::string sim_config_path = SNAPNAV_CONFIG_DIR "/sim.ini",
               places_config_path = SNAPNAV_CONFIG_DIR "/placecells.ini";
   std::string homing_config_path = SNAPNAV_CONFIG_DIR "/homing.ini";

@@ -38,7 +38,8 @@ class ViewMaker {
       : renderer_(scene, options.camera, options.seed), view_(options.view) {
     pipeline_.input = CameraPipeline::Input::kRaw;
     pipeline_.effects = options.effects;
-    mask_ = UseMask(options.mask, renderer_, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px));
+    mask_ = UseMask(options.mask, renderer_, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
+                    options.seed);
   }
   nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people,
                       const std::string& save_png = "") {

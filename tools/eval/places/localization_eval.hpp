@@ -69,7 +69,7 @@ struct LocalizationEvalOptions {
   double people_dt_s = 2.0;             // grid and test views: the people walk this long between images
   uint64_t seed = 1;
   std::string save_test_panoramas_dir;  // non-empty: the test positions' panoramas as test_N.png there
-  std::string mask = "none";            // self-occlusion mask of the raw images (homing_eval.hpp UseMask): none | truth | FILE
+  std::string mask = "none";            // self-occlusion mask of the raw images (homing_eval.hpp UseMask): none | calibrated | truth | FILE
   // The thesis' protocol beside ours (5.2.2 and the 169 locations of 4.4): every grid image (every
   // leave_one_out_stride-th) is a query against the grid memory with its own cell removed, so the
   // nearest cell is one grid spacing away. Needs the grid memory.

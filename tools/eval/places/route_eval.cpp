@@ -35,6 +35,7 @@ class ViewMaker {
   ViewMaker(const nav::sim::Scene& scene, const RouteEvalOptions& o)
       : renderer_(scene, o.camera, o.seed), view_(o.view) {
     pipeline_.input = CameraPipeline::Input::kRaw;
+    mask_ = UseMask(o.mask, renderer_, cv::Size(o.camera.omni_width_px, o.camera.omni_height_px), o.seed);
   }
   nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people, double* render_ms,
                       double* view_ms) {
@@ -43,7 +44,7 @@ class ViewMaker {
         renderer_.ToPanorama(renderer_.Sensor(pose, CameraPipeline::Input::kRaw, people), pipeline_);
     if (render_ms) *render_ms += MsSince(t0);
     t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panorama, view_);
+    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_);
     if (view_ms) *view_ms += MsSince(t0);
     return v;
   }
@@ -53,6 +54,7 @@ class ViewMaker {
   ViewRenderer renderer_;
   CameraPipeline pipeline_;
   nav::PlaceViewOptions view_;
+  cv::Mat mask_;  // the panoramas' mask (empty: none)
 };
 
 double RouteLength(const std::vector<Eigen::Vector2d>& w) {

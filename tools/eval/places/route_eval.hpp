@@ -41,6 +41,7 @@ namespace snapnav::eval {
 
 struct RouteEvalOptions {
   nav::sim::OmniCameraOptions camera;  // the simulator's camera, mirror and panorama
+  std::string mask = "none";           // the raw frames' self-occlusion mask (homing_eval.hpp UseMask)
   nav::sim::DriveOptions drive;        // control error and odometry noise
   nav::PlaceViewOptions view;
   nav::LocalizerOptions localizer;

@@ -14,7 +14,10 @@
 #include <sstream>
 #include <vector>
 
+#include "calibrated_mask.hpp"
 #include "ratslam_eval.hpp"
+#include "scene_file.hpp"
+#include "sim_config_use.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/image_msg.hpp"
 #include "snapnav/glue/ini.hpp"
@@ -106,10 +109,12 @@ bool EvalRatSlamApp::Initialize(int argc, char** argv) {
   flags.AddBool("raw", &raw,
                 "render raw catadioptric frames and unwrap them (as OMNI_FRAME) instead of panoramas; always with the "
                 "realistic camera ([camera] preset), whose optics act on the raw image");
+  flags.AddString("camera", &camera, "camera preset, overrides --config's [camera] preset: realistic | clean");
   flags.AddString("mask", &mask,
-                  "self-occlusion mask of the raw frames: none | truth (the renderer's robot parts, grown by 2 px) | "
-                  "FILE (black = masked, the raw image's size, e.g. calibrate-mirror's); RatSLAM's templates "
-                  "ignore it");
+                  "self-occlusion mask of the raw frames: calibrated (calibrate-mirror's, from 60 frames of the camera) "
+                  "| none | truth (the renderer's robot parts, grown by 2 px) | FILE (black = masked, the raw image's "
+                  "size, e.g. calibrate-mirror's); RatSLAM's templates ignore it; default: calibrated with the "
+                  "realistic camera, none with the clean one");
   flags.AddBool("no-people", &no_people, "leave the scene's walking people out of the camera's view");
   flags.AddDouble("rpe-delta-m", &rpe_delta_m, "travelled distance of the relative pose error [m]");
   flags.AddString("sweep", &sweep,
@@ -130,13 +135,22 @@ int EvalRatSlamApp::Run() {
   options.run.sim.laps = laps;
   options.run.sim.duration_s = duration_s;
   if (seed >= 0) options.run.sim.seed = static_cast<uint64_t>(seed);
+  if (!camera.empty()) {
+    eval::ApplyCameraFlag(camera, options.run.sim.seed, &options.run.camera);
+    options.run.raw_frames = options.run.camera.optics.enabled;
+  }
   options.run.raw_frames = options.run.raw_frames || raw;  // the realistic camera: raw frames always
+  if (mask.empty()) mask = options.run.camera.optics.enabled ? "calibrated" : "none";  // as a lab calibrates
+  options.mask = mask;
   if (mask != "none") {
     if (!options.run.raw_frames) {
       throw glue::FlagError("--mask is of raw frames: it needs --raw or the realistic camera");
     }
     if (mask == "truth") {
       options.run.truth_mask = true;
+    } else if (mask == "calibrated") {
+      options.run.raw_mask = eval::CalibratedMask(processes::LoadSceneFile(processes::SceneFilePath(scene)),
+                                                  options.run.camera, options.run.sim.seed);
     } else {
       try {
         options.run.raw_mask =

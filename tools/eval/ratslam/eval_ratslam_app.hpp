@@ -14,7 +14,7 @@ class EvalRatSlamApp {
 
   // The flags' values (Initialize sets them; a caller may set them itself and call Run).
   std::string sim_config = SNAPNAV_CONFIG_DIR "/sim.ini", ratslam_config = SNAPNAV_CONFIG_DIR "/ratslam.ini";
-  std::string scene = "indoor13", out_dir, sweep, mask = "none";
+  std::string scene = "indoor13", out_dir, sweep, mask, camera;
   int laps = 3, seed = -1;
   double duration_s = 0, rpe_delta_m = 1.0;
   bool raw = false, no_people = false;

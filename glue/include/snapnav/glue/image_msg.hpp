@@ -66,6 +66,13 @@ struct MirrorMask {
   cv::Mat mask;      // CV_8UC1, empty for none
 };
 MirrorMask ReadMirrorMask(const IniFile& ini, cv::Size expected = cv::Size(), const std::string& section = "mirror");
+// A process's `--mask FILE` (kMaskFlagHelp): sets the config's [mirror] mask to FILE made absolute
+// (FILE is relative to the working folder, the key's value to the config's); "" leaves the config as
+// it is. A missing file, or a config without the key, is a ConfigError naming the flag.
+inline constexpr const char* kMaskFlagHelp =
+    "the robot's own parts in the raw frames (PNG, black = masked; calibrate-mirror writes one); overrides "
+    "[mirror] mask";
+void ApplyMaskFlag(const std::string& mask_file, IniFile* ini, const std::string& section = "mirror");
 
 // The sections the two readers above read back (header line included).
 void PrintMirrorConfig(std::ostream& out, const nav::MirrorModel& mirror, const std::string& section = "mirror");
