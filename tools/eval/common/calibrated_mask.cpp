@@ -42,4 +42,9 @@ cv::Mat CalibratedMask(const nav::sim::Scene& scene, const nav::sim::OmniCameraO
   return mask;
 }
 
+std::string MaskOrDefault(const std::string& flag, const nav::sim::OmniCameraOptions& camera) {
+  if (!flag.empty()) return flag;
+  return camera.optics.enabled ? "calibrated" : "none";
+}
+
 }  // namespace snapnav::eval

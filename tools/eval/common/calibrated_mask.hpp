@@ -22,4 +22,8 @@ namespace snapnav::eval {
 cv::Mat CalibratedMask(const nav::sim::Scene& scene, const nav::sim::OmniCameraOptions& camera, uint64_t seed,
                        int frames = 60, std::string* note = nullptr);
 
+// An evaluation's --mask: `flag` when given, else the default for `camera`: "calibrated" with the
+// realistic optics (a lab calibrates its camera), "none" with the clean camera (no robot parts in view).
+std::string MaskOrDefault(const std::string& flag, const nav::sim::OmniCameraOptions& camera);
+
 }  // namespace snapnav::eval

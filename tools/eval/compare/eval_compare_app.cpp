@@ -13,8 +13,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "calibrated_mask.hpp"
 #include "compare_config.hpp"
-#include "homing_eval.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
 #include "scene_file.hpp"
@@ -133,7 +133,7 @@ int EvalCompareApp::Run() {
   o.run_ratslam = !no_ratslam;
   const processes::SimConfig sim_config = eval::LoadCompareConfigs(paths, &o);
   eval::ApplyCameraFlag(camera, sim_config.seed, &o.camera);
-  o.mask = !mask_source.empty() ? mask_source : eval::DefaultMask(o.camera.optics.enabled ? "realistic" : "clean");
+  o.mask = eval::MaskOrDefault(mask_source, o.camera);
   try {
     o.Validate();
   } catch (const std::invalid_argument& e) {

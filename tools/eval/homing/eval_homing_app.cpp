@@ -12,6 +12,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "calibrated_mask.hpp"
 #include "grid_folder.hpp"
 #include "json_values.hpp"
 #include "landmark_compare.hpp"
@@ -413,7 +414,7 @@ int EvalHomingApp::Run() {
     sim.camera_preset = camera;
   }
   if (mask_source.empty()) {  // the default: as a lab calibrates its camera (modes without masks: none)
-    mask_source = people_diagnosis || !grid_dir.empty() || input != "raw" ? "none" : eval::DefaultMask(sim.camera_preset);
+    mask_source = people_diagnosis || !grid_dir.empty() || input != "raw" ? "none" : eval::MaskOrDefault("", sim.camera);
   }
   if (mask_source != "none" && input != "raw") throw glue::FlagError("--mask needs --input raw (the mask is of raw images)");
   if (sim.camera.optics.enabled && input != "raw") {

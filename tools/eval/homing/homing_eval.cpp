@@ -73,10 +73,6 @@ void HomingMethod::SetMask(const cv::Mat& panorama_mask) {
   if (!panorama_mask.empty()) throw std::logic_error(name() + " does not take a mask");
 }
 
-std::string DefaultMask(const std::string& camera_preset) {
-  return camera_preset == "realistic" ? "calibrated" : "none";
-}
-
 cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size, uint64_t seed) {
   cv::Mat raw;
   if (source == "none" || source.empty()) {

@@ -98,9 +98,7 @@ class ViewRenderer {
 // image file (image_mask.hpp's convention, black = masked; of the raw image's size). Set on
 // `renderer`; returns the panorama mask (empty for none). Throws std::runtime_error on a bad file.
 cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size, uint64_t seed = 1);
-// --mask's default: "calibrated" for the realistic camera (a lab calibrates its camera), "none"
-// for the clean one (no robot parts in view).
-std::string DefaultMask(const std::string& camera_preset);
+
 
 // How many frames of one view a still robot takes (people walking between them): the home
 // view (taken once, the robot can stand for a while) and each current view (a robot that

@@ -10,6 +10,7 @@
 
 #include <opencv2/core/utility.hpp>
 
+#include "calibrated_mask.hpp"
 #include "grid_folder.hpp"
 #include "localization_eval.hpp"
 #include "sim_config_use.hpp"
@@ -146,7 +147,7 @@ int EvalLocalizationApp::Run() {
   const auto sim = eval::LoadSimConfigFor(sim_config_path, eval::LocalizationSimConfigUse());
   o.camera = sim.camera;
   eval::ApplyCameraFlag(camera, o.seed, &o.camera);
-  o.mask = !mask_source.empty() ? mask_source : eval::DefaultMask(o.camera.optics.enabled ? "realistic" : "clean");
+  o.mask = eval::MaskOrDefault(mask_source, o.camera);
   o.effects = sim.effects;
   o.drive = sim.drive_options;
   const auto ini = glue::IniFile::Load(config_path);

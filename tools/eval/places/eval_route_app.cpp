@@ -7,9 +7,9 @@
 #include <opencv2/core.hpp>
 #include <sstream>
 
+#include "calibrated_mask.hpp"
 #include "navigator_node.hpp"
 #include "report_text.hpp"
-#include "homing_eval.hpp"
 #include "route_eval.hpp"
 #include "scene_file.hpp"
 #include "sim_config_use.hpp"
@@ -82,7 +82,7 @@ int EvalRouteApp::Run() {
   const auto sim = processes::SimConfig::FromIni(glue::IniFile::Load(sim_config_path), "");
   o.camera = sim.camera;
   eval::ApplyCameraFlag(camera, static_cast<uint64_t>(seed), &o.camera);
-  o.mask = !mask_source.empty() ? mask_source : eval::DefaultMask(o.camera.optics.enabled ? "realistic" : "clean");
+  o.mask = eval::MaskOrDefault(mask_source, o.camera);
   o.drive = sim.drive_options;
   o.physics_rate_hz = sim.physics_rate_hz;
   o.control_rate_hz = sim.camera_rate_hz;

@@ -140,7 +140,7 @@ int EvalRatSlamApp::Run() {
     options.run.raw_frames = options.run.camera.optics.enabled;
   }
   options.run.raw_frames = options.run.raw_frames || raw;  // the realistic camera: raw frames always
-  if (mask.empty()) mask = options.run.camera.optics.enabled ? "calibrated" : "none";  // as a lab calibrates
+  mask = eval::MaskOrDefault(mask, options.run.camera);
   options.mask = mask;
   if (mask != "none") {
     if (!options.run.raw_frames) {
