@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "calibrate_mirror.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/homing/mirror_calibration.hpp"
 
 namespace snapnav::eval {
@@ -40,6 +41,10 @@ cv::Mat CalibratedMask(const nav::sim::Scene& scene, const nav::sim::OmniCameraO
     *note = s.str();
   }
   return mask;
+}
+
+cv::Mat TruthMask(const cv::Mat& parts_mask) {
+  return nav::GrowMasked(parts_mask, nav::OcclusionOptions().grow_px, false);
 }
 
 std::string MaskOrDefault(const std::string& flag, const nav::sim::OmniCameraOptions& camera) {

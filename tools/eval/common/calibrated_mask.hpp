@@ -22,6 +22,10 @@ namespace snapnav::eval {
 cv::Mat CalibratedMask(const nav::sim::Scene& scene, const nav::sim::OmniCameraOptions& camera, uint64_t seed,
                        int frames = 60, std::string* note = nullptr);
 
+// --mask truth: the renderer's parts (OmniRenderer::PartsMask) grown by calibrate-mirror's margin
+// (nav::OcclusionOptions::grow_px, 2 px): the mask a perfect calibration would find.
+cv::Mat TruthMask(const cv::Mat& parts_mask);
+
 // An evaluation's --mask: `flag` when given, else the default for `camera`: "calibrated" with the
 // realistic optics (a lab calibrates its camera), "none" with the clean camera (no robot parts in view).
 std::string MaskOrDefault(const std::string& flag, const nav::sim::OmniCameraOptions& camera);

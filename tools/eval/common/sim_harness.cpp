@@ -8,9 +8,9 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "calibrated_mask.hpp"
 #include "scene_file.hpp"
 #include "snapnav/glue/conversions.hpp"
-#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/homing/unwrap.hpp"
 
 namespace snapnav::eval {
@@ -57,7 +57,7 @@ SimDriveResult DriveSimulation(const SimDriveOptions& options, const SimFrameOpt
     if (frames->raw_frames) {
       unwrapper.emplace(frames->camera.ReportedMirror(), frames->camera.panorama,
                         cv::Size(frames->camera.omni_width_px, frames->camera.omni_height_px));
-      const cv::Mat raw_mask = frames->truth_mask ? nav::GrowMasked(renderer->PartsMask(), 2, false) : frames->raw_mask;
+      const cv::Mat raw_mask = frames->truth_mask ? TruthMask(renderer->PartsMask()) : frames->raw_mask;
       if (!raw_mask.empty()) {
         unwrapper->SetMask(raw_mask);
         if (!unwrapper->panorama_mask().empty()) sink.OnPanoramaMask(unwrapper->panorama_mask());

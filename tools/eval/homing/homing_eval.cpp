@@ -9,7 +9,6 @@
 
 #include "calibrated_mask.hpp"
 #include "snapnav/glue/image_msg.hpp"
-#include "snapnav/nav/homing/image_mask.hpp"
 
 #include "snapnav/nav/sim/world.hpp"
 #include "snapnav/nav/landmarks/view_fusion.hpp"
@@ -82,7 +81,7 @@ cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_
   if (source == "calibrated") {
     raw = CalibratedMask(renderer.scene(), renderer.camera(), seed);
   } else if (source == "truth") {
-    raw = nav::GrowMasked(renderer.PartsMask(), 2, false);
+    raw = TruthMask(renderer.PartsMask());
   } else {
     raw = glue::LoadMask(source, raw_size);  // no such file, not an image, another size: an error naming it
   }
