@@ -170,6 +170,8 @@ if [ -n "$EXPLORED" ]; then
     { echo "demo: --explored $EXPLORED: no placecells.mem, grid/images/6_6.png or camera_mask.png there" >&2; exit 2; }
 else
   step "2/$STEPS place-cell memory of '$SCENE': launch $(basename "$DEPLOY") --group explore"
+  # A memory left in OUT by an earlier run would be extended, not explored afresh.
+  rm -f "$OUT/placecells.mem" "$OUT/camera_mask.png"
   set +e
   (at base "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 10 "scene=$SCENE") 2>&1 |
     quiet grep --line-buffered -vE '^ {11}|^launch: variable ' | quiet sed -u 's/^/  /'

@@ -67,6 +67,7 @@ if [ -n "$EXPLORED" ]; then
     { echo "robots: --explored $EXPLORED: no placecells.mem or camera_mask.png there" >&2; exit 2; }
 else
   echo "robots: the place-cell memory of '$SCENE' (launch robots.deploy --group explore)"
+  rm -f "$OUT/placecells.mem" "$OUT/camera_mask.png"  # an earlier run's memory would be extended, not made afresh
   "$BIN/launch" "$DEPLOY" --group explore --out "$OUT" --status-every-s 0 "scene=$SCENE" >"$OUT/explore.log" 2>&1 ||
     { echo "robots: exploring failed (see $OUT/explore.log)" >&2; exit 1; }
 fi
