@@ -257,7 +257,7 @@ int EvalCompareApp::Run() {
     j["ratslam"] = o.run_ratslam ? "ran" : "off";
     j["explore_pose"] = eval::ExplorePoseName(o.explore_pose);
     j["camera"] = o.camera.optics.enabled ? "realistic" : "clean";
-    j["mask"] = o.mask == "none" || o.mask == "calibrated" || o.mask == "truth" ? o.mask : "file";
+    j["mask"] = o.mask;  // none | calibrated | truth | the file's path, as eval homing writes it
     for (const auto& run : compared) {
       const std::string prefix = compared.size() > 1 ? run.name + "_" : "";
       if (compared.size() == 1) {

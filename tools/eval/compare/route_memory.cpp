@@ -114,8 +114,9 @@ RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOption
   RouteMemory out;
   out.memory = std::make_unique<nav::PlaceCellMemory>(options.view, options.camera.panorama, options.vocabulary);
   ViewRenderer renderer(scene, options.camera, options.explore_seed);
-  const cv::Mat mask = UseMask(options.mask, renderer,
-                               cv::Size(options.camera.omni_width_px, options.camera.omni_height_px), sim.seed);
+  out.raw_mask = RawMask(options.mask, renderer, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
+                         sim.seed);
+  const cv::Mat mask = UseRawMask(out.raw_mask, renderer);
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;

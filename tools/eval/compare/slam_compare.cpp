@@ -158,8 +158,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
   const nav::Pose2 start{scene.start_pose.x(), scene.start_pose.y(), scene.start_pose.z()};
 
   ViewRenderer renderer(scene, options.camera, sim.seed ^ 0x5eedULL);
-  const cv::Mat mask = UseMask(options.mask, renderer, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
-                               sim.seed);
+  const cv::Mat mask = UseRawMask(memory.raw_mask, renderer);  // the camera's calibration, made with the memory
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;

@@ -100,6 +100,7 @@ struct RouteMemory {
   double cell_error_mean_m = 0, cell_error_max_m = 0;
   double seconds = 0;                  // rendering, views and index
   double ms_per_view = 0;              // rendering + MakePlaceView per cell
+  cv::Mat raw_mask;  // the raw frames' mask its views were made with (options.mask; empty: none): the runs' too
 };
 // Explores `scene`'s route (see the header comment) with the robot, laser and rates of `sim`
 // (its seed, stop condition and kidnapping are replaced: options.explore_seed, one lap, none).

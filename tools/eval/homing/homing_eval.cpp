@@ -72,21 +72,20 @@ void HomingMethod::SetMask(const cv::Mat& panorama_mask) {
   if (!panorama_mask.empty()) throw std::logic_error(name() + " does not take a mask");
 }
 
+cv::Mat RawMask(const std::string& source, const ViewRenderer& renderer, cv::Size raw_size, uint64_t seed) {
+  if (source == "none" || source.empty()) return {};
+  if (source == "calibrated") return CalibratedMask(renderer.scene(), renderer.camera(), seed);
+  if (source == "truth") return TruthMask(renderer.PartsMask());
+  return glue::LoadMask(source, raw_size);  // no such file, not an image, another size: an error naming it
+}
+
+cv::Mat UseRawMask(const cv::Mat& raw_mask, ViewRenderer& renderer) {
+  renderer.SetMask(raw_mask);
+  return raw_mask.empty() ? cv::Mat() : renderer.panorama_mask();
+}
+
 cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size, uint64_t seed) {
-  cv::Mat raw;
-  if (source == "none" || source.empty()) {
-    renderer.SetMask(cv::Mat());
-    return {};
-  }
-  if (source == "calibrated") {
-    raw = CalibratedMask(renderer.scene(), renderer.camera(), seed);
-  } else if (source == "truth") {
-    raw = TruthMask(renderer.PartsMask());
-  } else {
-    raw = glue::LoadMask(source, raw_size);  // no such file, not an image, another size: an error naming it
-  }
-  renderer.SetMask(raw);
-  return renderer.panorama_mask();
+  return UseRawMask(RawMask(source, renderer, raw_size, seed), renderer);
 }
 
 GridDatabase RenderGrid(const nav::sim::Scene& scene, ViewRenderer& renderer, const GridOptions& options,

@@ -98,6 +98,11 @@ class ViewRenderer {
 // image file (image_mask.hpp's convention, black = masked; of the raw image's size). Set on
 // `renderer`; returns the panorama mask (empty for none). Throws std::runtime_error on a bad file.
 cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_size, uint64_t seed = 1);
+// The same in two steps, for a second renderer of the same camera (a scene without its people) to
+// take the first one's mask instead of calibrating again: the raw mask by `source` (empty for none),
+// and setting it (returns the panorama mask).
+cv::Mat RawMask(const std::string& source, const ViewRenderer& renderer, cv::Size raw_size, uint64_t seed = 1);
+cv::Mat UseRawMask(const cv::Mat& raw_mask, ViewRenderer& renderer);
 
 
 // How many frames of one view a still robot takes (people walking between them): the home

@@ -98,7 +98,8 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
             << "\n";
   ViewRenderer renderer(scene, setup.camera, setup.seed);
   const cv::Size raw_size(setup.camera.omni_width_px, setup.camera.omni_height_px);
-  const cv::Mat mask = UseMask(setup.mask, renderer, raw_size, setup.seed);
+  const cv::Mat raw_mask = RawMask(setup.mask, renderer, raw_size, setup.seed);
+  const cv::Mat mask = UseRawMask(raw_mask, renderer);
   const Grid g = RenderScene(scene, MakeGridOptions(setup, setup.frames), renderer,
                              [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
   const auto cache = ExtractAll(g.AllPanoramas(), extractor, mask);
@@ -117,7 +118,7 @@ int RunLandmarkEval(const LandmarkEvalSetup& setup, const std::string& scene_nam
     nav::sim::Scene quiet = scene;
     quiet.people.count = 0;
     ViewRenderer r2(quiet, setup.camera, setup.seed);
-    UseMask(setup.mask, r2, raw_size, setup.seed);
+    UseRawMask(raw_mask, r2);  // the same camera: its calibration, not another
     const Grid e = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
                                [&](int d, int t) { Progress("eval-homing", "rendering " + quiet.name + " without people", d, t); });
     const auto empty_cache = ExtractAll(e.panos, extractor, mask);
@@ -223,7 +224,8 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
     const bool fused = people && fp.fused();
     ViewRenderer renderer(scene, setup.camera, setup.seed);
     const cv::Size raw_size(setup.camera.omni_width_px, setup.camera.omni_height_px);
-    const cv::Mat mask = UseMask(setup.mask, renderer, raw_size, setup.seed);
+    const cv::Mat raw_mask = RawMask(setup.mask, renderer, raw_size, setup.seed);
+    const cv::Mat mask = UseRawMask(raw_mask, renderer);
     const Grid g = RenderScene(scene, MakeGridOptions(setup, fused ? fp : FrameProtocol{}), renderer,
                                [&](int d, int t) { Progress("eval-homing", "rendering " + scene.name, d, t); });
     // The same room without its people, for the degradation the people cause.
@@ -232,7 +234,7 @@ int RunCompare(const LandmarkEvalSetup& setup, const CompareOptions& options, co
       nav::sim::Scene quiet = scene;
       quiet.people.count = 0;
       ViewRenderer r2(quiet, setup.camera, setup.seed);
-      UseMask(setup.mask, r2, raw_size, setup.seed);
+      UseRawMask(raw_mask, r2);  // the same camera: its calibration, not another
       empty = RenderScene(quiet, MakeGridOptions(setup, FrameProtocol{}), r2,
                           [&](int d, int t) { Progress("eval-homing", "rendering " + quiet.name + " without people", d, t); });
     }

@@ -412,7 +412,7 @@ void WriteRatSlamEvaluation(const RatSlamEvaluation& e, const RatSlamEvalOptions
   json["odometry"] = R4(e.run.odometry);
   json["raw_frames"] = options.run.raw_frames;
   json["camera"] = options.run.camera.optics.enabled ? "realistic" : "clean";
-  json["mask"] = options.mask == "none" || options.mask == "calibrated" || options.mask == "truth" ? options.mask : "file";
+  json["mask"] = options.mask;  // none | calibrated | truth | the file's path, as eval homing writes it
   json["heading_drift_deg_per_m"] = R4(options.run.sim.drive.heading_drift_deg_per_m);
   json["ratslam_templates"] = R4(e.templates);
   json["ratslam_experiences"] = e.experiences.size();

@@ -77,7 +77,7 @@ struct RatSlamEvalOptions {
   SimCameraOptions run;
   nav::RatSlamOptions ratslam;
   double rpe_delta_m = 1.0;  // RPE over this much travel [m]
-  std::string mask = "none";  // where run's mask came from, for the reports: none | calibrated | truth | FILE
+  std::string mask = "none";  // where run's mask came from, for the reports: none | calibrated | truth | a file
 };
 
 struct RatSlamEvaluation {
