@@ -40,6 +40,7 @@ const OptionTable<nav::LaserSlamOptions>& LaserSlamOptionTable() {
       .Degrees("match_sigma_theta_deg", &O::match_sigma_theta_rad)
       .Number("gate_mahalanobis2", "", &O::gate_mahalanobis2)
       .Number("max_ambiguity", "", &O::max_ambiguity)
+      .Flag("ambiguous_update", &O::ambiguous_update)
       .Number("min_fit", "", &O::min_fit)
       .Flag("adaptive_motion_noise", &O::adaptive_motion_noise)
       .Number("adaptive_window_scans", "", &O::adaptive_window_scans)

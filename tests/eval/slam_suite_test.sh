@@ -28,7 +28,7 @@ out = sys.argv[1]
 s = json.load(open(os.path.join(out, "summary.json")))
 rows = list(csv.DictReader(open(os.path.join(out, "suite.csv"))))
 names = [r["run"] for r in rows]
-assert len(names) == 7, names
+assert len(names) == 8, names
 for n in names:
     assert s[n + "_pass"], n
     assert os.path.getsize(os.path.join(out, n, "trajectory.png")) > 10000, n

@@ -168,7 +168,7 @@ GraphSlamUpdate GraphSlam::AfterFrontEnd(const LaserSlamUpdate& front_update,
   // own beside the EKF's: the EKF's prediction noise this scan (its covariance's growth) adds to
   // it, an accepted match's measurement narrows it.
   {
-    const bool accepted = front_update.outcome == MatchOutcome::kAccepted;
+    const bool accepted = front_update.measured;
     const Eigen::Matrix3d predicted = accepted ? front_update.predicted_covariance : front_.covariance();
     const Eigen::Matrix3d growth = ClampPsd(predicted - last_posterior_);
     relative_covariance_ += growth;

@@ -138,6 +138,7 @@ LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {
   thesis.point_sigma_m = 0.03;
   thesis.point_sigma_rad = 0;
   thesis.max_ambiguity = 1;
+  thesis.ambiguous_update = false;
   thesis.min_fit = 0;
   thesis.outlier_scale = 1;
   thesis.adaptive_motion_noise = false;
@@ -378,6 +379,8 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // the measurement's
       int recoveries = 0;
       bool odometry_outlier = false;  // accepted against the widened prediction (outlier_scale)
+      // The distinct alternatives inside the gate and their probabilities relative to the best.
+      std::vector<std::pair<Pose2, double>> alternatives;
     };
     MapMatcher::RefineCounts counts;
     const auto match_from = [&](const Prediction& prediction, const std::vector<MapMatcher::Candidate>& candidates) {
@@ -425,7 +428,9 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
                            std::abs(WrapAngle(o.estimate.theta_rad - m.icp.estimate.theta_rad)) > 5 * step;
         if (!apart) continue;
         if (options_.gate_mahalanobis2 > 0 && mahalanobis2(o.estimate) > options_.gate_mahalanobis2) continue;
-        m.ambiguity = std::max(m.ambiguity, std::exp(std::min(0.0, (o.posterior - m.icp.posterior) / weight)));
+        const double relative = std::exp(std::min(0.0, (o.posterior - m.icp.posterior) / weight));
+        m.ambiguity = std::max(m.ambiguity, relative);
+        m.alternatives.emplace_back(o.estimate, relative);
       }
       if (m.fit < options_.min_fit) {
         m.outcome = MatchOutcome::kNoMatch;
@@ -509,6 +514,33 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       u.measurement_covariance = result.covariance;
       u.mahalanobis2 = result.mahalanobis2;
       u.ambiguity = result.ambiguity;
+    }
+    if (u.outcome == MatchOutcome::kAmbiguous && options_.ambiguous_update) {
+      // The mixture of the best and its alternatives (moment matched): the mean, and the
+      // measurement's covariance plus their spread about it. Where they lie along a corridor,
+      // the update constrains the heading and the position across it, and barely along it.
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      double total = 1;
+      const auto offset = [&](const Pose2& z) {
+        return Eigen::Vector3d(z.x_m - icp.estimate.x_m, z.y_m - icp.estimate.y_m,
+                               WrapAngle(z.theta_rad - icp.estimate.theta_rad));
+      };
+      for (const auto& [z, w] : result.alternatives) {
+        mean += w * offset(z);
+        total += w;
+      }
+      mean /= total;
+      Eigen::Matrix3d spread = mean * mean.transpose();  // the best's own (weight 1)
+      for (const auto& [z, w] : result.alternatives) {
+        const Eigen::Vector3d d = offset(z) - mean;
+        spread += w * d * d.transpose();
+      }
+      spread /= total;
+      u.measurement = Pose2{icp.estimate.x_m + mean(0), icp.estimate.y_m + mean(1),
+                            WrapAngle(icp.estimate.theta_rad + mean(2))};
+      u.measurement_covariance = result.covariance + spread;
+      u.measured = true;
+      pose_ = EkfPoseUpdate(pose_, &covariance_, u.measurement, u.measurement_covariance);
     }
     if (u.outcome == MatchOutcome::kAccepted) {
       u.measured = true;

@@ -128,6 +128,11 @@ struct LaserSlamOptions : MatcherOptions {
   // this probable relative to the best (posteriors: kernel and prior), the match is ambiguous: no
   // measurement, no mapping [0-1; 1: off].
   double max_ambiguity = 0.5;
+  // An ambiguous match still measures what its alternatives agree on (along a corridor: the heading
+  // and the position across it): the update takes the mixture of the best and its distinct
+  // alternatives, weighted by their probabilities relative to the best, its mean and covariance
+  // (the measurement's plus their spread); no mapping. false: no measurement (coasting).
+  bool ambiguous_update = true;
   // A match that explains less than this fraction of the scan (its fit) is too weak to be a
   // measurement: the scan sees mostly what the map does not hold (new ground, a wrong place).
   // The filter coasts; the scan maps (new ground must join the map) [0-1, 0: off].
@@ -169,7 +174,8 @@ enum class MatchOutcome {
   kMapStart,   // the first scan: it starts the map
   kAccepted,   // the match passed the gate: an EKF update
   kGated,      // the match is inconsistent with the prediction (beyond the gate): coasting, not mapped
-  kAmbiguous,  // another, distinct match fits nearly as well: coasting, not mapped
+  kAmbiguous,  // another, distinct match fits nearly as well: not mapped; the alternatives' mixture is the
+               // measurement (ambiguous_update), or coasting
   kNoMatch,    // too few points matched the map, or fewer than min_fit of them (new ground, or an empty
                // scan): coasting, mapped
 };
@@ -185,7 +191,8 @@ const char* PredictionSourceName(PredictionSource p);
 struct LaserSlamUpdate {
   MatchOutcome outcome = MatchOutcome::kNoMatch;
   PredictionSource prediction = PredictionSource::kOdometry;
-  bool measured = false;       // the scan gave a pose measurement (outcome kAccepted)
+  bool measured = false;       // the scan gave a pose measurement (outcome kAccepted, or kAmbiguous with
+                               // ambiguous_update: the alternatives' mixture)
   int points = 0, matches = 0, added = 0, iterations = 0;
   double fit = 0;              // fraction of the points within match_distance_m / 2 of the map after ICP
   double kernel = 0;           // the match's kernel score per point (0-1: how well the scan fits the map there)
