@@ -4,7 +4,8 @@
 #     recorded by lcm-logger and replayed by lcm-logplayer, checked byte for byte;
 #  2. the place-cell memory: `launch config/deploy/demo.deploy --group explore` (gridgen renders
 #     the scene's grid, calibrate-mirror finds the mirror and the mask of the robot's own parts in its
-#     frames, placecells explores it);
+#     frames, the robot drives over the grid nodes into a log, laser SLAM is replayed over it and
+#     placecells explores it at laser SLAM's pose);
 #  3. the simulated lab in real time: `launch config/deploy/demo.deploy --group lab` (sim driven by
 #     the navigator, homing, landmarks, place cells, laser SLAM, dead reckoning, RatSLAM, fused
 #     SLAM, the viewer's snapshots, the recorder); with --fault, one process is killed with SIGKILL
@@ -350,8 +351,12 @@ fi
   echo "## 2. Place-cell memory ($(verdict $explore_rc))"
   echo
   [ -z "$EXPLORED" ] || printf 'Reused from `%s` (--explored).\n\n' "$EXPLORED"
-  grep -hE "^gridgen: scene|^(rim|mask): |^placecells: explore, memory" "$EXPLORE_OUT/explore/gridgen.log" \
-    "$EXPLORE_OUT/explore/calibrate.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
+  grep -hE "^gridgen: scene|^(rim|mask): |^sim: done|^replay: [0-9]+ input events|^placecells: explore, memory" \
+    "$EXPLORE_OUT/explore/gridgen.log" "$EXPLORE_OUT/explore/calibrate.log" "$EXPLORE_OUT/explore/drive.log" \
+    "$EXPLORE_OUT/explore/slam.log" "$EXPLORE_OUT/explore/placecells.log" 2>/dev/null | sed 's/^/    /' || true
+  echo
+  echo "The memory is explored as a robot explores: the drive over the grid nodes (sim), laser SLAM over its"
+  echo "log (replay), a cell every 0.2 m at laser SLAM's pose (placecells); no ground truth in it."
   echo
   echo "## 3. Simulated lab: scene $SCENE, $DURATION s ($(verdict $lab_rc))"
   echo

@@ -20,7 +20,7 @@ int Main(int argc, char** argv) {
   std::string scene_override;
   double duration_override = -1;
   int seed_override = -1;
-  std::string mode_override, encoding_override, start_time_override, frame_times_path;
+  std::string mode_override, drive_override, encoding_override, start_time_override, frame_times_path;
   double clock_offset_override = std::nan("");
   double realtime_factor_override = std::nan("");
   int jpeg_quality_override = -1;
@@ -32,6 +32,9 @@ int Main(int argc, char** argv) {
   flags.AddDouble("duration-s", &duration_override, "simulated seconds to run (overrides [sim] duration_s)");
   flags.AddInt("seed", &seed_override, "random seed (overrides [sim] seed)");
   flags.AddString("mode", &mode_override, "realtime | lockstep (overrides [sim] mode)");
+  flags.AddString("drive", &drive_override,
+                  "route | grid | commands | still (overrides [sim] drive); grid: every node of the scene's grid,\n"
+                  "row by row, once (an exploration drive), then the run ends");
   flags.AddDouble("realtime-factor", &realtime_factor_override,
                   "realtime: simulated seconds per wall-clock second, 0.01..100; 0.5: half as fast as life, every rate\n"
                   "and every utime as at 1 (overrides [sim] realtime_factor)");
@@ -54,6 +57,7 @@ int Main(int argc, char** argv) {
     config.realtime = mode_override == "realtime";
   }
   if (!std::isnan(realtime_factor_override)) config.realtime_factor = realtime_factor_override;
+  if (!drive_override.empty()) config.drive = drive_override;
   if (!encoding_override.empty()) {
     try {
       config.encoding = glue::ParseFrameEncoding(encoding_override);

@@ -199,7 +199,9 @@ SimConfig SimConfig::FromIni(const glue::IniFile& ini, const std::string& prefix
 }
 
 void SimConfig::Validate() const {
-  if (drive != "route" && drive != "commands" && drive != "still") throw std::invalid_argument("drive must be route, commands or still");
+  if (drive != "route" && drive != "grid" && drive != "commands" && drive != "still") {
+    throw std::invalid_argument("drive must be route, grid, commands or still");
+  }
   if (!(physics_rate_hz > 0)) throw std::invalid_argument("[sim] physics_rate_hz must be positive");
   if (!(camera_rate_hz > 0)) throw std::invalid_argument("[camera] rate_hz must be positive");
   if (!(laser_rate_hz > 0)) throw std::invalid_argument("[laser] rate_hz must be positive");
@@ -273,6 +275,16 @@ SimNode::SimNode(glue::Bus& bus, const SimConfig& config, const nav::sim::Scene&
   if (config_.drive == "route") {
     if (scene.route.empty()) throw std::invalid_argument("scene '" + scene.name + "' has no route for drive = route");
     route_.emplace(scene.route, config_.route_speed_mps, config_.route_tolerance_m, config_.route_loop);
+  }
+  if (config_.drive == "grid") {
+    // An exploration drive: every grid node as a waypoint, row by row, each row the other way
+    // round (boustrophedon), once.
+    if (scene.grid.nx < 1 || scene.grid.ny < 1) throw std::invalid_argument("scene '" + scene.name + "' has no grid for drive = grid");
+    std::vector<Eigen::Vector2d> nodes;
+    for (int iy = 0; iy < scene.grid.ny; ++iy) {
+      for (int k = 0; k < scene.grid.nx; ++k) nodes.push_back(scene.grid.Position(iy % 2 == 0 ? k : scene.grid.nx - 1 - k, iy));
+    }
+    route_.emplace(nodes, config_.route_speed_mps, config_.route_tolerance_m, false);
   }
   if (config_.drive == "commands") bus_.Subscribe(config_.command_channel, &SimNode::OnDriveCommand, this);
   world_.SetKidnap(config_.kidnap);  // throws when the robot does not fit at the destination

@@ -28,7 +28,7 @@ struct SimConfig {
   bool start_at_wall_clock = false;   // start_time_s = now: the first message is stamped with the wall clock
   int64_t clock_offset_us = 0;        // added to every utime: a robot whose clock is off [us]
   double physics_rate_hz = 100;
-  std::string drive = "route";        // route | commands | still
+  std::string drive = "route";        // route | grid | commands | still
   double route_speed_mps = 0.3;
   double route_tolerance_m = 0.1;
   bool route_loop = true;

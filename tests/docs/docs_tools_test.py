@@ -48,9 +48,15 @@ class ChannelGraphOfTheDemo(unittest.TestCase):
         # (--mode explore, from a file:// log) the other way round
         self.assertIn("POSE_PLACE_CELLS", self.p["placecells"]["pub"])
         self.assertNotIn("POSE_GROUND_TRUTH", self.p["placecells"]["sub"])
-        self.assertIn("POSE_GROUND_TRUTH", self.p["explore.placecells"]["sub"])
+        self.assertIn("POSE_LASER_SLAM", self.p["explore.placecells"]["sub"])
+        self.assertNotIn("POSE_GROUND_TRUTH", self.p["explore.placecells"]["sub"])
         self.assertNotIn("POSE_PLACE_CELLS", self.p["explore.placecells"]["pub"])
+        self.assertIn("reads", self.p["explore.placecells"]["note"])
         self.assertIn("not the bus", self.p["explore.placecells"]["note"])
+        # the exploration drive: sim --drive grid writes a log (mode=w) and takes no commands
+        self.assertEqual(self.p["explore.drive"]["sub"], [])
+        self.assertIn("writes", self.p["explore.drive"]["note"])
+        self.assertIn("no bus", self.p["explore.slam"]["note"])
         self.assertEqual(self.p["landmarks"]["pub"], ["LANDMARKS_SURF"])
 
     def test_regular_expressions_match_the_published_channels(self):

@@ -25,11 +25,25 @@ TEST(DemoConfigs, SimDrivesByCommandsInRealTime) {
   EXPECT_TRUE(c.realtime);
 }
 
-TEST(DemoConfigs, PlaceCellExplorationKeepsEveryGridView) {
+TEST(DemoConfigs, PlaceCellExplorationKeepsAViewEvery20CmAtLaserSlamsPose) {
+  // The demo explores as a robot does: the drive's views every 0.2 m (the grid's spacing), each a
+  // cell, at laser SLAM's pose; never at the ground truth.
   const auto c = processes::PlaceCellsConfig::FromIni(glue::IniFile::Load(kDemoDir / "placecells_explore.ini"), "");
   EXPECT_EQ(c.mode, processes::PlaceCellsMode::kExplore);
   EXPECT_EQ(c.min_interval_s, 0);
+  EXPECT_DOUBLE_EQ(c.min_travel_m, 0.2);
+  EXPECT_EQ(c.novelty_threshold, 0);
+  EXPECT_EQ(c.explore_pose_channel, "POSE_LASER_SLAM");
+}
+
+TEST(DemoConfigs, TheTruePoseExplorationKeepsEveryGridView) {
+  // The labelled upper bound: every grid view a cell at its true pose.
+  const auto c =
+      processes::PlaceCellsConfig::FromIni(glue::IniFile::Load(kDemoDir / "placecells_explore_truth.ini"), "");
+  EXPECT_EQ(c.mode, processes::PlaceCellsMode::kExplore);
+  EXPECT_EQ(c.min_interval_s, 0);
   EXPECT_EQ(c.min_travel_m, 0);
+  EXPECT_EQ(c.explore_pose_channel, "POSE_GROUND_TRUTH");
 }
 
 TEST(DemoConfigs, PlaceCellLocalizationGivesGlobalFixes) {
@@ -44,7 +58,8 @@ TEST(DemoConfigs, Navigator) {
 }
 
 TEST(DemoConfigs, EveryDemoIniIsKnown) {
-  const std::set<std::string> known{"sim.ini", "placecells_explore.ini", "placecells.ini", "navigator.ini"};
+  const std::set<std::string> known{"sim.ini", "placecells_explore.ini", "placecells_explore_truth.ini", "placecells.ini",
+                                    "navigator.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kDemoDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();
@@ -58,6 +73,7 @@ TEST(DemoConfigs, VariantsDifferFromTheirBaseOnlyInDemoKeys) {
   const std::filesystem::path base_dir = SNAPNAV_CONFIG_DIR;
   const std::vector<std::pair<std::string, std::string>> variants = {{"sim.ini", "sim.ini"},
                                                                      {"placecells_explore.ini", "placecells.ini"},
+                                                                     {"placecells_explore_truth.ini", "placecells.ini"},
                                                                      {"placecells.ini", "placecells.ini"},
                                                                      {"navigator.ini", "navigator.ini"}};
   for (const auto& [variant, base] : variants) {

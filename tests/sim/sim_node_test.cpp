@@ -315,6 +315,47 @@ TEST(SimNode, KidnappingMovesTheTruthNotTheOdometry) {
   EXPECT_THROW(SimNode(bus2, config, scene), std::invalid_argument);
 }
 
+TEST(SimNode, GridDriveVisitsEveryGridNodeOnceAndEnds) {
+  // drive = grid (the demo's exploration drive): every node of the scene's grid, row by row, each
+  // row the other way round; the run ends when the last node is reached, whatever duration_s says.
+  glue::Bus bus("memq://");
+  auto config = ShippedConfig("G1_");
+  config.drive = "grid";
+  config.duration_s = 0;
+  config.camera_rate_hz = 1;
+  const auto scene = LoadSceneFile(SceneFilePath("outdoor11"));
+  std::vector<pose_t> truth;
+  bus.Subscribe<pose_t>("G1_POSE_GROUND_TRUTH", [&](const pose_t& m) { truth.push_back(m); });
+  SimNode node(bus, config, scene);
+  int steps = 0;
+  while (node.Step() && ++steps < 100000) {
+    while (bus.HandleOnce(0)) {
+    }
+  }
+  ASSERT_LT(steps, 100000) << "the drive did not end";
+  const auto& g = scene.grid;
+  int visited = 0;
+  double worst = 0;
+  for (int iy = 0; iy < g.ny; ++iy) {
+    for (int ix = 0; ix < g.nx; ++ix) {
+      const Eigen::Vector2d node_xy = g.Position(ix, iy);
+      double nearest = 1e9;
+      for (const pose_t& p : truth) nearest = std::min(nearest, std::hypot(p.x_m - node_xy.x(), p.y_m - node_xy.y()));
+      visited += nearest <= config.route_tolerance_m + 0.01;  // (switched at the step it came within)
+      worst = std::max(worst, nearest);
+    }
+  }
+  std::cout << "grid drive: " << truth.size() << " poses, " << visited << " of " << g.nx * g.ny
+            << " nodes within " << config.route_tolerance_m << " m, the farthest " << worst << " m\n";
+  EXPECT_EQ(visited, g.nx * g.ny);
+  // It ends at the last row's far end: an odd number of rows ends on the right.
+  const Eigen::Vector2d last = g.Position(g.ny % 2 == 1 ? g.nx - 1 : 0, g.ny - 1);
+  EXPECT_LT(std::hypot(truth.back().x_m - last.x(), truth.back().y_m - last.y()), config.route_tolerance_m + 0.01);
+  config.drive = "gridd";
+  glue::Bus bus2("memq://");
+  EXPECT_THROW(SimNode(bus2, config, scene), std::invalid_argument);
+}
+
 TEST(SceneFiles, EveryShippedSceneLoadsAndHasAGrid) {
   int n = 0;
   for (const auto& e : std::filesystem::directory_iterator(SNAPNAV_CONFIG_DIR "/scenes")) {

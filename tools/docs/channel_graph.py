@@ -101,7 +101,7 @@ ROLES = {
         "omni": (PUB, _true("camera", "publish_raw")),
         "panorama": (PUB, _true("camera", "publish_panorama")),
         "scan": (PUB, _always), "odometry": (PUB, _always), "ground_truth": (PUB, _always),
-        "drive_command": (SUB, _opt("sim", "drive", "commands")),
+        "drive_command": (SUB, _flag_or_opt("drive", "sim", "drive", "commands")),
     },
     "viewer": {  # poses and landmarks are regular expressions (LCM's, anchored)
         "point_map": (SUB, _always), "poses": (SUB, _always), "ground_truth": (SUB, _always),
@@ -125,6 +125,7 @@ OTHER = {
     "lcm-logger": "records every channel",
     "gridgen": "no bus: writes the grid database and its log (`--out`)",
     "calibrate-mirror": "no bus: reads the grid's log (`--log`), writes the `[mirror]` calibration and the mask",
+    "replay": "no bus: runs the `--only` processes over a log in-process, writes their outputs and its inputs (`--out`)",
 }
 
 
@@ -264,7 +265,9 @@ def read_deployment(root, deploy_rel, given=None, prefix=""):
              "pub": [], "sub": [], "regex": [], "note": ""}
         url = flags.get("lcm-url", "")
         if url.startswith("file://"):
-            p["note"] = f"reads `{url.split('?')[0][len('file://'):]}`, not the bus"
+            path = url.split('?')[0][len('file://'):]
+            writes = "mode=w" in url.split('?', 1)[-1].split('&')
+            p["note"] = f"writes `{path}`, not the bus" if writes else f"reads `{path}`, not the bus"
         if program in OTHER:
             p["note"] = OTHER[program]
             if program in RECORDERS:
