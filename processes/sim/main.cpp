@@ -57,7 +57,12 @@ int Main(int argc, char** argv) {
     config.realtime = mode_override == "realtime";
   }
   if (!std::isnan(realtime_factor_override)) config.realtime_factor = realtime_factor_override;
-  if (!drive_override.empty()) config.drive = drive_override;
+  if (!drive_override.empty()) {
+    if (drive_override != "route" && drive_override != "grid" && drive_override != "commands" && drive_override != "still") {
+      throw glue::FlagError("--drive must be route, grid, commands or still, got '" + drive_override + "'");
+    }
+    config.drive = drive_override;
+  }
   if (!encoding_override.empty()) {
     try {
       config.encoding = glue::ParseFrameEncoding(encoding_override);

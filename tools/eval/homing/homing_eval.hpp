@@ -104,7 +104,6 @@ cv::Mat UseMask(const std::string& source, ViewRenderer& renderer, cv::Size raw_
 cv::Mat RawMask(const std::string& source, const ViewRenderer& renderer, cv::Size raw_size, uint64_t seed = 1);
 cv::Mat UseRawMask(const cv::Mat& raw_mask, ViewRenderer& renderer);
 
-
 // How many frames of one view a still robot takes (people walking between them): the home
 // view (taken once, the robot can stand for a while) and each current view (a robot that
 // pauses to look). 1 and 1: the thesis' single snapshots.
