@@ -99,6 +99,68 @@ TEST(Masks, TheRendersPartsAreMaskedInThePanorama) {
   EXPECT_THROW(u.SetMask(cv::Mat(10, 10, CV_8UC1)), std::invalid_argument);
 }
 
+TEST(Masks, TheImagesBorderIsMaskedWhereTheRimRunsPastIt) {
+  // A 16:9 frame cuts the mirror at its top and bottom (as real cameras often do): the panorama's
+  // pixels whose samples fall outside the image are masked, and only those.
+  RenderCase c;
+  c.width = 1280, c.height = 720, c.cx = 641.7, c.cy = 362.4, c.radius = 392, c.seed = 11;
+  const nav::sim::OmniCameraOptions camera = RealisticCamera(c);
+  nav::sim::OmniRenderer r(SharedScene("indoor13"), camera);
+  cv::Mat raw;
+  r.RenderOmni({3.5, 3.0, 0.2}, {}, &raw);
+  const nav::MirrorModel mirror = camera.ReportedMirror();
+  nav::Unwrapper u(mirror, camera.panorama, raw.size());
+  const cv::Mat mask = u.panorama_mask().clone();
+  ASSERT_FALSE(mask.empty());
+  const double f = nav::MaskedFraction(mask);
+  EXPECT_GT(f, 0.001);
+  EXPECT_LT(f, 0.05);
+  int outside = 0;
+  for (int row = 0; row < mask.rows; ++row) {
+    for (int col = 0; col < mask.cols; ++col) {
+      const auto px = nav::MirrorPixel(mirror, camera.panorama.BearingOfColumn(col), camera.panorama.ElevationOfRow(row));
+      ASSERT_TRUE(px.has_value());
+      // Bilinear: usable when both pixels it reads along each axis lie inside (up to the remap's
+      // fixed point, 1/32 px).
+      const double e = 1.0 / 32;
+      const bool in = px->x() >= -e && px->x() <= c.width - 1 + e && px->y() >= -e && px->y() <= c.height - 1 + e;
+      const bool well_in = px->x() >= 1 && px->x() <= c.width - 2 && px->y() >= 1 && px->y() <= c.height - 2;
+      outside += !in;
+      if (!in) EXPECT_EQ(mask.at<uint8_t>(row, col), 0) << "row " << row << " col " << col;
+      if (well_in) EXPECT_NE(mask.at<uint8_t>(row, col), 0) << "row " << row << " col " << col;
+    }
+  }
+  EXPECT_GT(outside, 0);
+  // The border's black does not reach the panorama (filled from the row), and no landmark lies on it.
+  cv::Mat pano, grey;
+  u.Unwrap(raw, &pano);
+  cv::cvtColor(pano, grey, cv::COLOR_BGR2GRAY);
+  const cv::Mat top = grey.rowRange(0, 20), top_mask = mask.rowRange(0, 20);
+  ASSERT_GT(cv::countNonZero(top_mask == 0), 0);
+  EXPECT_GT(cv::mean(top, top_mask == 0)[0], 0.5 * cv::mean(top, top_mask)[0]);
+  for (auto method : {nav::LandmarkMethod::kSift, nav::LandmarkMethod::kSurf}) {
+    nav::LandmarkExtractorConfig lc;
+    lc.method = method;
+    const auto set = nav::ExtractLandmarks(pano, lc, mask);
+    EXPECT_GT(set.size(), 5) << nav::LandmarkMethodName(method);
+    EXPECT_EQ(OnMasked(set, mask), 0) << nav::LandmarkMethodName(method);
+  }
+  // A raw mask adds to the border's; removing it leaves the border's.
+  nav::Unwrapper with = u;
+  with.SetMask(cv::Mat(raw.size(), CV_8UC1, cv::Scalar(255)));
+  EXPECT_EQ(cv::countNonZero(with.panorama_mask() != mask), 0);
+  cv::Mat parts = cv::Mat(raw.size(), CV_8UC1, cv::Scalar(255));
+  cv::rectangle(parts, cv::Rect(0, 300, 1280, 40), cv::Scalar(0), cv::FILLED);
+  with.SetMask(parts);
+  EXPECT_GT(nav::MaskedFraction(with.panorama_mask()), f);
+  EXPECT_EQ(cv::countNonZero(with.panorama_mask() & (mask == 0)), 0);
+  with.SetMask(cv::Mat());
+  EXPECT_EQ(cv::countNonZero(with.panorama_mask() != mask), 0);
+  // A ring inside the image has no mask of its own, as before.
+  const nav::sim::OmniCameraOptions inside = RealisticCamera(RenderCase{});
+  EXPECT_TRUE(nav::Unwrapper(inside.ReportedMirror(), inside.panorama, cv::Size(640, 480)).panorama_mask().empty());
+}
+
 TEST(Masks, NoLandmarkOnTheRobotsParts) {
   const Views& v = Rendered();
   for (auto method : {nav::LandmarkMethod::kSift, nav::LandmarkMethod::kSurf, nav::LandmarkMethod::kVline}) {

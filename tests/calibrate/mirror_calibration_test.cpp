@@ -65,6 +65,12 @@ std::vector<Expect> Cases() {
   c = {};
   c.scene = "featureless11", c.width = 960, c.height = 720, c.cx = 478.9, c.cy = 362.3, c.radius = 340, c.seed = 9;
   v.push_back({c, "featureless11, 960x720"});
+  c = {};
+  c.width = 2592, c.height = 1944, c.cx = 1310.6, c.cy = 958.3, c.radius = 905, c.seed = 10;
+  v.push_back({c, "2592x1944, a Raspberry Pi camera's full frame"});
+  c = {};
+  c.width = 1280, c.height = 720, c.cx = 641.7, c.cy = 362.4, c.radius = 392, c.seed = 11;
+  v.push_back({c, "1280x720: the rim cut by the top and bottom of the frame"});
   return v;
 }
 

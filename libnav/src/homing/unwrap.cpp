@@ -38,6 +38,12 @@ Unwrapper::Unwrapper(const MirrorModel& mirror, const PanoramaModel& panorama, c
     }
   }
   cv::convertMaps(map_x, map_y, map1_, map2_, CV_16SC2);  // fixed point: faster remap
+  // Where the ring runs past the image's border, the panorama would show the border's black: masked.
+  cv::Mat inside;
+  cv::remap(cv::Mat(raw_size, CV_8UC1, cv::Scalar(255)), inside, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+            cv::Scalar(0));
+  if (cv::countNonZero(inside != 255) > 0) inside_ = inside == 255;
+  panorama_mask_ = inside_;
 }
 
 void Unwrapper::Unwrap(const cv::Mat& raw, cv::Mat* panorama) const {
@@ -56,13 +62,15 @@ void Unwrapper::Unwrap(const cv::Mat& raw, cv::Mat* panorama) const {
 void Unwrapper::SetMask(const cv::Mat& raw_mask) {
   CheckMask(raw_mask, raw_size_, "unwrap");
   if (raw_mask.empty()) {
-    panorama_mask_.release();
+    panorama_mask_ = inside_;
     return;
   }
   cv::Mat usable = raw_mask != 0, sampled;
-  // Bilinear: 255 only where every raw pixel with a weight is usable.
+  // Bilinear: 255 only where every raw pixel with a weight is usable (and inside the image).
   cv::remap(usable, sampled, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-  panorama_mask_ = sampled == 255;
+  // A new matrix: assigning the comparison would write into the one panorama_mask_ may share with inside_.
+  cv::Mat mask = sampled == 255;
+  panorama_mask_ = mask;
 }
 
 }  // namespace snapnav::nav

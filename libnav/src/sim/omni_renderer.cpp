@@ -133,9 +133,13 @@ void OmniCameraOptions::Validate() const {
   mirror.Validate();
   panorama.Validate();
   optics.Validate();
-  if (mirror.center_x_px - mirror.outer_radius_px < -0.5 || mirror.center_x_px + mirror.outer_radius_px > omni_width_px - 0.5 ||
-      mirror.center_y_px - mirror.outer_radius_px < -0.5 || mirror.center_y_px + mirror.outer_radius_px > omni_height_px - 0.5) {
-    throw std::invalid_argument("camera: the mirror circle does not fit in the raw image");
+  // The rim may run past the image's border, as a real camera's often does (a 16:9 frame); the
+  // centre must lie inside.
+  if (!(mirror.center_x_px >= 0 && mirror.center_x_px < omni_width_px && mirror.center_y_px >= 0 &&
+        mirror.center_y_px < omni_height_px)) {
+    throw std::invalid_argument("camera: the mirror centre (" + std::to_string(mirror.center_x_px) + ", " +
+                                std::to_string(mirror.center_y_px) + ") lies outside the " +
+                                std::to_string(omni_width_px) + "x" + std::to_string(omni_height_px) + " raw image");
   }
 }
 
