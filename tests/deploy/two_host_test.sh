@@ -11,13 +11,17 @@
 #     base's clock), nothing is rejected or ignored as stale, the robot is driven as in A, and each
 #     estimator's error is as in A (message time only: nothing mixes in the base's clock).
 set -euo pipefail
-BIN="$1"; OUT="$2"
+# EXPLORED (optional): an explored memory's folder both runs reuse (ctest's demo_explored_memory);
+# without it run A explores and B reuses A's.
+BIN="$1"; OUT="$2"; EXPLORED="${3:-}"
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 rm -rf "$OUT"; mkdir -p "$OUT"
 rc_a=0; rc_b=0
-"$ROOT/tools/demo.sh" "$BIN" --two-host --raw-frames --link-mtu 9000 --duration-s 30 --drop-log --out "$OUT/a" || rc_a=$?
+explored_a=(); [ -z "$EXPLORED" ] || explored_a=(--explored "$EXPLORED")
+"$ROOT/tools/demo.sh" "$BIN" --two-host --raw-frames --link-mtu 9000 --duration-s 30 --drop-log "${explored_a[@]}" \
+  --out "$OUT/a" || rc_a=$?
 "$ROOT/tools/demo.sh" "$BIN" --two-host --clock-offset-s 2 --link-goal-ms 10 --duration-s 30 --no-bus-health \
-  --explored "$OUT/a" --out "$OUT/b" || rc_b=$?
+  --explored "${EXPLORED:-$OUT/a}" --out "$OUT/b" || rc_b=$?
 python3 - "$OUT/a" "$OUT/b" "$rc_a" "$rc_b" <<'PY'
 import json, os, re, sys
 a_dir, b_dir, rc_a, rc_b = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
