@@ -1,11 +1,13 @@
 // The laser SLAM suite files (tools/eval/slam/slam_suite): the shipped suites load with every entry the
-// issue asks for; a bad suite file is an error naming the file and the key.
+// issue asks for; a bad suite file is an error naming the file and the key. The reference readers
+// (slam_log.hpp): MRPT's ground-truth text beside CSV and CARMEN.
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <set>
 
+#include "slam_log.hpp"
 #include "slam_suite.hpp"
 #include "snapnav/glue/ini.hpp"
 
@@ -35,9 +37,9 @@ TEST(SlamSuiteFile, ShippedSuiteHasEveryLogAtEveryOdometry) {
   EXPECT_TRUE(s.graph);
   for (const SuiteEntry& e : s.entries) EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, e.name == "csail" ? 0.05 : 0.10) << e.name;
   const Suite held = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_heldout.ini");
-  EXPECT_EQ(held.entries.size(), 16u);  // 12 of the suite's logs, 4 of CSAIL's corrected log
+  EXPECT_EQ(held.entries.size(), 17u);  // 12 of the suite's logs, 4 of CSAIL's corrected log, MRPT's simulated loop
   for (const SuiteEntry& e : held.entries) {
-    EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
+    if (e.kind == "carmen_corrected") EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
     EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, 0.10) << e.name;
   }
 }
@@ -58,6 +60,46 @@ TEST(SlamSuiteFile, BadSuiteIsAnErrorNamingFileAndKey) {
     EXPECT_NE(what.find("no_worse_than_dead_reckonin"), std::string::npos) << what;
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST(SlamReference, ReadsMrptGroundTruthPairedByTime) {
+  const auto dir = std::filesystem::temp_directory_path() / "snapnav_slam_reference_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "run.rawlog.GT.txt").string();
+  std::ofstream(path) << "% MRPT ground truth: timestamp x y phi\n"
+                         "1464600320.989009 0.000 0.000 0.000\n"
+                         "\n"
+                         "1464600321.041046 1.500 -2.250 0.500 0.0 0.0\n";
+  const Reference r = LoadReference(path);
+  ASSERT_EQ(r.by_time.size(), 2u);
+  EXPECT_EQ(r.by_time[0].utime, 1464600320989009);
+  EXPECT_EQ(r.by_time[1].utime, 1464600321041046);
+  const auto p = r.Find("", 1464600321041046 + 10000);  // a scan 10 ms from the second pose
+  ASSERT_TRUE(p.has_value());
+  EXPECT_DOUBLE_EQ(p->x_m, 1.5);
+  EXPECT_DOUBLE_EQ(p->y_m, -2.25);
+  EXPECT_DOUBLE_EQ(p->theta_rad, 0.5);
+  EXPECT_FALSE(r.Find("", 1464600330000000).has_value());  // no pose within 50 ms
+  // A line that does not parse: the file and its line.
+  std::ofstream(path) << "1464600320.989009 0 0 0\n1464600321.0 1.0 two 0\n";
+  try {
+    LoadReference(path);
+    ADD_FAILURE() << "a malformed ground truth loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":2:"), std::string::npos) << e.what();
+  }
+  std::ofstream(path) << "% nothing\n";
+  EXPECT_THROW(LoadReference(path), std::runtime_error);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SlamReference, ReadsTheGroundTruthOfMrptsSimulatedLoop) {
+  const std::string path =
+      "/usr/share/mrpt/datasets/graphslam-engine-demos/action_observations_map/simul.rawlog.GT.txt";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent (Debian's mrpt-common)";
+  const Reference r = LoadReference(path);
+  EXPECT_EQ(r.by_time.size(), 1734u);
+  EXPECT_EQ(r.by_time.front().utime, 1464600320989009);
 }
 
 }  // namespace

@@ -53,15 +53,16 @@ bool EvalSlamApp::Initialize(int argc, char** argv) {
   glue::Flags flags("eval-slam",
                     "Runs dead reckoning and laser SLAM in lockstep over an LCM log of LASER_SCAN and ODOMETRY\n"
                     "(see log-import) and writes trajectories, a map image and summary.json; with --reference,\n"
-                    "the ATE (RMSE after SE(2) alignment) of each against a CSV (utime,x,y,theta) or a CARMEN log\n"
-                    "of corrected poses, paired with the log's scans by identical ranges. With --icp-slam, MRPT's\n"
+                    "the ATE (RMSE after SE(2) alignment) of each against a CSV (utime,x,y,theta) or MRPT's\n"
+                    "ground truth (.txt: timestamp x y phi), paired by time, or a CARMEN log of corrected poses,\n"
+                    "paired with the log's scans by identical ranges. With --icp-slam, MRPT's\n"
                     "icp-slam runs beside it on the rawlog or CARMEN log the LCM log was imported from (work files\n"
                     "and the generated config in OUT/icp-slam/): time per scan, RMS difference from our trajectory\n"
                     "(paired by scan time, after SE(2) alignment) and its ATE against the reference. The laser SLAM\n"
                     "runs the [laser_slam] options of --config (default: the shipped config/laser_slam.ini), with\n"
                     "--set overrides; the effective options are printed. The trajectory is each scan's pose.");
   flags.AddString("log", &log_path, "LCM log (required)");
-  flags.AddString("reference", &reference_path, "reference trajectory: .csv or CARMEN log (.log, .clf, .gz)");
+  flags.AddString("reference", &reference_path, "reference trajectory: .csv, MRPT ground truth (.txt) or CARMEN log (.log, .clf, .gz)");
   flags.AddString("icp-slam", &icp_input,
                   "rawlog (.rawlog[.gz]) or CARMEN log the LCM log was imported from: run MRPT's icp-slam on it");
   flags.AddString("icp-slam-config", &icp_options.base_config, "icp-slam ini file the config is generated from");

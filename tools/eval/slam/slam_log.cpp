@@ -110,10 +110,51 @@ std::optional<nav::Pose2> Reference::Find(const std::string& ranges_key, int64_t
   return std::nullopt;
 }
 
+namespace {
+
+bool EndsWith(const std::string& s, const std::string& end) {
+  return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
+}
+
+// MRPT's ground truth of its simulated datasets (`*.rawlog.GT.txt`, as in
+// /usr/share/mrpt/datasets/graphslam-engine-demos): one line per pose, `timestamp x y phi`, the time
+// in Unix seconds, whitespace-separated; `%` or `#` start a comment. Further columns are ignored.
+void ReadMrptGroundTruth(const std::string& path, Reference* ref) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open reference " + path);
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    const size_t first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '%' || line[first] == '#') continue;
+    std::istringstream s(line);
+    double seconds = 0;
+    nav::StampedPose p;
+    if (!(s >> seconds >> p.pose.x_m >> p.pose.y_m >> p.pose.theta_rad) || !std::isfinite(seconds) ||
+        !std::isfinite(p.pose.x_m) || !std::isfinite(p.pose.y_m) || !std::isfinite(p.pose.theta_rad) ||
+        !(seconds >= 0 && seconds < 1e10)) {
+      throw std::runtime_error(path + ":" + std::to_string(n) +
+                               ": expected 'timestamp x y phi' (MRPT ground truth: Unix seconds, metres, radians)");
+    }
+    p.utime = std::llround(seconds * 1e6);
+    ref->by_time.push_back(p);
+  }
+}
+
+}  // namespace
+
 Reference LoadReference(const std::string& path) {
   Reference ref;
   ref.path = path;
-  const bool csv = path.size() > 4 && path.substr(path.size() - 4) == ".csv";
+  if (EndsWith(path, ".txt")) {
+    ReadMrptGroundTruth(path, &ref);
+    std::sort(ref.by_time.begin(), ref.by_time.end(), [](auto& a, auto& b) { return a.utime < b.utime; });
+    if (ref.by_time.empty()) throw std::runtime_error("reference " + path + " holds no poses");
+    std::cerr << "eval-slam: reference " << path << ": " << ref.by_time.size() << " poses (MRPT ground truth)\n";
+    return ref;
+  }
+  const bool csv = EndsWith(path, ".csv");
   if (csv) {
     std::ifstream in(path);
     if (!in) throw std::runtime_error("cannot open reference " + path);

@@ -49,7 +49,8 @@ bool UsableScan(const laser_scan_t& scan);
 // file if it cannot be opened or holds no scans. Progress goes to stderr when `progress`.
 SlamLog LoadSlamLog(const std::string& path, bool progress = true);
 
-// Reference poses keyed by scan ranges (CARMEN) or by time (CSV).
+// Reference poses keyed by scan ranges (CARMEN) or by time (CSV `utime,x,y,theta`; MRPT's
+// ground truth `*.txt`: `timestamp x y phi`, Unix seconds).
 struct Reference {
   std::string path;
   std::map<std::string, nav::Pose2> by_ranges;
