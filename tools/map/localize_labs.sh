@@ -5,10 +5,15 @@
 # raw-like log of the same lab (carmen_raw_like.py --noise 1: the same scans, odometry with
 # wheel errors) from 4 unknown starts; CSAIL's real raw log in CSAIL's map. Writes
 # OUT/LAB/{map,eval} and OUT/summary.md, OUT/summary.json.
-# Usage: tools/map/localize_labs.sh BIN DATA RAW_LIKE_TOOL OUT [LAB...]
+# Usage: tools/map/localize_labs.sh BIN DATA RAW_LIKE_TOOL OUT [LAB...] [-- --set SECTION.KEY=VALUE ...]
+# (after --: localize-eval's overrides, the same for every lab).
 set -euo pipefail
 BIN="$1"; DATA="$2"; TOOL="$3"; OUT="$4"; shift 4
-LABS=("$@")
+LABS=(); SETS=()
+while [ $# -gt 0 ]; do
+  if [ "$1" = "--" ]; then shift; SETS=("$@"); break; fi
+  LABS+=("$1"); shift
+done
 [ ${#LABS[@]} -gt 0 ] || LABS=(aces seattle orebro freiburg-079 csail)
 mkdir -p "$OUT"
 for lab in "${LABS[@]}"; do
@@ -27,7 +32,7 @@ for lab in "${LABS[@]}"; do
   fi
   "$BIN/log-import" carmen "$raw" --out "$d/raw.lcmlog" --quiet > "$d/import-raw.txt" 2>&1 || true
   "$BIN/localize-eval" "$d/raw.lcmlog" --map "$d/map/map.yaml" --reference "$corrected" --starts 4 --out "$d/eval" \
-      > "$d/localize-eval.txt" 2>&1
+      ${SETS[@]+"${SETS[@]}"} > "$d/localize-eval.txt" 2>&1
   grep "^localize-eval: start" "$d/localize-eval.txt" | sed "s/^/$lab: /"
 done
 python3 - "$OUT" "${LABS[@]}" <<'PY'

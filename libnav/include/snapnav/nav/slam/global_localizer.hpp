@@ -22,7 +22,7 @@ struct GlobalSearchOptions {
   double heading_step_rad = 0.0174533;  // headings searched: 0, step, 2 step, ... [rad] (1 deg)
   double sigma_m = 0.15;           // a point scores exp(-d^2 / (2 sigma^2)), d to the nearest occupied cell [m]
   int depth = 6;                   // levels of the pyramid above the leaves (root nodes 2^depth cells wide)
-  double max_range_m = 15;         // points farther from the robot are not searched [m]
+  double max_range_m = 60;         // points farther from the robot are not searched [m]
   int max_points = 250;            // at most this many points scored (a 0.1 m voxel filter, then thinned)
   double occupied_threshold = 0.65;  // a map cell at or above this occupancy is a wall [0-1]
   double free_threshold = 0.196;     // ... at or below it free: the robot may stand there [0-1]
