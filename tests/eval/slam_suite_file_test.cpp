@@ -93,6 +93,25 @@ TEST(SlamReference, ReadsMrptGroundTruthPairedByTime) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(SlamReference, ReadsACsvOfUtimeXYTheta) {
+  const auto dir = std::filesystem::temp_directory_path() / "snapnav_slam_reference_csv_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "reference.csv").string();
+  std::ofstream(path) << "utime,x,y,theta\n# a comment\n2000000,2.0,0.5,0.25\n1000000,1.0,0.0,0.0\n";
+  const Reference r = LoadReference(path);
+  ASSERT_EQ(r.by_time.size(), 2u);  // sorted by time
+  EXPECT_EQ(r.by_time[0].utime, 1000000);
+  EXPECT_DOUBLE_EQ(r.by_time[1].pose.y_m, 0.5);
+  std::ofstream(path) << "utime,x,y,theta\n1000000,1.0,0.0\n";
+  try {
+    LoadReference(path);
+    ADD_FAILURE() << "a CSV line without theta loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ":2: expected utime,x,y,theta"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(SlamReference, ReadsTheGroundTruthOfMrptsSimulatedLoop) {
   const std::string path =
       "/usr/share/mrpt/datasets/graphslam-engine-demos/action_observations_map/simul.rawlog.GT.txt";

@@ -116,10 +116,11 @@ bool EndsWith(const std::string& s, const std::string& end) {
   return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
 }
 
-// MRPT's ground truth of its simulated datasets (`*.rawlog.GT.txt`, as in
-// /usr/share/mrpt/datasets/graphslam-engine-demos): one line per pose, `timestamp x y phi`, the time
-// in Unix seconds, whitespace-separated; `%` or `#` start a comment. Further columns are ignored.
-void ReadMrptGroundTruth(const std::string& path, Reference* ref) {
+// Poses by time, one per line: a CSV `utime,x,y,theta` (a header line starting with `utime`, `#`
+// comments), or MRPT's ground truth of its simulated datasets (`*.rawlog.GT.txt`, as in
+// /usr/share/mrpt/datasets/graphslam-engine-demos: `timestamp x y phi`, Unix seconds, whitespace,
+// `%` or `#` comments). Further columns are ignored. Sorted by time.
+void ReadTimedPoses(const std::string& path, bool mrpt, Reference* ref) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error("cannot open reference " + path);
   std::string line;
@@ -127,19 +128,27 @@ void ReadMrptGroundTruth(const std::string& path, Reference* ref) {
   while (std::getline(in, line)) {
     ++n;
     const size_t first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '%' || line[first] == '#') continue;
-    std::istringstream s(line);
-    double seconds = 0;
-    nav::StampedPose p;
-    if (!(s >> seconds >> p.pose.x_m >> p.pose.y_m >> p.pose.theta_rad) || !std::isfinite(seconds) ||
-        !std::isfinite(p.pose.x_m) || !std::isfinite(p.pose.y_m) || !std::isfinite(p.pose.theta_rad) ||
-        !(seconds >= 0 && seconds < 1e10)) {
-      throw std::runtime_error(path + ":" + std::to_string(n) +
-                               ": expected 'timestamp x y phi' (MRPT ground truth: Unix seconds, metres, radians)");
+    if (first == std::string::npos || line[first] == '#' || (mrpt && line[first] == '%') ||
+        (!mrpt && line.compare(first, 5, "utime") == 0)) {
+      continue;
     }
-    p.utime = std::llround(seconds * 1e6);
+    if (!mrpt) std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream s(line);
+    double t = 0;
+    nav::StampedPose p;
+    const bool ok = static_cast<bool>(s >> t >> p.pose.x_m >> p.pose.y_m >> p.pose.theta_rad) && std::isfinite(t) &&
+                    t >= 0 && t < (mrpt ? 1e10 : 1e17) && std::isfinite(p.pose.x_m) && std::isfinite(p.pose.y_m) &&
+                    std::isfinite(p.pose.theta_rad);
+    if (!ok) {
+      throw std::runtime_error(path + ":" + std::to_string(n) +
+                               (mrpt ? ": expected 'timestamp x y phi' (MRPT ground truth: Unix seconds, metres, radians)"
+                                     : ": expected utime,x,y,theta"));
+    }
+    p.utime = mrpt ? std::llround(t * 1e6) : std::llround(t);
     ref->by_time.push_back(p);
   }
+  std::sort(ref->by_time.begin(), ref->by_time.end(), [](auto& a, auto& b) { return a.utime < b.utime; });
+  if (ref->by_time.empty()) throw std::runtime_error("reference " + path + " holds no poses");
 }
 
 }  // namespace
@@ -147,32 +156,10 @@ void ReadMrptGroundTruth(const std::string& path, Reference* ref) {
 Reference LoadReference(const std::string& path) {
   Reference ref;
   ref.path = path;
-  if (EndsWith(path, ".txt")) {
-    ReadMrptGroundTruth(path, &ref);
-    std::sort(ref.by_time.begin(), ref.by_time.end(), [](auto& a, auto& b) { return a.utime < b.utime; });
-    if (ref.by_time.empty()) throw std::runtime_error("reference " + path + " holds no poses");
-    std::cerr << "eval-slam: reference " << path << ": " << ref.by_time.size() << " poses (MRPT ground truth)\n";
-    return ref;
-  }
-  const bool csv = EndsWith(path, ".csv");
-  if (csv) {
-    std::ifstream in(path);
-    if (!in) throw std::runtime_error("cannot open reference " + path);
-    std::string line;
-    int n = 0;
-    while (std::getline(in, line)) {
-      ++n;
-      if (line.empty() || line[0] == '#' || line.rfind("utime", 0) == 0) continue;
-      std::replace(line.begin(), line.end(), ',', ' ');
-      std::istringstream s(line);
-      nav::StampedPose p;
-      if (!(s >> p.utime >> p.pose.x_m >> p.pose.y_m >> p.pose.theta_rad)) {
-        throw std::runtime_error(path + ":" + std::to_string(n) + ": expected utime,x,y,theta");
-      }
-      ref.by_time.push_back(p);
-    }
-    std::sort(ref.by_time.begin(), ref.by_time.end(), [](auto& a, auto& b) { return a.utime < b.utime; });
-    if (ref.by_time.empty()) throw std::runtime_error("reference " + path + " holds no poses");
+  if (EndsWith(path, ".txt") || EndsWith(path, ".csv")) {
+    const bool mrpt = EndsWith(path, ".txt");
+    ReadTimedPoses(path, mrpt, &ref);
+    if (mrpt) std::cerr << "eval-slam: reference " << path << ": " << ref.by_time.size() << " poses (MRPT ground truth)\n";
     return ref;
   }
   VectorSink sink;
