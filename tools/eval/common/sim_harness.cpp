@@ -58,10 +58,9 @@ SimDriveResult DriveSimulation(const SimDriveOptions& options, const SimFrameOpt
       unwrapper.emplace(frames->camera.ReportedMirror(), frames->camera.panorama,
                         cv::Size(frames->camera.omni_width_px, frames->camera.omni_height_px));
       const cv::Mat raw_mask = frames->truth_mask ? TruthMask(renderer->PartsMask()) : frames->raw_mask;
-      if (!raw_mask.empty()) {
-        unwrapper->SetMask(raw_mask);
-        if (!unwrapper->panorama_mask().empty()) sink.OnPanoramaMask(unwrapper->panorama_mask());
-      }
+      if (!raw_mask.empty()) unwrapper->SetMask(raw_mask);
+      // (Without a raw mask the panorama's may still mask a rim that runs past the image.)
+      if (!unwrapper->panorama_mask().empty()) sink.OnPanoramaMask(unwrapper->panorama_mask());
     } else if (frames->truth_mask || !frames->raw_mask.empty()) {
       throw std::invalid_argument("a mask is of raw images: it needs raw frames");
     }
