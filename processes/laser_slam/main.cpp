@@ -22,18 +22,19 @@ int Main(int argc, char** argv) {
                     "matched to a point map by ICP and updates it. Publishes one pose_t per scan (utime of the scan),\n"
                     "every n-th scan the map as point_map_t, and the map as an occupancy grid (occupancy_grid_t,\n"
                     "[grid] every_s and on a map_request_t). Messages are processed in arrival order.\n"
-                    "--mode localize --map FILE: the pose in a saved map (map-export's map.yaml + map.pgm, or its\n"
-                    "map.gridmap), the map never changed: from an unknown start a global search over the whole map\n"
+                    "--mode localize --map FILE: the pose in a saved map (map-export's map.yaml + map.pgm, its\n"
+                    "map.gridmap, or MRPT's keyframes: a .simplemap as icp-slam writes it), the map never changed:\n"
+                    "from an unknown start a global search over the whole map\n"
                     "(branch and bound, every heading) until a pose is unambiguous, then tracking with the EKF and\n"
                     "scan matcher; a sustained collapse of the scans' fit searches again. Poses only while localized,\n"
                     "localization_status_t (lost / localized, scores) on every scan, the saved map on the grid\n"
                     "channel ([localize] in the config; docs/localization.md).");
   flags.AddCommon(&common);
   flags.AddString("mode", &mode, "slam (build the map) | localize (in the saved map --map)");
-  flags.AddString("map", &map_path, "--mode localize: the saved map, map.yaml (ROS map_server: YAML + PGM) or map.gridmap (MRPT)");
+  flags.AddString("map", &map_path, "--mode localize: the saved map, map.yaml (ROS map_server: YAML + PGM), map.gridmap or map.simplemap (MRPT)");
   if (!flags.Parse(argc, argv)) return 0;
   if (mode != "slam" && mode != "localize") throw glue::FlagError("--mode must be slam or localize, got '" + mode + "'");
-  if (mode == "localize" && map_path.empty()) throw glue::FlagError("--mode localize needs --map FILE (map.yaml or map.gridmap)");
+  if (mode == "localize" && map_path.empty()) throw glue::FlagError("--mode localize needs --map FILE (map.yaml, map.gridmap or map.simplemap)");
   if (mode == "slam" && !map_path.empty()) throw glue::FlagError("--map is for --mode localize");
   const auto config = processes::LaserSlamConfig::FromIni(glue::IniFile::Load(common.config), common.channel_prefix);
   if (mode == "localize") {

@@ -71,3 +71,20 @@ for name in ("every_scan_dec5", "every_point", "keyframes_06", "dense"):  # the 
     assert s[f"icp_slam_{name}_map_consistency_m"] < s["icp_slam_map_consistency_m"], name
 PY
 test -s "$OUT/bench/bench.md"
+
+# A map made by MRPT's icp-slam (its _finalmap_.simplemap) is a saved map snapnav localizes in: the
+# same loop from 4 unknown starts, each relocalized at once, within 0.15 m of icp-slam's own
+# trajectory (measured 0.06-0.07 m), none wrong (docs/localization.md).
+"$BIN/localize-eval" "$OUT/malaga.lcmlog" --map "$OUT/eval/icp-slam/icp-slam-out/_finalmap_.simplemap" \
+  --reference "$OUT/eval/icp_slam_trajectory.csv" --starts 4 --out "$OUT/localize" >"$OUT/localize.txt" 2>&1 ||
+  { cat "$OUT/localize.txt"; exit 1; }
+python3 - "$OUT/localize/localize.json" <<'PY'
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert len(j["starts"]) == 4, j["starts"]
+for s in j["starts"]:
+    assert s["relocalized"] and s["time_s"] <= 10, s
+    assert s["wrong_accepts"] == 0 and s["losses"] == 0, s
+    assert s["ate_rmse_m"] < 0.15, s
+print("localized in icp-slam's map: ATE " + ", ".join(f"{s['ate_rmse_m']:.3f}" for s in j["starts"]) + " m")
+PY

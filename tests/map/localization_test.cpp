@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "../support/grid_scans.hpp"
@@ -191,6 +192,65 @@ TEST(MapFile, RosMapAndGridmapReadBack) {
   EXPECT_NEAR(grid.occupied, c.occupied, c.occupied / 50 + 1);
   EXPECT_THROW(map::ReadMapFile(dir + "/nothing.yaml", options), std::runtime_error);
   EXPECT_THROW(map::ReadMapFile(dir + "/m.pgm", options), std::runtime_error);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(MapFile, SimplemapReadAsTheGridOfItsScans) {
+  // MRPT's keyframes (icp-slam's and map-export's .simplemap) as a saved map: the grid of its scans
+  // at their poses, as map-export builds it from the same scans.
+  sim::LaserOptions laser;
+  const sim::Scene room = AsymmetricRoom();  // (the world keeps a reference to it)
+  sim::World world(room, {}, laser, 5);
+  std::vector<GridScan> scans;
+  for (double x = 0.7; x < 7.5; x += 1.0)
+    for (double y = 0.7; y < 5.5; y += 1.0)
+      for (double th : {0.0, 2.1, 4.2}) scans.push_back(ScanAt(world, laser, {x, y, th}));
+  const nav::OccupancyGridOptions options;
+  const nav::OccupancyCells built = nav::ToOccupancyCells(nav::BuildOccupancyGrid(scans, options), options);
+  const std::string dir = (std::filesystem::temp_directory_path() / "snapnav_simplemap_test").string();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  map::WriteSimplemap(nav::BuildSimpleMap(scans, 0), dir + "/m.simplemap");
+  const nav::OccupancyCells read = map::ReadMapFile(dir + "/m.simplemap", options);
+  EXPECT_NEAR(read.resolution_m, 0.05, 1e-9);
+  // The same walls: nearly every occupied cell of the built grid is occupied in the read one, or its
+  // neighbour (MRPT grows the read grid on its own cell lattice, up to a cell apart).
+  int found = 0;
+  const auto occupied_near = [&](int rx, int ry) {
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = rx + dx, y = ry + dy;
+        if (x >= 0 && y >= 0 && x < read.width && y < read.height && read.at(x, y) >= 65) return true;
+      }
+    return false;
+  };
+  for (int y = 0; y < built.height; ++y) {
+    for (int x = 0; x < built.width; ++x) {
+      if (built.at(x, y) < 65) continue;
+      const double wx = built.origin_x_m + (x + 0.5) * built.resolution_m, wy = built.origin_y_m + (y + 0.5) * built.resolution_m;
+      found += occupied_near(static_cast<int>(std::floor((wx - read.origin_x_m) / read.resolution_m)),
+                             static_cast<int>(std::floor((wy - read.origin_y_m) / read.resolution_m)));
+    }
+  }
+  EXPECT_GT(found, built.occupied * 95 / 100) << found << " of " << built.occupied;
+  EXPECT_NEAR(read.occupied, built.occupied, built.occupied / 10 + 1);
+  // A file that is not a simple map, and one without scans, are named.
+  std::ofstream(dir + "/bad.simplemap") << "not a map";
+  try {
+    map::ReadMapFile(dir + "/bad.simplemap", options);
+    ADD_FAILURE() << "a text file read as a simple map";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.simplemap"), std::string::npos) << e.what();
+  }
+  map::WriteSimplemap(mrpt::maps::CSimpleMap(), dir + "/empty.simplemap");
+  EXPECT_THROW(map::ReadMapFile(dir + "/empty.simplemap", options), std::runtime_error);
+  // MRPT's own pf-localization demo map (Debian's mrpt-common), where present.
+  const std::string demo = "/usr/share/mrpt/datasets/localization_demo.simplemap.gz";
+  if (std::filesystem::exists(demo)) {
+    const nav::OccupancyCells m = map::ReadMapFile(demo, options);
+    EXPECT_GT(m.occupied, 1000);
+    EXPECT_GT(m.free, 50000);
+  }
   std::filesystem::remove_all(dir);
 }
 

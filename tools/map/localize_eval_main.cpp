@@ -55,7 +55,7 @@ int Main(int argc, char** argv) {
   double tol_m = 0.3, tol_deg = 10, wrong_m = 0.5, wrong_deg = 5;
   glue::Flags flags("localize-eval",
                     "laser-slam --mode localize's localizer (the same code and config) over LOG (LASER_SCAN and ODOMETRY,\n"
-                    "as log-import writes them) in the saved map --map (map.yaml or map.gridmap), against --reference\n"
+                    "as log-import writes them) in the saved map --map (map.yaml, .gridmap or .simplemap), against --reference\n"
                     "(a CARMEN log whose scans pair with LOG's by identical ranges, e.g. the corrected log the map was\n"
                     "made from, or a CSV utime,x,y,theta). The localizer starts knowing nothing at --starts scans spread\n"
                     "over the log (the first at scan 0) and runs from each to the log's end. Per start: the time (message\n"
@@ -65,7 +65,7 @@ int Main(int argc, char** argv) {
                     "(ms), losses, and accepted global poses more than --wrong-m or\n"
                     "--wrong-deg from the reference (wrong). Writes DIR/localize.json and DIR/localize.md.");
   flags.AllowPositional("LOG", "the LCM log to localize");
-  flags.AddString("map", &map_path, "the saved map (map.yaml or map.gridmap; required)");
+  flags.AddString("map", &map_path, "the saved map (map.yaml, map.gridmap or map.simplemap, MRPT's keyframes as icp-slam writes them; required)");
   flags.AddString("reference", &reference_path, "the reference trajectory (CARMEN log or CSV; required)");
   flags.AddString("reference-channel", &reference_channel,
                   "take the reference from this pose_t channel of LOG instead (e.g. the simulator's POSE_GROUND_TRUTH)");

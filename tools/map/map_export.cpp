@@ -1,5 +1,6 @@
 #include "map_export.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <cmath>
@@ -67,16 +68,24 @@ void WriteSimplemap(const mrpt::maps::CSimpleMap& map, const std::string& path) 
   mrpt::serialization::archiveFrom(f) << map;
 }
 
-mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path) {
+namespace {
+// An MRPT serialization (gzip-compressed or not, as MRPT's apps write them) of a `T`.
+template <class T>
+T ReadMrptFile(const std::string& path, const std::string& what) {
   mrpt::io::CFileGZInputStream f;
   if (!f.open(path)) throw std::runtime_error(path + ": cannot open");
-  mrpt::maps::COccupancyGridMap2D grid;
+  T object;
   try {
-    mrpt::serialization::archiveFrom(f) >> grid;
+    mrpt::serialization::archiveFrom(f) >> object;
   } catch (const std::exception& e) {
-    throw std::runtime_error(path + ": not an MRPT occupancy grid (.gridmap): " + std::string(e.what()).substr(0, 200));
+    throw std::runtime_error(path + ": not an MRPT " + what + ": " + std::string(e.what()).substr(0, 200));
   }
-  return grid;
+  return object;
+}
+}  // namespace
+
+mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path) {
+  return ReadMrptFile<mrpt::maps::COccupancyGridMap2D>(path, "occupancy grid (.gridmap)");
 }
 
 namespace {
@@ -94,14 +103,45 @@ double Number(const std::string& path, const std::string& key, const std::string
 }
 }  // namespace
 
+mrpt::maps::COccupancyGridMap2D GridFromSimplemap(const std::string& path, const nav::OccupancyGridOptions& options) {
+  const auto keyframes = ReadMrptFile<mrpt::maps::CSimpleMap>(path, "simple map (.simplemap)");
+  size_t scans = 0;
+  for (size_t i = 0; i < keyframes.size(); ++i) {
+    const auto [pose, frame] = keyframes.get(i);
+    if (pose && frame) scans += frame->size();  // (what insertion takes is counted below)
+  }
+  if (scans == 0) throw std::runtime_error(path + ": the simple map holds no observations");
+  // As map-export builds its grids (OccupancyGridBuilder): a beam with no return clears nothing.
+  mrpt::maps::COccupancyGridMap2D grid(-1, 1, -1, 1, static_cast<float>(options.resolution_m));
+  grid.insertionOptions.considerInvalidRangesAsFreeSpace = false;
+  grid.insertionOptions.maxDistanceInsertion =
+      options.max_range_m > 0 ? static_cast<float>(options.max_range_m) : 1e4f;
+  grid.loadFromSimpleMap(keyframes);
+  const nav::OccupancyCells cells = nav::ToOccupancyCells(grid, options);
+  if (cells.occupied == 0 || cells.free == 0) {
+    throw std::runtime_error(path + ": the simple map's " + std::to_string(keyframes.size()) +
+                             " keyframes hold no 2D laser scan");
+  }
+  return grid;
+}
+
+namespace {
+bool EndsWith(const std::string& s, const std::string& end) {
+  return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
+}
+}  // namespace
+
 nav::OccupancyCells ReadMapFile(const std::string& path, const nav::OccupancyGridOptions& options) {
   const std::filesystem::path p(path);
-  if (p.extension() == ".gridmap") {
+  if (EndsWith(path, ".gridmap") || EndsWith(path, ".gridmap.gz")) {
     nav::OccupancyCells cells = nav::ToOccupancyCells(ReadGridmap(path), options);
     return cells;
   }
+  if (EndsWith(path, ".simplemap") || EndsWith(path, ".simplemap.gz")) {
+    return nav::ToOccupancyCells(GridFromSimplemap(path, options), options);
+  }
   if (p.extension() != ".yaml" && p.extension() != ".yml") {
-    throw std::runtime_error(path + ": not a map file (map.yaml of ROS map_server, or MRPT's .gridmap)");
+    throw std::runtime_error(path + ": not a map file (map.yaml of ROS map_server, or MRPT's .gridmap or .simplemap)");
   }
   std::ifstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot open");

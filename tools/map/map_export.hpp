@@ -22,10 +22,16 @@ void WriteSimplemap(const mrpt::maps::CSimpleMap& map, const std::string& path);
 // Reads a .gridmap back (MRPT's own reader); throws std::runtime_error naming the file.
 mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path);
 
+// The occupancy grid of MRPT's keyframes (.simplemap[.gz]: icp-slam's and map-export's output):
+// each 2D laser scan inserted at its pose, at `options`' resolution, as map-export builds its grids.
+// Throws std::runtime_error naming the file when it is not a simple map or holds no laser scan.
+mrpt::maps::COccupancyGridMap2D GridFromSimplemap(const std::string& path, const nav::OccupancyGridOptions& options = {});
+
 // A saved map as cells: PATH.yaml (ROS map_server's YAML and the image it names, PGM or PNG:
 // occupancy = (255 - pixel) / 255, or pixel / 255 with negate: 1; trinary mode: above
-// occupied_thresh 100, below free_thresh 0, else unknown; scale mode: in between scaled) or
-// PATH.gridmap (MRPT's, cells counted with `options`' thresholds). The origin's yaw must be 0.
+// occupied_thresh 100, below free_thresh 0, else unknown; scale mode: in between scaled),
+// PATH.gridmap[.gz] (MRPT's, cells counted with `options`' thresholds) or PATH.simplemap[.gz] (MRPT's
+// keyframes, GridFromSimplemap). The origin's yaw must be 0.
 // Throws std::runtime_error naming the file and what is wrong.
 nav::OccupancyCells ReadMapFile(const std::string& path, const nav::OccupancyGridOptions& options = {});
 
