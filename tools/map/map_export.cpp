@@ -1,6 +1,5 @@
 #include "map_export.hpp"
 
-#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <cmath>
@@ -105,40 +104,28 @@ double Number(const std::string& path, const std::string& key, const std::string
 
 mrpt::maps::COccupancyGridMap2D GridFromSimplemap(const std::string& path, const nav::OccupancyGridOptions& options) {
   const auto keyframes = ReadMrptFile<mrpt::maps::CSimpleMap>(path, "simple map (.simplemap)");
-  size_t scans = 0;
-  for (size_t i = 0; i < keyframes.size(); ++i) {
-    const auto [pose, frame] = keyframes.get(i);
-    if (pose && frame) scans += frame->size();  // (what insertion takes is counted below)
-  }
-  if (scans == 0) throw std::runtime_error(path + ": the simple map holds no observations");
+  if (keyframes.empty()) throw std::runtime_error(path + ": the simple map holds no keyframes");
   // As map-export builds its grids (OccupancyGridBuilder): a beam with no return clears nothing.
   mrpt::maps::COccupancyGridMap2D grid(-1, 1, -1, 1, static_cast<float>(options.resolution_m));
   grid.insertionOptions.considerInvalidRangesAsFreeSpace = false;
   grid.insertionOptions.maxDistanceInsertion =
       options.max_range_m > 0 ? static_cast<float>(options.max_range_m) : 1e4f;
   grid.loadFromSimpleMap(keyframes);
-  const nav::OccupancyCells cells = nav::ToOccupancyCells(grid, options);
-  if (cells.occupied == 0 || cells.free == 0) {
-    throw std::runtime_error(path + ": the simple map's " + std::to_string(keyframes.size()) +
-                             " keyframes hold no 2D laser scan");
-  }
   return grid;
 }
 
-namespace {
-bool EndsWith(const std::string& s, const std::string& end) {
-  return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
-}
-}  // namespace
-
 nav::OccupancyCells ReadMapFile(const std::string& path, const nav::OccupancyGridOptions& options) {
   const std::filesystem::path p(path);
-  if (EndsWith(path, ".gridmap") || EndsWith(path, ".gridmap.gz")) {
+  // The kind by the extension, a gzip's ".gz" aside (MRPT reads both).
+  const std::string kind = (p.extension() == ".gz" ? p.stem() : p).extension().string();
+  if (kind == ".gridmap") {
     nav::OccupancyCells cells = nav::ToOccupancyCells(ReadGridmap(path), options);
     return cells;
   }
-  if (EndsWith(path, ".simplemap") || EndsWith(path, ".simplemap.gz")) {
-    return nav::ToOccupancyCells(GridFromSimplemap(path, options), options);
+  if (kind == ".simplemap") {
+    nav::OccupancyCells cells = nav::ToOccupancyCells(GridFromSimplemap(path, options), options);
+    if (cells.occupied == 0 || cells.free == 0) throw std::runtime_error(path + ": the simple map holds no 2D laser scan");
+    return cells;
   }
   if (p.extension() != ".yaml" && p.extension() != ".yml") {
     throw std::runtime_error(path + ": not a map file (map.yaml of ROS map_server, or MRPT's .gridmap or .simplemap)");

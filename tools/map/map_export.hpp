@@ -24,7 +24,8 @@ mrpt::maps::COccupancyGridMap2D ReadGridmap(const std::string& path);
 
 // The occupancy grid of MRPT's keyframes (.simplemap[.gz]: icp-slam's and map-export's output):
 // each 2D laser scan inserted at its pose, at `options`' resolution, as map-export builds its grids.
-// Throws std::runtime_error naming the file when it is not a simple map or holds no laser scan.
+// Throws std::runtime_error naming the file when it is not a simple map or holds no keyframe
+// (ReadMapFile also refuses one whose grid has no wall or no free cell: no 2D laser scan).
 mrpt::maps::COccupancyGridMap2D GridFromSimplemap(const std::string& path, const nav::OccupancyGridOptions& options = {});
 
 // A saved map as cells: PATH.yaml (ROS map_server's YAML and the image it names, PGM or PNG:

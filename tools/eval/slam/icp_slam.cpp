@@ -33,10 +33,13 @@
 #include "program.hpp"
 #include "importers.hpp"
 #include "mrpt_time.hpp"
+#include "snapnav/glue/strings.hpp"
 #include "snapnav/laser_scan_t.hpp"
 
 namespace snapnav::eval {
 namespace {
+
+using glue::EndsWith;
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
@@ -64,9 +67,6 @@ std::ifstream OpenText(const std::string& path, const std::string& what) {
   return in;
 }
 
-bool EndsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 }  // namespace
 

@@ -12,6 +12,7 @@
 
 
 #include "importers.hpp"
+#include "snapnav/glue/strings.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/log_reader.hpp"
@@ -22,6 +23,8 @@
 
 namespace snapnav::eval {
 namespace {
+
+using glue::EndsWith;
 
 using Clock = std::chrono::steady_clock;
 
@@ -112,9 +115,6 @@ std::optional<nav::Pose2> Reference::Find(const std::string& ranges_key, int64_t
 
 namespace {
 
-bool EndsWith(const std::string& s, const std::string& end) {
-  return s.size() >= end.size() && s.compare(s.size() - end.size(), end.size(), end) == 0;
-}
 
 // Poses by time, one per line: a CSV `utime,x,y,theta` (a header line starting with `utime`, `#`
 // comments), or MRPT's ground truth of its simulated datasets (`*.rawlog.GT.txt`, as in
