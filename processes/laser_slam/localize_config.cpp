@@ -23,6 +23,7 @@ const glue::OptionTable<nav::MapLocalizerOptions>& LocalizeTable() {
       .Degrees("distinct_deg", [](auto& o) -> auto& { return o.global.distinct_rad; })
       .Number("min_global_score", "", &O::min_global_score)
       .Number("max_global_ambiguity", "", &O::max_global_ambiguity)
+      .Flag("accumulate_evidence", &O::accumulate_evidence)
       .Number("accept_fit", "", &O::accept_fit)
       .Number("window_scans", "", &O::window_scans)
       .Number("window_m", "m", &O::window_m)

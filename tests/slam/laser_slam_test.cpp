@@ -586,6 +586,49 @@ TEST(LaserSlam, ScanLatencyMatchesTheScanWhereItWasTaken) {
   }
 }
 
+// The walls' directions (wall_orientation) are a heading reference the local map's drift does not
+// move. The square room is mapped at the truth (its walls: the map's directions); then the map is
+// turned 5 deg about the robot, as a local map built a little turned at every scan would be. From
+// the truth, with a heading the prediction knows to 3 deg, the match against the turned map turns
+// the heading 5 deg: within the prediction's gate, so without the walls it is taken and the
+// heading follows the turned map; the walls agree with the prediction and not with the match,
+// which is gated (the filter coasts on the prediction, which the walls confirm).
+TEST(LaserSlam, TheWallsGateAMatchTurnedAwayFromThem) {
+  RoomScanner scan;
+  const Pose2 truth{2.0, 1.5, 0.3};
+  for (const bool walls : {false, true}) {
+    LaserSlamOptions o;
+    o.initial_sigma_theta_rad = 3 * kRadPerDeg;
+    o.wall_orientation = walls;
+    o.wall_min_map_points = 50;
+    LaserSlam slam(o, truth);
+    EXPECT_EQ(slam.Update(scan(truth)).outcome, MatchOutcome::kMapStart);
+    // The map turned 5 deg about the robot.
+    const Pose2 turn = truth.Compose(Pose2{0, 0, 5 * kRadPerDeg}).Compose(truth.Inverse());
+    std::vector<Eigen::Vector2d> points, normals;
+    for (size_t i = 0; i < slam.map().size(); ++i) {
+      points.push_back(turn.Transform(slam.map().points()[i]));
+      const Eigen::Vector2d& n = slam.map().normals()[i];
+      normals.push_back({std::cos(turn.theta_rad) * n.x() - std::sin(turn.theta_rad) * n.y(),
+                         std::sin(turn.theta_rad) * n.x() + std::cos(turn.theta_rad) * n.y()});
+    }
+    slam.ResetMap(points, normals);
+    const LaserSlamUpdate u = slam.Update(scan(truth));
+    const double heading_error_deg = WrapAngle(slam.pose().theta_rad - truth.theta_rad) / kRadPerDeg;
+    if (!walls) {
+      EXPECT_EQ(u.outcome, MatchOutcome::kAccepted);
+      EXPECT_NEAR(heading_error_deg, 5, 1) << "without the walls the heading follows the turned map";
+      EXPECT_FALSE(u.wall_gated);
+    } else {
+      EXPECT_TRUE(u.wall_gated);
+      EXPECT_EQ(u.outcome, MatchOutcome::kGated);
+      EXPECT_NEAR(u.wall_offset_rad / kRadPerDeg, 0, 0.5) << "the walls agree with the prediction";
+      EXPECT_NEAR(heading_error_deg, 0, 0.5);
+      EXPECT_EQ(u.added, 0) << "a gated scan does not map";
+    }
+  }
+}
+
 TEST(LaserSlam, EmptyScansAreSkipped) {
   LaserSlam slam({}, {});
   slam.Predict({0.1, 0, 0});

@@ -118,8 +118,20 @@ const char* LoopOutcomeName(LoopOutcome o) {
   return "?";
 }
 
+namespace {
+
+// The graph's front end: the EKF's options without the walls' heading measurement. The loop closures
+// bound the heading drift it corrects; on the every 2nd and 3rd scan runs it turned two recoverable
+// runs into front-end failures the graph did not undo (docs/experiments/2026-12-05-wall-orientation.md).
+LaserSlamOptions GraphFrontEnd(LaserSlamOptions o) {
+  o.wall_orientation = false;
+  return o;
+}
+
+}  // namespace
+
 GraphSlam::GraphSlam(const LaserSlamOptions& front_end, const GraphSlamOptions& options, const Pose2& start)
-    : front_options_(front_end), options_(options), front_(front_end, start), start_(start) {
+    : front_options_(GraphFrontEnd(front_end)), options_(options), front_(front_options_, start), start_(start) {
   options_.Validate();
   last_posterior_ = front_.covariance();
 }

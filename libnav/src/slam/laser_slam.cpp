@@ -15,6 +15,9 @@
 namespace snapnav::nav {
 namespace {
 
+// Points on each side of a scan point whose line gives the walls' directions (wall_orientation).
+constexpr int kWallNeighbours = 7;
+
 Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
 
 }  // namespace
@@ -67,6 +70,12 @@ void LaserSlamOptions::Validate() const {
   if (!(outlier_min_fit >= 0 && outlier_min_fit <= 1))
     throw std::invalid_argument("laser slam: outlier_min_fit must be in [0, 1]");
   if (!(min_fit >= 0 && min_fit <= 1)) throw std::invalid_argument("laser slam: min_fit must be in [0, 1]");
+  if (!(wall_window_rad > 0 && wall_window_rad <= 0.5)) throw std::invalid_argument("laser slam: wall_window_deg must be in (0, 28.6]");
+  if (!(wall_kernel_rad > 0 && wall_kernel_rad <= 0.2)) throw std::invalid_argument("laser slam: wall_kernel_deg must be in (0, 11.5]");
+  if (!(wall_sigma_rad > 0)) throw std::invalid_argument("laser slam: wall_sigma_deg must be > 0");
+  if (!(wall_min_contrast >= 1)) throw std::invalid_argument("laser slam: wall_min_contrast must be >= 1");
+  if (!(wall_min_map_points >= 0)) throw std::invalid_argument("laser slam: wall_min_map_points must be >= 0");
+  if (!(wall_gate_mahalanobis2 > 0)) throw std::invalid_argument("laser slam: wall_gate_mahalanobis2 must be > 0");
   if (!(adaptive_window_scans >= 1)) throw std::invalid_argument("laser slam: adaptive_window_scans must be >= 1");
   if (!(adaptive_scale_min > 0 && adaptive_scale_min <= 1 && adaptive_scale_max >= 1))
     throw std::invalid_argument("laser slam: adaptive_scale_min must be in (0, 1] and adaptive_scale_max >= 1");
@@ -112,14 +121,16 @@ PointGridMap LaserSlam::MakeMap(const LaserSlamOptions& options) {
 void LaserSlam::ResetMap(const std::vector<Eigen::Vector2d>& points, const std::vector<Eigen::Vector2d>& normals) {
   if (normals.size() != points.size()) throw std::invalid_argument("laser slam: ResetMap needs a normal per point");
   map_ = MakeMap(options_);
+  // The walls' directions stay: a correction turns the map's parts by little, and these points'
+  // normals (not in scan order) are not the walls' own.
   for (size_t i = 0; i < points.size(); ++i) AddMapPoint(options_, points[i], normals[i], &map_);
 }
 
-void LaserSlam::AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
+bool LaserSlam::AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
                             PointGridMap* map) {
-  if (!p.allFinite()) return;
-  if (map->size() > 0 && map->HasPointWithin(p, options.add_distance_m)) return;
-  map->Add(p, normal);
+  if (!p.allFinite()) return false;
+  if (map->size() > 0 && map->HasPointWithin(p, options.add_distance_m)) return false;
+  return map->Add(p, normal);
 }
 
 LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {
@@ -139,6 +150,7 @@ LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {
   thesis.point_sigma_rad = 0;
   thesis.max_ambiguity = 1;
   thesis.ambiguous_update = false;
+  thesis.wall_orientation = false;
   thesis.min_fit = 0;
   thesis.outlier_scale = 1;
   thesis.adaptive_motion_noise = false;
@@ -281,6 +293,9 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     if (all_points[i].squaredNorm() <= max_range2) points.push_back(all_points[i]);
   }
   const std::vector<Eigen::Vector2d> normals = ScanNormals(points);
+  // The walls' directions from longer runs of points (a straight wall's, to a degree or better).
+  const std::vector<Eigen::Vector2d> wall_normals =
+      options_.wall_orientation ? ScanNormals(points, kWallNeighbours) : std::vector<Eigen::Vector2d>();
   u.points = static_cast<int>(points.size());
   ++scans_;
 
@@ -330,6 +345,15 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     }
   }
 
+  // The walls' directions at each prediction (wall_orientation): a heading reference the local map's
+  // drift does not move.
+  const bool use_walls = options_.wall_orientation && walls_.total() >= options_.wall_min_map_points;
+  std::vector<WallMeasurement> walls(predictions.size());
+  if (use_walls) {
+    for (size_t k = 0; k < predictions.size(); ++k) {
+      walls[k] = AlignWalls(wall_normals, predictions[k].pose, predictions[k].covariance);
+    }
+  }
   size_t chosen = 0;
   if (map_.size() == 0 || points.empty()) {
     u.outcome = map_.size() == 0 ? MatchOutcome::kMapStart : MatchOutcome::kNoMatch;
@@ -489,6 +513,21 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       }
     }
     const Prediction& prediction = predictions[chosen];
+    if (use_walls && result.icp.ok &&
+        (result.outcome == MatchOutcome::kAccepted || result.outcome == MatchOutcome::kAmbiguous)) {
+      // Where the walls agree with the prediction, a match that turns the heading away from them
+      // (beyond both measurements' errors) is the odd one out: gated.
+      const WallMeasurement& w = walls[chosen];
+      const double rw = options_.wall_sigma_rad * options_.wall_sigma_rad;
+      if (w.aligned && w.trusted &&
+          w.offset_rad * w.offset_rad / (prediction.covariance(2, 2) + rw) <= options_.wall_gate_mahalanobis2) {
+        const double turn = WrapAngle(result.icp.estimate.theta_rad - prediction.pose.theta_rad) - w.offset_rad;
+        if (turn * turn / (result.covariance(2, 2) + rw) > options_.wall_gate_mahalanobis2) {
+          result.outcome = MatchOutcome::kGated;
+          u.wall_gated = true;
+        }
+      }
+    }
     pose_ = prediction.pose;
     covariance_ = prediction.covariance;
     if (result.odometry_outlier) {
@@ -573,6 +612,13 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       for (int i = 0; i < 3; ++i) covariance_(i, i) = std::max(covariance_(i, i), floor2(i));
     }
   }
+  if (use_walls && u.outcome != MatchOutcome::kMapStart) {
+    // The heading measured by the walls at the updated pose (the prediction's, when coasting).
+    const WallMeasurement w = AlignWalls(wall_normals, pose_, covariance_);
+    u.wall_offset_rad = w.offset_rad;
+    u.wall_contrast = w.contrast;
+    u.wall_measured = w.aligned && ApplyWalls(w.offset_rad, &pose_, &covariance_);
+  }
   coasting_ = u.outcome == MatchOutcome::kAccepted || u.outcome == MatchOutcome::kMapStart ? 0 : coasting_ + 1;
   if (options_.adaptive_motion_noise && u.predictions == 1 &&
       (u.outcome == MatchOutcome::kAccepted || u.outcome == MatchOutcome::kGated) && !u.widened) {
@@ -610,9 +656,44 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
   for (size_t i = 0; i < points.size(); ++i) {
     const Eigen::Vector2d w = Rotate(c, s, points[i]) + t;
     if (map_.size() > 0 && map_.HasPointWithin(w, options_.add_distance_m)) continue;
-    if (map_.Add(w, Rotate(c, s, normals[i]))) ++u.added;
+    if (map_.Add(w, Rotate(c, s, normals[i]))) {
+      ++u.added;
+      if (!wall_normals.empty()) walls_.Add(Rotate(c, s, wall_normals[i]));
+    }
   }
   return u;
+}
+
+LaserSlam::WallMeasurement LaserSlam::AlignWalls(const std::vector<Eigen::Vector2d>& normals_robot, const Pose2& pose,
+                                                  const Eigen::Matrix3d& covariance) const {
+  WallMeasurement w;
+  const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
+  std::vector<Eigen::Vector2d> normals;
+  normals.reserve(normals_robot.size());
+  for (const Eigen::Vector2d& n : normals_robot) {
+    if (!n.isZero()) normals.push_back(Rotate(c, s, n));
+  }
+  const auto a = walls_.Align(normals, options_.wall_window_rad, options_.wall_kernel_rad);
+  if (!a) return w;
+  w.offset_rad = a->offset_rad;
+  w.contrast = a->contrast;
+  w.aligned = a->contrast >= options_.wall_min_contrast;
+  // The alignment looks within +-wall_window_rad: it is the walls' own offset (not another direction
+  // of the map's) when the heading is known to half of that.
+  w.trusted = 2 * std::sqrt(covariance(2, 2)) <= options_.wall_window_rad;
+  return w;
+}
+
+bool LaserSlam::ApplyWalls(double offset_rad, Pose2* pose, Eigen::Matrix3d* covariance) const {
+  const double s2 = (*covariance)(2, 2) + options_.wall_sigma_rad * options_.wall_sigma_rad;
+  if (offset_rad * offset_rad / s2 > options_.wall_gate_mahalanobis2) return false;
+  // A heading-only EKF update: H = [0 0 1].
+  const Eigen::Vector3d k = covariance->col(2) / s2;
+  *pose = {pose->x_m + k(0) * offset_rad, pose->y_m + k(1) * offset_rad, WrapAngle(pose->theta_rad + k(2) * offset_rad)};
+  const Eigen::RowVector3d row = covariance->row(2);
+  *covariance -= k * row;
+  *covariance = 0.5 * (*covariance + covariance->transpose()).eval();
+  return true;
 }
 
 // ---- For filters built on this one (nav::FusedSlam).

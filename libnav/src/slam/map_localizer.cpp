@@ -104,6 +104,27 @@ void MapLocalizer::Predict(const Pose2& odometry_delta, int64_t end_utime) {
   odometry_path_m_ += std::hypot(odometry_delta.x_m, odometry_delta.y_m);
 }
 
+bool MapLocalizer::Accumulate(const Pose2& found, double ambiguity, double* evidence) {
+  if (evidence_) {
+    // Where the pose found before is now, by odometry since.
+    const Pose2 carried = evidence_->pose.Compose(evidence_->odometry.Between(odometry_));
+    const bool same = std::hypot(found.x_m - carried.x_m, found.y_m - carried.y_m) <= options_.global.distinct_m &&
+                      std::abs(WrapAngle(found.theta_rad - carried.theta_rad)) <= options_.global.distinct_rad;
+    if (same && scans_ - evidence_->scan < options_.window_scans) {
+      *evidence = evidence_->ambiguity;  // the same window's scans again: no new evidence yet
+      return false;
+    }
+    if (same) {
+      evidence_ = Evidence{found, odometry_, scans_, evidence_->ambiguity * ambiguity};
+      *evidence = evidence_->ambiguity;
+      return evidence_->ambiguity <= options_.max_global_ambiguity;
+    }
+  }
+  evidence_ = Evidence{found, odometry_, scans_, ambiguity};
+  *evidence = ambiguity;
+  return false;
+}
+
 void MapLocalizer::SetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
   slam_->ResetPose(pose, covariance);
   state_ = LocalizationState::kLocalized;
@@ -141,6 +162,7 @@ LocalizationUpdate MapLocalizer::Update(const std::vector<Eigen::Vector2d>& poin
     if (bad_scans_ >= options_.lost_after_scans) {
       state_ = LocalizationState::kLost;
       u.lost_now = true;
+      evidence_.reset();
       ++losses_;
       // Only the scans since the trouble began belong to where the robot is now.
       while (static_cast<int>(window_.size()) > bad_scans_) window_.pop_front();
@@ -178,8 +200,13 @@ LocalizationUpdate MapLocalizer::Update(const std::vector<Eigen::Vector2d>& poin
       if (icp.ok && !icp.scored) matcher.ScoreEstimate(points_robot, &icp);
       u.refined = icp.ok ? icp.estimate : u.global.best;
       u.refined_fit = icp.ok ? icp.fit : matcher.Fit(u.global.best, points_robot, 1);
-      if (u.global.score >= options_.min_global_score && u.global.ambiguity <= options_.max_global_ambiguity &&
-          u.refined_fit >= options_.accept_fit) {
+      bool accept = false;
+      if (u.global.score >= options_.min_global_score && u.refined_fit >= options_.accept_fit) {
+        accept = u.global.ambiguity <= options_.max_global_ambiguity;
+        if (!accept && options_.accumulate_evidence) accept = Accumulate(u.refined, u.global.ambiguity, &u.evidence);
+      }
+      if (accept) {
+        evidence_.reset();
         const Eigen::Matrix3d reset =
             Eigen::Vector3d(std::pow(options_.reset_sigma_xy_m, 2), std::pow(options_.reset_sigma_xy_m, 2),
                             std::pow(options_.reset_sigma_theta_rad, 2))

@@ -381,7 +381,7 @@ int EvalSlamApp::Run() {
            "predicted_x_m,predicted_y_m,predicted_theta_rad,predicted_sigma_xy_m,predicted_sigma_theta_deg,"
            "measured_x_m,measured_y_m,measured_theta_rad,measured_sigma_x_m,measured_sigma_y_m,"
            "measured_sigma_theta_deg,x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad,outcome,prediction,"
-           "predictions,mahalanobis2,ambiguity,kernel,coasting\n"
+           "predictions,mahalanobis2,ambiguity,kernel,coasting,wall_measured,wall_gated,wall_offset_deg,wall_contrast\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.updates.size(); ++i) {
       const nav::LaserSlamUpdate& u = run.updates[i];
@@ -397,7 +397,8 @@ int EvalSlamApp::Run() {
           << s.x_m << "," << s.y_m << "," << s.theta_rad << "," << u.start.x_m << "," << u.start.y_m << ","
           << u.start.theta_rad << "," << nav::MatchOutcomeName(u.outcome) << ","
           << nav::PredictionSourceName(u.prediction) << "," << u.predictions << "," << u.mahalanobis2 << ","
-          << u.ambiguity << "," << u.kernel << "," << u.coasting << "\n";
+          << u.ambiguity << "," << u.kernel << "," << u.coasting << "," << u.wall_measured << "," << u.wall_gated << ","
+          << u.wall_offset_rad * deg << "," << u.wall_contrast << "\n";
     }
   }
   std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv"

@@ -24,6 +24,7 @@
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/nav/slam/map_matcher.hpp"
 #include "snapnav/nav/slam/point_grid_map.hpp"
+#include "snapnav/nav/slam/wall_orientations.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::nav {
@@ -133,6 +134,25 @@ struct LaserSlamOptions : MatcherOptions {
   // alternatives, weighted by their probabilities relative to the best, its mean and covariance
   // (the measurement's plus their spread); no mapping. false: no measurement (coasting).
   bool ambiguous_update = true;
+  // The walls' directions as a heading measurement (WallOrientations): after the match, the scan's
+  // wall normals, turned by the heading, are aligned with the histogram of the whole map's within
+  // +-wall_window_deg (each map direction spread by wall_kernel_deg); the offset is a heading
+  // measurement of std. dev. wall_sigma_deg, taken when the alignment's contrast (its score over the
+  // mean across the window) is at least wall_min_contrast, the map holds wall_min_map_points points,
+  // and its squared Mahalanobis distance is within wall_gate_mahalanobis2 (1 degree of freedom).
+  // And where the walls agree with the prediction (within that gate, the prediction's heading known
+  // to half the window), a match whose heading differs from the walls' beyond the gate (against the
+  // match's own heading variance plus wall_sigma_deg's) is gated: LaserSlamUpdate::wall_gated.
+  // A building's walls stay parallel over a floor: the local map's small turns scan by scan do not
+  // add up. The map's histogram is built from the scans' points as they join the map (ResetMap keeps
+  // it). false: off. (GraphSlam's front end runs without it.)
+  bool wall_orientation = true;
+  double wall_window_rad = 10 * kRadPerDeg;
+  double wall_kernel_rad = 1 * kRadPerDeg;
+  double wall_sigma_rad = 1 * kRadPerDeg;
+  double wall_min_contrast = 1.5;
+  double wall_min_map_points = 500;
+  double wall_gate_mahalanobis2 = 10.83;
   // A match that explains less than this fraction of the scan (its fit) is too weak to be a
   // measurement: the scan sees mostly what the map does not hold (new ground, a wrong place).
   // The filter coasts; the scan maps (new ground must join the map) [0-1, 0: off].
@@ -207,6 +227,10 @@ struct LaserSlamUpdate {
   bool widened = false;        // the update scored below the ICP pose: the prediction was widened
   int64_t coasting = 0;        // scans since the last accepted match (0: this one was accepted)
   double motion_noise_scale = 1;  // the odometry noise scale after this scan (adaptive_motion_noise)
+  bool wall_measured = false;  // the walls' directions measured the heading (wall_orientation)
+  bool wall_gated = false;     // ... and gated the match, which turned the heading away from them
+  double wall_offset_rad = 0;  // ... the alignment's offset (the heading innovation), 0 without one
+  double wall_contrast = 0;    // ... its contrast (0: no alignment)
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
   Pose2 start;      // the pose ICP started from (the search's best; after a recovery, its)
@@ -246,6 +270,20 @@ class LaserSlam {
   Pose2 pose_;
   Eigen::Matrix3d covariance_;
   PointGridMap map_;
+  WallOrientations walls_;  // the map's wall directions (wall_orientation)
+  // The walls' directions (wall_orientation) for a scan (its wall normals in the robot frame) at a
+  // pose: the heading offset that aligns them with the map's; `aligned` when the alignment's
+  // contrast is at least wall_min_contrast.
+  struct WallMeasurement {
+    bool aligned = false;
+    bool trusted = false;  // the heading is known to half the window (2 std. devs.): the alignment can be no other
+    double offset_rad = 0, contrast = 0;
+  };
+  WallMeasurement AlignWalls(const std::vector<Eigen::Vector2d>& normals_robot, const Pose2& pose,
+                             const Eigen::Matrix3d& covariance) const;
+  // The offset as a heading measurement (wall_sigma_rad): an EKF update of the pose and its
+  // covariance, unless beyond wall_gate_mahalanobis2 (false).
+  bool ApplyWalls(double offset_rad, Pose2* pose, Eigen::Matrix3d* covariance) const;
   int64_t scans_ = 0;
   LaserSlamUpdate UpdateAtScan(const std::vector<Eigen::Vector2d>& points_robot);
   struct TimedIncrement {
@@ -303,7 +341,7 @@ class LaserSlam {
   void ResetMap(PointGridMap map) { map_ = std::move(map); }
   static PointGridMap MakeMap(const LaserSlamOptions& options);
   // Adds p to the map unless a point already kept lies within options' add_distance_m (ResetMap's rule).
-  static void AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
+  static bool AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
                           PointGridMap* map);
 
  private:

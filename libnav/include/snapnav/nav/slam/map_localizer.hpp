@@ -32,6 +32,11 @@ struct MapLocalizerOptions {
   GlobalSearchOptions global;    // the global search (its ambiguity_floor is set to max_global_ambiguity)
   double min_global_score = 0.5;      // a global search's best is taken only at or above this mean likelihood [0-1]
   double max_global_ambiguity = 0.8;  // ... and when the best distinct other pose scores below this fraction of it [0-1]
+  // ... or, where the place is alike elsewhere (a repeated hall), when searches over independent
+  // windows (at least window_scans apart) keep finding the same pose, carried on by odometry (within
+  // the search's distinct_m and distinct_rad), and the product of their ambiguities is below
+  // max_global_ambiguity (each search's best against its second as independent evidence). false: each search alone.
+  bool accumulate_evidence = true;
   double accept_fit = 0.6;            // ... and when the refined scan's fit (points within match_distance_m / 2 of the map) is at least this [0-1]
   double lost_fit = 0.3;              // a tracked scan that fits less than this is bad [0-1]
   int lost_after_scans = 5;           // this many bad scans in a row: lost [count]
@@ -51,6 +56,7 @@ struct LocalizationUpdate {
   bool relocalized = false;   // ... and its pose was accepted
   bool lost_now = false;      // tracking was declared lost at this scan
   GlobalSearchResult global;  // the search's result (searched)
+  double evidence = 0;        // the ambiguities' product over the searches that found this pose (accumulate_evidence; 0: none)
   double refined_fit = 0;     // the refined global pose's fit (searched)
   Pose2 refined;              // ... the pose
   double fit = 0;             // the tracker's fit of this scan [0-1]
@@ -94,7 +100,18 @@ class MapLocalizer {
   double odometry_path_m_ = 0;     // ... and its path length
   std::deque<std::pair<double, WindowScan>> window_;  // (path length at the scan, scan)
   int bad_scans_ = 0;
+  // accumulate_evidence: whether the pose `found` with this ambiguity, with what the searches before
+  // found, is enough (the product so far in *evidence).
+  bool Accumulate(const Pose2& found, double ambiguity, double* evidence);
   int64_t scans_ = 0, searches_ = 0, relocalizations_ = 0, losses_ = 0;
+  // accumulate_evidence: the pose the searches keep finding, where it was found (map frame and
+  // odometry), the scan, and the product of the ambiguities so far.
+  struct Evidence {
+    Pose2 pose, odometry;
+    int64_t scan = 0;
+    double ambiguity = 1;
+  };
+  std::optional<Evidence> evidence_;
 };
 
 // The map points the tracker matches against: the centre of every occupied cell (at or above
