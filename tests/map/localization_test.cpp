@@ -357,5 +357,36 @@ TEST(MapLocalizer, FindsTracksNoticesAKidnappingAndFindsItAgain) {
   EXPECT_GE(loc.relocalizations(), 2);
 }
 
+// Evidence over searches (accumulate_evidence) decides where each search is nearly, not quite, sure;
+// a room symmetric about its middle is alike in every detail: however long the robot drives, its
+// searches (ambiguity above 0.9) give no evidence and no pose is taken, the mirror's least of all.
+TEST(MapLocalizer, EvidenceOverSearchesDoesNotDecideASymmetricRoom) {
+  const nav::OccupancyCells map = MapOf(SymmetricRoom(), 6, 4);
+  nav::MapLocalizerOptions options;
+  ASSERT_TRUE(options.accumulate_evidence);
+  nav::MapLocalizer loc(map, options);
+  sim::LaserOptions laser;
+  const sim::Scene scene = SymmetricRoom();
+  sim::World world(scene, {}, laser, 5);
+  int64_t utime = 1'000'000;
+  Pose2 truth{1.5, 1.2, 0.3}, last = truth;
+  int searches = 0;
+  for (int i = 0; i < 120; ++i) {
+    // Back and forth along a short line (the room's symmetry holds for every pose).
+    truth = Pose2{1.5 + 0.4 * std::sin(i * 0.05), 1.2, 0.3};
+    if (i > 0) {
+      utime += 100'000;
+      loc.Predict(last.Between(truth), utime);
+    }
+    last = truth;
+    const nav::LocalizationUpdate u = loc.Update(Points(ScanAt(world, laser, truth)), utime);
+    searches += u.searched;
+    EXPECT_FALSE(u.relocalized) << "scan " << i << ": a pose taken in a symmetric room (ambiguity " << u.global.ambiguity
+                                << ", evidence " << u.evidence << ")";
+  }
+  EXPECT_GE(searches, 100);
+  EXPECT_EQ(loc.state(), nav::LocalizationState::kLost);
+}
+
 }  // namespace
 }  // namespace snapnav

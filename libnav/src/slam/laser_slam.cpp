@@ -345,15 +345,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     }
   }
 
-  // The walls' directions at each prediction (wall_orientation): a heading reference the local map's
-  // drift does not move.
   const bool use_walls = options_.wall_orientation && walls_.total() >= options_.wall_min_map_points;
-  std::vector<WallMeasurement> walls(predictions.size());
-  if (use_walls) {
-    for (size_t k = 0; k < predictions.size(); ++k) {
-      walls[k] = AlignWalls(wall_normals, predictions[k].pose, predictions[k].covariance);
-    }
-  }
   size_t chosen = 0;
   if (map_.size() == 0 || points.empty()) {
     u.outcome = map_.size() == 0 ? MatchOutcome::kMapStart : MatchOutcome::kNoMatch;
@@ -517,7 +509,9 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
         (result.outcome == MatchOutcome::kAccepted || result.outcome == MatchOutcome::kAmbiguous)) {
       // Where the walls agree with the prediction, a match that turns the heading away from them
       // (beyond both measurements' errors) is the odd one out: gated.
-      const WallMeasurement& w = walls[chosen];
+      // The walls' directions at the prediction (wall_orientation): a heading reference the local
+      // map's drift does not move.
+      const WallMeasurement w = AlignWalls(wall_normals, prediction.pose, prediction.covariance);
       const double rw = options_.wall_sigma_rad * options_.wall_sigma_rad;
       if (w.aligned && w.trusted &&
           w.offset_rad * w.offset_rad / (prediction.covariance(2, 2) + rw) <= options_.wall_gate_mahalanobis2) {

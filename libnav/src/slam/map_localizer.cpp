@@ -105,6 +105,13 @@ void MapLocalizer::Predict(const Pose2& odometry_delta, int64_t end_utime) {
 }
 
 bool MapLocalizer::Accumulate(const Pose2& found, double ambiguity, double* evidence) {
+  // A search whose second is nearly as good (beyond the square root of max_global_ambiguity: two such
+  // windows would not suffice) is no evidence either way: a place alike in every detail (a room
+  // symmetric about its middle) stays undecided however long the robot drives.
+  if (ambiguity > std::sqrt(options_.max_global_ambiguity)) {
+    *evidence = evidence_ ? evidence_->ambiguity : 0;
+    return false;
+  }
   if (evidence_) {
     // Where the pose found before is now, by odometry since.
     const Pose2 carried = evidence_->pose.Compose(evidence_->odometry.Between(odometry_));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace snapnav::nav {
 namespace {
@@ -32,34 +33,48 @@ void WallOrientations::Add(const Eigen::Vector2d& normal, double weight) {
   bins_[static_cast<size_t>(b0)] += weight * (1 - w1);
   bins_[static_cast<size_t>((b0 + 1) % n)] += weight * w1;
   total_ += weight;
+  smooth_valid_ = false;
 }
 
 void WallOrientations::Clear() {
   std::fill(bins_.begin(), bins_.end(), 0.0);
   total_ = 0;
+  smooth_valid_ = false;
 }
 
 std::optional<WallOrientations::Alignment> WallOrientations::Align(const std::vector<Eigen::Vector2d>& normals,
                                                                    double window_rad, double kernel_rad) const {
   if (total_ <= 0 || !(kernel_rad > 0) || !(window_rad > 0)) return std::nullopt;
   const int n = static_cast<int>(bins_.size());
-  // The map's directions spread by the kernel, normalised so that a lone direction peaks at 1.
-  const int half = static_cast<int>(std::ceil(3 * kernel_rad / bin_rad_));
-  std::vector<double> kernel(static_cast<size_t>(2 * half + 1));
-  for (int k = -half; k <= half; ++k) {
-    const double d = k * bin_rad_ / kernel_rad;
-    kernel[static_cast<size_t>(k + half)] = std::exp(-0.5 * d * d);
-  }
-  std::vector<double> smooth(static_cast<size_t>(n), 0.0);
-  for (int b = 0; b < n; ++b) {
-    if (bins_[static_cast<size_t>(b)] == 0) continue;
+  // The map's directions spread by the kernel, normalised so that a lone direction peaks at 1 (kept
+  // between calls until a normal is added).
+  if (!smooth_valid_ || smooth_kernel_rad_ != kernel_rad) {
+    const int half = static_cast<int>(std::ceil(3 * kernel_rad / bin_rad_));
+    std::vector<double> kernel(static_cast<size_t>(2 * half + 1));
     for (int k = -half; k <= half; ++k) {
-      smooth[static_cast<size_t>(((b + k) % n + n) % n)] += bins_[static_cast<size_t>(b)] * kernel[static_cast<size_t>(k + half)];
+      const double d = k * bin_rad_ / kernel_rad;
+      kernel[static_cast<size_t>(k + half)] = std::exp(-0.5 * d * d);
     }
+    smooth_.assign(static_cast<size_t>(n), 0.0);
+    for (int b = 0; b < n; ++b) {
+      const double v = bins_[static_cast<size_t>(b)];
+      if (v == 0) continue;
+      for (int k = -half; k <= half; ++k) {
+        int i = b + k;  // circular over pi (half < n)
+        if (i < 0) i += n;
+        if (i >= n) i -= n;
+        smooth_[static_cast<size_t>(i)] += v * kernel[static_cast<size_t>(k + half)];
+      }
+    }
+    const double peak = *std::max_element(smooth_.begin(), smooth_.end());
+    if (peak > 0) {
+      for (double& v : smooth_) v /= peak;
+    }
+    smooth_kernel_rad_ = kernel_rad;
+    smooth_valid_ = true;
   }
-  const double peak = *std::max_element(smooth.begin(), smooth.end());
-  if (!(peak > 0)) return std::nullopt;
-  for (double& v : smooth) v /= peak;
+  const std::vector<double>& smooth = smooth_;
+  if (!(*std::max_element(smooth.begin(), smooth.end()) > 0)) return std::nullopt;
   // The scan's directions, binned the same way.
   std::vector<double> scan(static_cast<size_t>(n), 0.0);
   double scan_total = 0;
@@ -73,13 +88,18 @@ std::optional<WallOrientations::Alignment> WallOrientations::Align(const std::ve
     scan_total += 1;
   }
   if (scan_total <= 0) return std::nullopt;
-  const int steps = static_cast<int>(std::floor(window_rad / bin_rad_));
+  std::vector<std::pair<int, double>> occupied;  // the scan's non-empty bins
+  for (int b = 0; b < n; ++b) {
+    if (scan[static_cast<size_t>(b)] != 0) occupied.emplace_back(b, scan[static_cast<size_t>(b)]);
+  }
+  const int steps = std::min(static_cast<int>(std::floor(window_rad / bin_rad_)), n / 2);
+  // The map's histogram with `steps` bins of its other end on each side: shifts without wrapping.
+  std::vector<double> padded(static_cast<size_t>(n + 2 * steps));
+  for (int i = 0; i < n + 2 * steps; ++i) padded[static_cast<size_t>(i)] = smooth[static_cast<size_t>((i - steps + n) % n)];
   std::vector<double> score(static_cast<size_t>(2 * steps + 1), 0.0);
   for (int s = -steps; s <= steps; ++s) {
     double c = 0;
-    for (int b = 0; b < n; ++b) {
-      if (scan[static_cast<size_t>(b)] != 0) c += scan[static_cast<size_t>(b)] * smooth[static_cast<size_t>(((b + s) % n + n) % n)];
-    }
+    for (const auto& [b, w] : occupied) c += w * padded[static_cast<size_t>(b + s + steps)];
     score[static_cast<size_t>(s + steps)] = c / scan_total;
   }
   const auto best = std::max_element(score.begin(), score.end());

@@ -35,7 +35,9 @@ struct MapLocalizerOptions {
   // ... or, where the place is alike elsewhere (a repeated hall), when searches over independent
   // windows (at least window_scans apart) keep finding the same pose, carried on by odometry (within
   // the search's distinct_m and distinct_rad), and the product of their ambiguities is below
-  // max_global_ambiguity (each search's best against its second as independent evidence). false: each search alone.
+  // max_global_ambiguity (each search's best against its second as independent evidence; a search
+  // whose ambiguity is above the square root of max_global_ambiguity counts for nothing, so a place
+  // alike in every detail stays undecided). false: each search alone.
   bool accumulate_evidence = true;
   double accept_fit = 0.6;            // ... and when the refined scan's fit (points within match_distance_m / 2 of the map) is at least this [0-1]
   double lost_fit = 0.3;              // a tracked scan that fits less than this is bad [0-1]

@@ -41,6 +41,10 @@ class WallOrientations {
   double bin_rad_;
   std::vector<double> bins_;
   double total_ = 0;
+  // The histogram spread by the kernel and normalised (Align), kept until a normal is added.
+  mutable std::vector<double> smooth_;
+  mutable double smooth_kernel_rad_ = 0;
+  mutable bool smooth_valid_ = false;
 };
 
 }  // namespace snapnav::nav
