@@ -507,10 +507,9 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     const Prediction& prediction = predictions[chosen];
     if (use_walls && result.icp.ok &&
         (result.outcome == MatchOutcome::kAccepted || result.outcome == MatchOutcome::kAmbiguous)) {
-      // Where the walls agree with the prediction, a match that turns the heading away from them
+      // The walls' directions at the prediction: a heading reference the local map's drift does not
+      // move. Where they agree with the prediction, a match that turns the heading away from them
       // (beyond both measurements' errors) is the odd one out: gated.
-      // The walls' directions at the prediction (wall_orientation): a heading reference the local
-      // map's drift does not move.
       const WallMeasurement w = AlignWalls(wall_normals, prediction.pose, prediction.covariance);
       const double rw = options_.wall_sigma_rad * options_.wall_sigma_rad;
       if (w.aligned && w.trusted &&

@@ -145,7 +145,8 @@ struct LaserSlamOptions : MatcherOptions {
   // match's own heading variance plus wall_sigma_deg's) is gated: LaserSlamUpdate::wall_gated.
   // A building's walls stay parallel over a floor: the local map's small turns scan by scan do not
   // add up. The map's histogram is built from the scans' points as they join the map (ResetMap keeps
-  // it). false: off. (GraphSlam's front end runs without it.)
+  // it; SeedMap adds none: localization in a saved map runs without it). false: off. (GraphSlam's
+  // front end runs without it.)
   bool wall_orientation = true;
   double wall_window_rad = 10 * kRadPerDeg;
   double wall_kernel_rad = 1 * kRadPerDeg;
