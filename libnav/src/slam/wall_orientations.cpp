@@ -16,6 +16,17 @@ double LineAngle(const Eigen::Vector2d& n) {
   return a;
 }
 
+// Adds a normal's direction to a histogram of bins of bin_rad over [0, pi): linear interpolation
+// between the two nearest bins (circular over pi).
+void AddToBins(const Eigen::Vector2d& normal, double weight, double bin_rad, std::vector<double>* bins) {
+  const double f = LineAngle(normal) / bin_rad;
+  const int n = static_cast<int>(bins->size());
+  const int b0 = static_cast<int>(std::floor(f)) % n;
+  const double w1 = f - std::floor(f);
+  (*bins)[static_cast<size_t>(b0)] += weight * (1 - w1);
+  (*bins)[static_cast<size_t>((b0 + 1) % n)] += weight * w1;
+}
+
 }  // namespace
 
 WallOrientations::WallOrientations(double bin_rad) : bin_rad_(bin_rad) {
@@ -25,13 +36,7 @@ WallOrientations::WallOrientations(double bin_rad) : bin_rad_(bin_rad) {
 
 void WallOrientations::Add(const Eigen::Vector2d& normal, double weight) {
   if (normal.isZero() || !(weight > 0)) return;
-  // Linear interpolation between the two nearest bins (circular over pi).
-  const double f = LineAngle(normal) / bin_rad_;
-  const int n = static_cast<int>(bins_.size());
-  const int b0 = static_cast<int>(std::floor(f)) % n;
-  const double w1 = f - std::floor(f);
-  bins_[static_cast<size_t>(b0)] += weight * (1 - w1);
-  bins_[static_cast<size_t>((b0 + 1) % n)] += weight * w1;
+  AddToBins(normal, weight, bin_rad_, &bins_);
   total_ += weight;
   smooth_valid_ = false;
 }
@@ -80,11 +85,7 @@ std::optional<WallOrientations::Alignment> WallOrientations::Align(const std::ve
   double scan_total = 0;
   for (const Eigen::Vector2d& v : normals) {
     if (v.isZero()) continue;
-    const double f = LineAngle(v) / bin_rad_;
-    const int b0 = static_cast<int>(std::floor(f)) % n;
-    const double w1 = f - std::floor(f);
-    scan[static_cast<size_t>(b0)] += 1 - w1;
-    scan[static_cast<size_t>((b0 + 1) % n)] += w1;
+    AddToBins(v, 1, bin_rad_, &scan);
     scan_total += 1;
   }
   if (scan_total <= 0) return std::nullopt;
