@@ -236,6 +236,33 @@ TEST(ScanNormals, LinesGiveTheirNormalCornersAndLoneNeighboursNone) {
   EXPECT_FALSE(ParseIcpMetric("p2p").has_value());
 }
 
+// Two neighbourhoods in one pass give what two single passes give: on a noisy wall with gaps,
+// corners and far points (where the gap allowed grows with the range).
+TEST(ScanNormals, OnePassForTwoNeighbourhoodsEqualsTwoPasses) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < 200; ++i) {
+    const double a = -1.5 + 0.015 * i;
+    const double r = (i % 50 < 30 ? 3.0 : 9.0) + 0.01 * std::sin(7.3 * i) + (i % 37 == 0 ? 0.5 : 0.0);
+    pts.push_back({r * std::cos(a), r * std::sin(a)});
+  }
+  std::vector<Eigen::Vector2d> few, many;
+  ScanNormals(pts, 2, 7, 0.3, &few, &many);
+  const auto few1 = ScanNormals(pts, 2, 0.3), many1 = ScanNormals(pts, 7, 0.3);
+  ASSERT_EQ(few.size(), pts.size());
+  ASSERT_EQ(many.size(), pts.size());
+  int lines = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    EXPECT_EQ(few[i], few1[i]) << i;
+    EXPECT_EQ(many[i], many1[i]) << i;
+    lines += !many[i].isZero();
+  }
+  EXPECT_GT(lines, 100) << "most points lie on the walls";
+  EXPECT_LT(lines, 200) << "corners and jumps have none";
+  std::vector<Eigen::Vector2d> only;
+  ScanNormals(pts, 2, 7, 0.3, &only, nullptr);
+  EXPECT_EQ(only, few1);
+}
+
 // Odometry misses a 20 degree turn (a slip, or odometry late against the laser) and the prediction
 // says its heading is that uncertain (8 deg): ICP alone from the prediction locks onto the wrong
 // heading; the heading search after the poor fit finds it. With a confident prediction (0.5 deg)

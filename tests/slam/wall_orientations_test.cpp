@@ -36,7 +36,7 @@ TEST(WallOrientations, AlignsAScanTurnedAwayFromTheMapsWalls) {
   const WallOrientations walls = Building();
   EXPECT_DOUBLE_EQ(walls.total(), 800);
   for (const double turn : {-6.3, -2.0, 0.0, 0.7, 4.4}) {
-    const auto a = walls.Align(ScanTurnedBy(turn), 10 * kDeg, 1 * kDeg);
+    const auto a = walls.Align(ScanTurnedBy(turn), 10 * kDeg);
     ASSERT_TRUE(a.has_value()) << turn;
     EXPECT_NEAR(a->offset_rad / kDeg, -turn, 0.15) << turn;
     EXPECT_GT(a->contrast, 2.0) << "a clear alignment in a window of +-10 deg";
@@ -47,21 +47,21 @@ TEST(WallOrientations, AlignsAScanTurnedAwayFromTheMapsWalls) {
 
 TEST(WallOrientations, NoAnswerWithoutWallsOrOutsideTheWindow) {
   WallOrientations empty;
-  EXPECT_FALSE(empty.Align(ScanTurnedBy(0), 10 * kDeg, 1 * kDeg).has_value()) << "a map without walls";
+  EXPECT_FALSE(empty.Align(ScanTurnedBy(0), 10 * kDeg).has_value()) << "a map without walls";
   const WallOrientations walls = Building();
-  EXPECT_FALSE(walls.Align(std::vector<Eigen::Vector2d>(5, Eigen::Vector2d::Zero()), 10 * kDeg, 1 * kDeg).has_value())
+  EXPECT_FALSE(walls.Align(std::vector<Eigen::Vector2d>(5, Eigen::Vector2d::Zero()), 10 * kDeg).has_value())
       << "a scan without walls";
   // Turned by 25 deg: within +-10 deg the best lies at the window's edge, no maximum inside.
-  EXPECT_FALSE(walls.Align(ScanTurnedBy(25), 10 * kDeg, 1 * kDeg).has_value());
+  EXPECT_FALSE(walls.Align(ScanTurnedBy(25), 10 * kDeg).has_value());
   // Turned by 45 deg, halfway between the building's directions: both ways are alike.
-  const auto half = walls.Align(ScanTurnedBy(45), 50 * kDeg, 1 * kDeg);
+  const auto half = walls.Align(ScanTurnedBy(45), 50 * kDeg);
   ASSERT_TRUE(half.has_value());
   EXPECT_GT(half->ambiguity, 0.8);
   // Cleared: nothing to align with.
   WallOrientations cleared = Building();
   cleared.Clear();
   EXPECT_EQ(cleared.total(), 0);
-  EXPECT_FALSE(cleared.Align(ScanTurnedBy(0), 10 * kDeg, 1 * kDeg).has_value());
+  EXPECT_FALSE(cleared.Align(ScanTurnedBy(0), 10 * kDeg).has_value());
   EXPECT_THROW(WallOrientations(0), std::invalid_argument);
 }
 

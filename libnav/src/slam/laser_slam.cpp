@@ -17,6 +17,9 @@ namespace {
 
 // Points on each side of a scan point whose line gives the walls' directions (wall_orientation).
 constexpr int kWallNeighbours = 7;
+// The matcher's normals: ScanNormals' defaults.
+constexpr int kNormalNeighbours = 2;
+constexpr double kNormalMaxGapM = 0.3;
 
 Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
 
@@ -103,6 +106,7 @@ LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
       pose_(start),
       map_(MakeMap(options)) {
   options_.Validate();
+  walls_ = WallOrientations(options_.wall_kernel_rad);
   covariance_ = Eigen::Vector3d(options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_xy_m * options.initial_sigma_xy_m,
                                 options.initial_sigma_theta_rad * options.initial_sigma_theta_rad)
@@ -292,10 +296,13 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
   for (size_t i = 0; i < all_points.size(); i += static_cast<size_t>(options_.scan_step)) {
     if (all_points[i].squaredNorm() <= max_range2) points.push_back(all_points[i]);
   }
-  const std::vector<Eigen::Vector2d> normals = ScanNormals(points);
   // The walls' directions from longer runs of points (a straight wall's, to a degree or better).
-  const std::vector<Eigen::Vector2d> wall_normals =
-      options_.wall_orientation ? ScanNormals(points, kWallNeighbours) : std::vector<Eigen::Vector2d>();
+  std::vector<Eigen::Vector2d> normals, wall_normals;
+  ScanNormals(points, kNormalNeighbours, kWallNeighbours, kNormalMaxGapM, &normals,
+              options_.wall_orientation ? &wall_normals : nullptr);
+  std::vector<double> wall_directions;  // in the robot frame, NaN where no wall
+  wall_directions.reserve(wall_normals.size());
+  for (const Eigen::Vector2d& n : wall_normals) wall_directions.push_back(WallOrientations::Direction(n));
   u.points = static_cast<int>(points.size());
   ++scans_;
 
@@ -510,7 +517,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       // The walls' directions at the prediction: a heading reference the local map's drift does not
       // move. Where they agree with the prediction, a match that turns the heading away from them
       // (beyond both measurements' errors) is the odd one out: gated.
-      const WallMeasurement w = AlignWalls(wall_normals, prediction.pose, prediction.covariance);
+      const WallMeasurement w = AlignWalls(wall_directions, prediction.pose, prediction.covariance);
       const double rw = options_.wall_sigma_rad * options_.wall_sigma_rad;
       if (w.aligned && w.trusted &&
           w.offset_rad * w.offset_rad / (prediction.covariance(2, 2) + rw) <= options_.wall_gate_mahalanobis2) {
@@ -607,7 +614,7 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
   }
   if (use_walls && u.outcome != MatchOutcome::kMapStart) {
     // The heading measured by the walls at the updated pose (the prediction's, when coasting).
-    const WallMeasurement w = AlignWalls(wall_normals, pose_, covariance_);
+    const WallMeasurement w = AlignWalls(wall_directions, pose_, covariance_);
     u.wall_offset_rad = w.offset_rad;
     u.wall_contrast = w.contrast;
     u.wall_measured = w.aligned && ApplyWalls(w.offset_rad, &pose_, &covariance_);
@@ -651,22 +658,16 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     if (map_.size() > 0 && map_.HasPointWithin(w, options_.add_distance_m)) continue;
     if (map_.Add(w, Rotate(c, s, normals[i]))) {
       ++u.added;
-      if (!wall_normals.empty()) walls_.Add(Rotate(c, s, wall_normals[i]));
+      if (!wall_directions.empty()) walls_.AddDirection(wall_directions[i] + pose_.theta_rad);
     }
   }
   return u;
 }
 
-LaserSlam::WallMeasurement LaserSlam::AlignWalls(const std::vector<Eigen::Vector2d>& normals_robot, const Pose2& pose,
+LaserSlam::WallMeasurement LaserSlam::AlignWalls(const std::vector<double>& directions_robot, const Pose2& pose,
                                                   const Eigen::Matrix3d& covariance) const {
   WallMeasurement w;
-  const double c = std::cos(pose.theta_rad), s = std::sin(pose.theta_rad);
-  std::vector<Eigen::Vector2d> normals;
-  normals.reserve(normals_robot.size());
-  for (const Eigen::Vector2d& n : normals_robot) {
-    if (!n.isZero()) normals.push_back(Rotate(c, s, n));
-  }
-  const auto a = walls_.Align(normals, options_.wall_window_rad, options_.wall_kernel_rad);
+  const auto a = walls_.Align(directions_robot, pose.theta_rad, options_.wall_window_rad);
   if (!a) return w;
   w.offset_rad = a->offset_rad;
   w.contrast = a->contrast;

@@ -26,39 +26,84 @@ std::optional<ScanMatcher> ParseScanMatcher(const std::string& name) {
   return std::nullopt;
 }
 
-std::vector<Eigen::Vector2d> ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours, double max_gap_m) {
-  std::vector<Eigen::Vector2d> normals(points.size(), Eigen::Vector2d::Zero());
-  const int n = static_cast<int>(points.size());
-  for (int i = 0; i < n; ++i) {
-    // Neighbours may be farther apart at long range (beams diverge): 5 % of the range.
-    const double gap = std::max(max_gap_m, 0.05 * points[i].norm());
-    Eigen::Vector2d sum = points[i];
-    Eigen::Matrix2d outer = points[i] * points[i].transpose();
-    int count = 1;
-    // Walk outwards on each side while the neighbours stay close to the point.
-    for (const int dir : {-1, 1}) {
-      for (int k = 1; k <= neighbours; ++k) {
-        const int j = i + dir * k;
-        if (j < 0 || j >= n || (points[j] - points[i]).norm() > gap * k) break;
-        sum += points[j];
-        outer += points[j] * points[j].transpose();
-        ++count;
-      }
-    }
-    if (count < 3) continue;
-    const Eigen::Vector2d mean = sum / count;
-    const Eigen::Matrix2d cov = outer / count - mean * mean.transpose();
+namespace {
+
+// Sums of points' offsets from a scan point, and their products (the point itself counted as one
+// at the origin).
+struct Moments {
+  int count = 1;
+  double x = 0, y = 0, xx = 0, xy = 0, yy = 0;
+  void Add(const Eigen::Vector2d& d) {
+    ++count;
+    x += d.x();
+    y += d.y();
+    xx += d.x() * d.x();
+    xy += d.x() * d.y();
+    yy += d.y() * d.y();
+  }
+  // Another's offsets (without its point).
+  void Merge(const Moments& o) {
+    count += o.count - 1;
+    x += o.x;
+    y += o.y;
+    xx += o.xx;
+    xy += o.xy;
+    yy += o.yy;
+  }
+  // The unit normal of the line through the points (principal axes); zero with fewer than 3
+  // points or where they do not lie on a line.
+  Eigen::Vector2d Normal() const {
+    if (count < 3) return Eigen::Vector2d::Zero();
+    const double mx = x / count, my = y / count;
+    const double a = xx / count - mx * mx, b = xy / count - mx * my, c = yy / count - my * my;
     // Closed-form eigen decomposition of the symmetric 2x2 covariance.
-    const double a = cov(0, 0), b = cov(0, 1), c = cov(1, 1);
     const double half_trace = 0.5 * (a + c), det = a * c - b * b;
     const double root = std::sqrt(std::max(0.0, half_trace * half_trace - det));
     const double large = half_trace + root, small = half_trace - root;
-    if (!(large > 0) || small > 0.1 * large) continue;  // not a line
+    if (!(large > 0) || small > 0.1 * large) return Eigen::Vector2d::Zero();  // not a line
     // Eigenvector of the small eigenvalue: the normal.
     const Eigen::Vector2d v = std::abs(b) > 1e-15 ? Eigen::Vector2d(b, small - a)
                                                   : (a < c ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
-    normals[i] = v.normalized();
+    return v.normalized();
   }
+};
+
+}  // namespace
+
+void ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours, int more_neighbours, double max_gap_m,
+                 std::vector<Eigen::Vector2d>* normals, std::vector<Eigen::Vector2d>* more) {
+  const int n = static_cast<int>(points.size());
+  const int reach = std::max(neighbours, more_neighbours);
+  normals->assign(points.size(), Eigen::Vector2d::Zero());
+  if (more) more->assign(points.size(), Eigen::Vector2d::Zero());
+  for (int i = 0; i < n; ++i) {
+    // Neighbours may be farther apart at long range (beams diverge): 5 % of the range.
+    const double gap = std::max(max_gap_m, 0.05 * points[i].norm());
+    const double gap2 = gap * gap;
+    // Walk outwards on each side while the neighbours stay close to the point; the sums of the
+    // first `neighbours` steps and of the first `more_neighbours`.
+    Moments few, many;
+    for (const int dir : {-1, 1}) {
+      Moments side_few, side_many;
+      for (int k = 1; k <= (more ? reach : neighbours); ++k) {
+        const int j = i + dir * k;
+        if (j < 0 || j >= n) break;
+        const Eigen::Vector2d d = points[j] - points[i];
+        if (d.squaredNorm() > gap2 * k * k) break;
+        if (k <= neighbours) side_few.Add(d);
+        if (k <= more_neighbours) side_many.Add(d);
+      }
+      few.Merge(side_few);
+      many.Merge(side_many);
+    }
+    (*normals)[static_cast<size_t>(i)] = few.Normal();
+    if (more) (*more)[static_cast<size_t>(i)] = many.Normal();
+  }
+}
+
+std::vector<Eigen::Vector2d> ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours, double max_gap_m) {
+  std::vector<Eigen::Vector2d> normals;
+  ScanNormals(points, neighbours, neighbours, max_gap_m, &normals, nullptr);
   return normals;
 }
 

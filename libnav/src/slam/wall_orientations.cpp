@@ -2,121 +2,120 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
 namespace snapnav::nav {
-namespace {
 
-// A normal's direction in [0, pi).
-double LineAngle(const Eigen::Vector2d& n) {
-  double a = std::atan2(n.y(), n.x());
+WallOrientations::WallOrientations(double kernel_rad, double bin_rad) : kernel_rad_(kernel_rad) {
+  if (!(bin_rad > 0 && bin_rad <= 0.1)) throw std::invalid_argument("wall orientations: bin must be in (0, 0.1] rad");
+  if (!(kernel_rad > 0 && kernel_rad <= 0.2)) throw std::invalid_argument("wall orientations: kernel must be in (0, 0.2] rad");
+  // A whole number of bins over pi: a direction and the same turned by pi fall in the same bin.
+  const int n = static_cast<int>(std::lround(M_PI / bin_rad));
+  bin_rad_ = M_PI / n;
+  const int half = std::min(static_cast<int>(std::ceil(3 * kernel_rad / bin_rad_)), (n - 1) / 2);
+  for (int k = -half; k <= half; ++k) {
+    const double d = k * bin_rad_ / kernel_rad;
+    kernel_.push_back(std::exp(-0.5 * d * d));
+  }
+  smooth_.assign(static_cast<size_t>(n), 0.0);
+}
+
+double WallOrientations::Direction(const Eigen::Vector2d& normal) {
+  if (normal.isZero()) return std::numeric_limits<double>::quiet_NaN();
+  double a = std::atan2(normal.y(), normal.x());
   if (a < 0) a += M_PI;
   if (a >= M_PI) a -= M_PI;
   return a;
 }
 
-// Adds a normal's direction to a histogram of bins of bin_rad over [0, pi): linear interpolation
-// between the two nearest bins (circular over pi).
-void AddToBins(const Eigen::Vector2d& normal, double weight, double bin_rad, std::vector<double>* bins) {
-  const double f = LineAngle(normal) / bin_rad;
-  const int n = static_cast<int>(bins->size());
-  const int b0 = static_cast<int>(std::floor(f)) % n;
-  const double w1 = f - std::floor(f);
-  (*bins)[static_cast<size_t>(b0)] += weight * (1 - w1);
-  (*bins)[static_cast<size_t>((b0 + 1) % n)] += weight * w1;
-}
-
-}  // namespace
-
-WallOrientations::WallOrientations(double bin_rad) : bin_rad_(bin_rad) {
-  if (!(bin_rad > 0 && bin_rad <= 0.1)) throw std::invalid_argument("wall orientations: bin must be in (0, 0.1] rad");
-  bins_.assign(static_cast<size_t>(std::ceil(M_PI / bin_rad)), 0.0);
-}
-
-void WallOrientations::Add(const Eigen::Vector2d& normal, double weight) {
-  if (normal.isZero() || !(weight > 0)) return;
-  AddToBins(normal, weight, bin_rad_, &bins_);
+void WallOrientations::AddDirection(double direction_rad, double weight) {
+  if (!std::isfinite(direction_rad) || !(weight > 0)) return;
+  // Linear interpolation between the two nearest bins (circular over pi), each spread by the kernel.
+  const int n = static_cast<int>(smooth_.size());
+  const int half = static_cast<int>(kernel_.size() / 2);
+  const double f = direction_rad / bin_rad_;
+  const double fl = std::floor(f);
+  const double w1 = f - fl;
+  int b = static_cast<int>(fl) % n;
+  if (b < 0) b += n;
+  for (const double w : {weight * (1 - w1), weight * w1}) {
+    for (int k = -half; k <= half; ++k) {
+      int i = b + k;
+      if (i < 0) i += n;
+      if (i >= n) i -= n;
+      smooth_[static_cast<size_t>(i)] += w * kernel_[static_cast<size_t>(k + half)];
+    }
+    b = (b + 1) % n;
+  }
   total_ += weight;
-  smooth_valid_ = false;
 }
 
 void WallOrientations::Clear() {
-  std::fill(bins_.begin(), bins_.end(), 0.0);
+  std::fill(smooth_.begin(), smooth_.end(), 0.0);
   total_ = 0;
-  smooth_valid_ = false;
 }
 
 std::optional<WallOrientations::Alignment> WallOrientations::Align(const std::vector<Eigen::Vector2d>& normals,
-                                                                   double window_rad, double kernel_rad) const {
-  if (total_ <= 0 || !(kernel_rad > 0) || !(window_rad > 0)) return std::nullopt;
-  const int n = static_cast<int>(bins_.size());
-  // The map's directions spread by the kernel, normalised so that a lone direction peaks at 1 (kept
-  // between calls until a normal is added).
-  if (!smooth_valid_ || smooth_kernel_rad_ != kernel_rad) {
-    const int half = static_cast<int>(std::ceil(3 * kernel_rad / bin_rad_));
-    std::vector<double> kernel(static_cast<size_t>(2 * half + 1));
-    for (int k = -half; k <= half; ++k) {
-      const double d = k * bin_rad_ / kernel_rad;
-      kernel[static_cast<size_t>(k + half)] = std::exp(-0.5 * d * d);
-    }
-    smooth_.assign(static_cast<size_t>(n), 0.0);
-    for (int b = 0; b < n; ++b) {
-      const double v = bins_[static_cast<size_t>(b)];
-      if (v == 0) continue;
-      for (int k = -half; k <= half; ++k) {
-        int i = b + k;  // circular over pi (half < n)
-        if (i < 0) i += n;
-        if (i >= n) i -= n;
-        smooth_[static_cast<size_t>(i)] += v * kernel[static_cast<size_t>(k + half)];
-      }
-    }
-    const double peak = *std::max_element(smooth_.begin(), smooth_.end());
-    if (peak > 0) {
-      for (double& v : smooth_) v /= peak;
-    }
-    smooth_kernel_rad_ = kernel_rad;
-    smooth_valid_ = true;
-  }
-  const std::vector<double>& smooth = smooth_;
-  if (!(*std::max_element(smooth.begin(), smooth.end()) > 0)) return std::nullopt;
-  // The scan's directions, binned the same way.
-  std::vector<double> scan(static_cast<size_t>(n), 0.0);
+                                                                   double window_rad) const {
+  std::vector<double> directions;
+  directions.reserve(normals.size());
+  for (const Eigen::Vector2d& v : normals) directions.push_back(Direction(v));
+  return Align(directions, 0, window_rad);
+}
+
+std::optional<WallOrientations::Alignment> WallOrientations::Align(const std::vector<double>& directions,
+                                                                   double turn_rad, double window_rad) const {
+  if (total_ <= 0 || !(window_rad > 0) || !std::isfinite(turn_rad)) return std::nullopt;
+  const int n = static_cast<int>(smooth_.size());
+  // The map's directions spread by the kernel, normalised so that a lone direction peaks at 1.
+  const double peak = *std::max_element(smooth_.begin(), smooth_.end());
+  if (!(peak > 0)) return std::nullopt;
+  // The scan's directions, turned and binned as the map's are (without the kernel).
+  scan_.assign(static_cast<size_t>(n), 0.0);
   double scan_total = 0;
-  for (const Eigen::Vector2d& v : normals) {
-    if (v.isZero()) continue;
-    AddToBins(v, 1, bin_rad_, &scan);
+  const double turn = std::fmod(turn_rad, M_PI) + M_PI;  // in (0, 2 pi)
+  for (const double d : directions) {
+    if (!std::isfinite(d)) continue;
+    const double f = (d + turn) / bin_rad_;
+    const double fl = std::floor(f);
+    const double w1 = f - fl;
+    const int b = static_cast<int>(fl) % n;
+    scan_[static_cast<size_t>(b)] += 1 - w1;
+    scan_[static_cast<size_t>((b + 1) % n)] += w1;
     scan_total += 1;
   }
   if (scan_total <= 0) return std::nullopt;
-  std::vector<std::pair<int, double>> occupied;  // the scan's non-empty bins
-  for (int b = 0; b < n; ++b) {
-    if (scan[static_cast<size_t>(b)] != 0) occupied.emplace_back(b, scan[static_cast<size_t>(b)]);
-  }
   const int steps = std::min(static_cast<int>(std::floor(window_rad / bin_rad_)), n / 2);
   // The map's histogram with `steps` bins of its other end on each side: shifts without wrapping.
-  std::vector<double> padded(static_cast<size_t>(n + 2 * steps));
-  for (int i = 0; i < n + 2 * steps; ++i) padded[static_cast<size_t>(i)] = smooth[static_cast<size_t>((i - steps + n) % n)];
-  std::vector<double> score(static_cast<size_t>(2 * steps + 1), 0.0);
-  for (int s = -steps; s <= steps; ++s) {
-    double c = 0;
-    for (const auto& [b, w] : occupied) c += w * padded[static_cast<size_t>(b + s + steps)];
-    score[static_cast<size_t>(s + steps)] = c / scan_total;
+  padded_.resize(static_cast<size_t>(n + 2 * steps));
+  for (int i = 0; i < n + 2 * steps; ++i) padded_[static_cast<size_t>(i)] = smooth_[static_cast<size_t>((i - steps + n) % n)];
+  score_.assign(static_cast<size_t>(2 * steps + 1), 0.0);
+  for (int b = 0; b < n; ++b) {
+    const double w = scan_[static_cast<size_t>(b)];
+    if (w == 0) continue;
+    const double* map = padded_.data() + b;  // map[s + steps]: the map at the scan's bin shifted by s
+    for (int k = 0; k <= 2 * steps; ++k) score_[static_cast<size_t>(k)] += w * map[k];
   }
+  const double norm = 1 / (scan_total * peak);
+  for (double& v : score_) v *= norm;
+  const std::vector<double>& score = score_;
   const auto best = std::max_element(score.begin(), score.end());
   const int i = static_cast<int>(best - score.begin());
+  if (i == 0 || i + 1 == static_cast<int>(score.size())) return std::nullopt;  // no maximum inside the window
   double mean = 0;
   for (double v : score) mean += v;
   mean /= static_cast<double>(score.size());
-  // Sub-bin: the parabola through the best and its neighbours (not at the window's edge).
+  // Sub-bin: the parabola through the best and its neighbours.
   double sub = 0;
-  if (i > 0 && i + 1 < static_cast<int>(score.size())) {
+  {
     const double l = score[static_cast<size_t>(i - 1)], c = score[static_cast<size_t>(i)], r = score[static_cast<size_t>(i + 1)];
     const double den = l - 2 * c + r;
     if (den < 0) sub = std::clamp(0.5 * (l - r) / den, -0.5, 0.5);
   }
   // The best other local maximum, at least 3 kernel widths away: another way the walls could align.
-  const int apart = static_cast<int>(std::ceil(3 * kernel_rad / bin_rad_));
+  const int apart = static_cast<int>(std::ceil(3 * kernel_rad_ / bin_rad_));
   double second = 0;
   for (int k = 1; k + 1 < static_cast<int>(score.size()); ++k) {
     if (std::abs(k - i) < apart) continue;
@@ -128,7 +127,6 @@ std::optional<WallOrientations::Alignment> WallOrientations::Align(const std::ve
   a.offset_rad = ((i - steps) + sub) * bin_rad_;
   a.score = *best;
   a.contrast = mean > 0 ? *best / mean : 0;
-  if (i == 0 || i + 1 == static_cast<int>(score.size())) return std::nullopt;  // no maximum inside the window
   return a;
 }
 

@@ -272,15 +272,15 @@ class LaserSlam {
   Eigen::Matrix3d covariance_;
   PointGridMap map_;
   WallOrientations walls_;  // the map's wall directions (wall_orientation)
-  // The walls' directions (wall_orientation) for a scan (its wall normals in the robot frame) at a
-  // pose: the heading offset that aligns them with the map's; `aligned` when the alignment's
-  // contrast is at least wall_min_contrast.
+  // The walls' directions (wall_orientation) for a scan (WallOrientations::Direction of its wall
+  // normals in the robot frame) at a pose: the heading offset that aligns them with the map's;
+  // `aligned` when the alignment's contrast is at least wall_min_contrast.
   struct WallMeasurement {
     bool aligned = false;
     bool trusted = false;  // the heading is known to half the window (2 std. devs.): the alignment can be no other
     double offset_rad = 0, contrast = 0;
   };
-  WallMeasurement AlignWalls(const std::vector<Eigen::Vector2d>& normals_robot, const Pose2& pose,
+  WallMeasurement AlignWalls(const std::vector<double>& directions_robot, const Pose2& pose,
                              const Eigen::Matrix3d& covariance) const;
   // The offset as a heading measurement (wall_sigma_rad): an EKF update of the pose and its
   // covariance, unless beyond wall_gate_mahalanobis2 (false).

@@ -40,6 +40,10 @@ std::optional<ScanMatcher> ParseScanMatcher(const std::string& name);
 // line (a corner, clutter). The gap grows to 5 % of the range for far points.
 std::vector<Eigen::Vector2d> ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours = 2,
                                          double max_gap_m = 0.3);
+// The same for two neighbourhoods in one pass (the smaller's are the first steps of the larger's
+// walk): *normals from `neighbours`, *more (unless null) from `more_neighbours`.
+void ScanNormals(const std::vector<Eigen::Vector2d>& points, int neighbours, int more_neighbours, double max_gap_m,
+                 std::vector<Eigen::Vector2d>* normals, std::vector<Eigen::Vector2d>* more);
 
 // The rigid transform T minimising sum |T(src_i) - dst_i|^2 (closed form, 2D Kabsch).
 // nullopt with fewer than 2 pairs or a degenerate (single-point) source.

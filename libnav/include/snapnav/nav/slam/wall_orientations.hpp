@@ -17,10 +17,15 @@ namespace snapnav::nav {
 
 class WallOrientations {
  public:
-  // Histogram bins of bin_rad over [0, pi) (a normal and its opposite fall in the same bin).
-  explicit WallOrientations(double bin_rad = 0.25 * 3.14159265358979323846 / 180);
+  // Histogram bins of bin_rad over [0, pi) (a normal and its opposite fall in the same bin); each
+  // direction added is spread by a Gaussian of kernel_rad (the alignment's tolerance).
+  explicit WallOrientations(double kernel_rad = 1 * kDegree, double bin_rad = 0.25 * kDegree);
+  // A normal's line direction in [0, pi); NaN for a zero normal (no wall there).
+  static double Direction(const Eigen::Vector2d& normal);
   // A wall point's normal (map frame; a zero normal is ignored), weighted.
-  void Add(const Eigen::Vector2d& normal, double weight = 1);
+  void Add(const Eigen::Vector2d& normal, double weight = 1) { AddDirection(Direction(normal), weight); }
+  // The same by its Direction (NaN ignored).
+  void AddDirection(double direction_rad, double weight = 1);
   void Clear();
   double total() const { return total_; }
 
@@ -31,20 +36,24 @@ class WallOrientations {
     double contrast = 0;    // the score over its mean across the window (1: nothing to align with)
     double ambiguity = 0;   // the best other local maximum (3 kernel widths or more away) over the best (0: none)
   };
-  // The offset within +-window_rad that best aligns `normals` (map frame at the current heading;
-  // zero normals ignored) with the map's walls, each map direction spread by a Gaussian of
-  // kernel_rad; nullopt without map or scan walls.
-  std::optional<Alignment> Align(const std::vector<Eigen::Vector2d>& normals, double window_rad,
-                                 double kernel_rad) const;
+  // The offset within +-window_rad that best aligns a scan's wall directions (Direction of its
+  // normals in its own frame; NaN ignored), turned by turn_rad (its heading), with the map's walls;
+  // nullopt without map or scan walls, or when the best lies at the window's edge.
+  std::optional<Alignment> Align(const std::vector<double>& directions, double turn_rad, double window_rad) const;
+  // The same for normals already in the map frame.
+  std::optional<Alignment> Align(const std::vector<Eigen::Vector2d>& normals, double window_rad) const;
 
  private:
+  static constexpr double kDegree = 3.14159265358979323846 / 180;
   double bin_rad_;
-  std::vector<double> bins_;
+  double kernel_rad_;
+  std::vector<double> kernel_;  // the Gaussian over 2 half + 1 bins
+  // The histogram of the map's directions spread by the kernel, kept up to date by each Add (an
+  // added direction touches 2 (2 half + 1) bins; re-spreading the whole histogram at every scan
+  // cost a tenth of the scan's update).
+  std::vector<double> smooth_;
   double total_ = 0;
-  // The histogram spread by the kernel and normalised (Align), kept until a normal is added.
-  mutable std::vector<double> smooth_;
-  mutable double smooth_kernel_rad_ = 0;
-  mutable bool smooth_valid_ = false;
+  mutable std::vector<double> scan_, padded_, score_;  // Align's work space
 };
 
 }  // namespace snapnav::nav
