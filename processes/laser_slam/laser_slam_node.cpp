@@ -158,6 +158,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
     ++updates_;
     measured_ += update->outcome == nav::MatchOutcome::kAccepted;
     gated_ += update->outcome == nav::MatchOutcome::kGated;
+    wall_measured_ += update->wall_measured;
     ambiguous_ += update->outcome == nav::MatchOutcome::kAmbiguous;
     no_match_ += update->outcome == nav::MatchOutcome::kNoMatch;
   }
@@ -206,7 +207,12 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
     s.points = u->points;
     s.matches = u->matches;
     s.coasting_scans = u->coasting;
+    s.wall_measured = u->wall_measured;
+    s.wall_gated = u->wall_gated;
+    s.wall_offset_deg = u->wall_offset_rad * kDegPerRad;
+    s.wall_contrast = u->wall_contrast;
   }
+  s.wall_measurements = wall_measured_;
   if (graph_) {
     s.backend = laser_slam_status_t::BACKEND_GRAPH;
     s.keyframes = graph_->keyframes();
@@ -248,6 +254,7 @@ void LaserSlamNode::Report(std::ostream& out) const {
       << maps_published_ << ", skipped " << problems_.skipped_total() << ", internal errors " << problems_.internal_errors() << "\n";
   out << "laser-slam: mean update " << mean_update_ms() << " ms per scan";
   if (slam_) out << ", map " << slam_->map().size() << " points";
+  if (!graph_ && config_.options.wall_orientation) out << ", heading measured by the walls on " << wall_measured_ << " scans";
   if (graph_) {
     out << ", graph back end: " << graph_->keyframes() << " keyframes, loop closures " << graph_->loop_accepted()
         << " accepted / " << graph_->loop_rejected() << " rejected of " << graph_->loop_candidates()

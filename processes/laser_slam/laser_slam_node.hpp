@@ -65,6 +65,7 @@ class LaserSlamNode {
   int64_t updates() const { return updates_; }              // scans given to LaserSlam::Update
   int64_t measured() const { return measured_; }            // updates whose ICP measurement was accepted
   int64_t gated() const { return gated_; }                  // updates whose match was beyond the gate
+  int64_t wall_measured() const { return wall_measured_; }  // updates whose heading the walls measured
   int64_t ambiguous() const { return ambiguous_; }          // updates whose match was ambiguous
   int64_t no_match() const { return no_match_; }            // updates with no usable match
   int64_t odometry() const { return odometry_; }            // decoded odometry messages, skipped ones included
@@ -109,7 +110,7 @@ class LaserSlamNode {
   bool odometry_seen_ = false;
   int64_t last_scan_utime_ = 0;
   int64_t scans_ = 0, updates_ = 0, measured_ = 0, odometry_ = 0, late_odometry_ = 0;
-  int64_t gated_ = 0, ambiguous_ = 0, no_match_ = 0;
+  int64_t gated_ = 0, ambiguous_ = 0, no_match_ = 0, wall_measured_ = 0;
   int64_t poses_published_ = 0, maps_published_ = 0;
   double update_ms_total_ = 0.0;
   glue::HandlerProblems problems_;
