@@ -140,6 +140,18 @@ std::string MissingInput(const Suite& suite, const SuiteEntry& e) {
   return "";
 }
 
+// The map consistency of `estimate` (one pose per scan of `run`) over the scans `reference` has.
+std::optional<double> ConsistencyOver(const SlamLog& log, const SlamRun& run, const std::vector<nav::Pose2>& estimate,
+                                      const Reference& reference, bool reference_poses) {
+  std::vector<std::optional<nav::Pose2>> poses(estimate.size());
+  for (size_t i = 0; i < estimate.size() && i < run.utime.size(); ++i) {
+    if (const auto truth = reference.Find(run.ranges_key[i], run.utime[i])) poses[i] = reference_poses ? *truth : estimate[i];
+  }
+  const MapConsistency c = ComputeMapConsistency(log, poses);
+  if (c.scans == 0) return std::nullopt;
+  return c.median_m;
+}
+
 SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSlamOptions& options,
                      const SlamBackendChoice& backend, const fs::path& dir, const SuiteOptions& so) {
   SuiteResult r;
@@ -202,12 +214,15 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
   r.dead_reckoning = MeasureAte(run.dead_reckoning, run, reference);
   r.ekf = MeasureAte(ekf_run.slam, ekf_run, reference);
   r.ekf_rpe = MeasureRpe(ekf_run.slam, ekf_run, reference);
+  r.ekf_consistency_m = ConsistencyOver(log, ekf_run, ekf_run.slam, reference, false);
+  r.reference_consistency_m = ConsistencyOver(log, ekf_run, ekf_run.slam, reference, true);
   if (graph_run) {
     const GraphSlamRun& g = *graph_run;
     r.graph_ran = true;
     r.graph = MeasureAte(g.run.slam, g.run, reference);
     r.graph_live = MeasureAte(g.live, g.run, reference);
     r.graph_rpe = MeasureRpe(g.run.slam, g.run, reference);
+    r.graph_consistency_m = ConsistencyOver(log, g.run, g.run.slam, reference, false);
     r.graph_front_ms_per_scan = g.front_ms_per_scan();
     r.graph_back_ms_per_scan = g.back_ms_per_scan();
     r.graph_back_max_ms = g.back_max_ms;
@@ -315,16 +330,18 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
 }
 
 std::string Cell(const AteFigure& f, int digits = 3) { return f.measured ? Fixed(f.rmse_m, digits) : "-"; }
+std::string Cell(const std::optional<double>& v, int digits = 3) { return v ? Fixed(*v, digits) : "-"; }
 
 }  // namespace
 
 void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results) {
   out << "| run | scans | laser SLAM ATE [m] | max [m] | thesis [m] | icp-slam [m] | dead reckoning [m] | "
-         "ms/scan (icp-slam) | accepted / gated / ambiguous / no match | goal | result |\n"
-         "|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "map consistency ours / reference [m] | ms/scan (icp-slam) | accepted / gated / ambiguous / no match | goal | "
+         "result |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const SuiteResult& r : results) {
     if (r.skipped) {
-      out << "| " << r.entry.name << " | | | | | | | | | | skipped: " << r.skip_reason << " |\n";
+      out << "| " << r.entry.name << " | | | | | | | | | | | skipped: " << r.skip_reason << " |\n";
       continue;
     }
     std::string goal = r.entry.goal_ate_m > 0 ? "<= " + Fixed(r.entry.goal_ate_m, 2) : "";
@@ -332,7 +349,8 @@ void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results)
     out << "| " << r.entry.name << " | " << r.scans << " | **" << Cell(r.slam) << "** | "
         << (r.slam.measured ? Fixed(r.slam.max_m, 2) : "-") << " | " << Cell(r.thesis) << " | "
         << (r.entry.reference == "icp-slam" ? "(reference)" : Cell(r.icp_slam)) << " | " << Cell(r.dead_reckoning)
-        << " | " << Fixed(r.slam_ms_per_scan, 2) << " (" << (r.icp_slam_ran ? Fixed(r.icp_slam_ms_per_scan, 2) : "-") << ") | "
+        << " | " << Cell(r.backend == "graph" ? r.graph_consistency_m : r.ekf_consistency_m) << " / "
+        << Cell(r.reference_consistency_m) << " | " << Fixed(r.slam_ms_per_scan, 2) << " (" << (r.icp_slam_ran ? Fixed(r.icp_slam_ms_per_scan, 2) : "-") << ") | "
         << r.outcomes.accepted << " / " << r.outcomes.gated << " / " << r.outcomes.ambiguous << " / "
         << r.outcomes.no_match << " | " << goal << " | " << (r.pass ? "pass" : "**fail**: " + r.failed) << " |\n";
   }
@@ -340,8 +358,9 @@ void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results)
 
 void WriteGraphTable(std::ostream& out, const std::vector<SuiteResult>& results) {
   out << "| run | EKF ATE [m] | graph ATE [m] | graph live [m] | RPE 1 m EKF / graph [m] | RPE 10 m EKF / graph [m] | "
-         "closures accepted / rejected / wrong | keyframes | ms/scan front + back (max back) | graph goal | result |\n"
-         "|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "map consistency EKF / graph / reference [m] | closures accepted / rejected / wrong | keyframes | "
+         "ms/scan front + back (max back) | graph goal | result |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   const auto rpe = [](const RpeFigure& f, bool ten) {
     if (!f.measured || (ten && f.segments_10m == 0)) return std::string("-");
     return Fixed(ten ? f.translation_10m_m : f.translation_1m_m, 3);
@@ -353,7 +372,8 @@ void WriteGraphTable(std::ostream& out, const std::vector<SuiteResult>& results)
     if (r.entry.no_worse_than_dead_reckoning) goal += ", <= DR";
     out << "| " << r.entry.name << " | " << Cell(r.ekf) << " | **" << Cell(r.graph) << "** | " << Cell(r.graph_live)
         << " | " << rpe(r.ekf_rpe, false) << " / " << rpe(r.graph_rpe, false) << " | " << rpe(r.ekf_rpe, true) << " / "
-        << rpe(r.graph_rpe, true) << " | " << r.closures.accepted << " / " << r.closures.rejected << " / "
+        << rpe(r.graph_rpe, true) << " | " << Cell(r.ekf_consistency_m) << " / " << Cell(r.graph_consistency_m) << " / "
+        << Cell(r.reference_consistency_m) << " | " << r.closures.accepted << " / " << r.closures.rejected << " / "
         << r.closures.wrong << " | " << r.keyframes << " | " << Fixed(r.graph_front_ms_per_scan, 2) << " + "
         << Fixed(r.graph_back_ms_per_scan, 2) << " (" << Fixed(r.graph_back_max_ms, 0) << ") | " << goal << " | "
         << (r.graph_pass ? "pass" : "**fail**: " + r.graph_failed) << " |\n";
@@ -402,7 +422,8 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
                   << Fixed(r.graph_front_ms_per_scan, 2) << " + " << Fixed(r.graph_back_ms_per_scan, 2)
                   << " ms/scan: " << (r.graph_pass ? "pass" : "FAIL (" + r.graph_failed + ")");
       }
-      std::cerr << " ["
+      std::cerr << "; map consistency EKF " << Cell(r.ekf_consistency_m) << (r.graph_ran ? ", graph " + Cell(r.graph_consistency_m) : "")
+                << ", reference " << Cell(r.reference_consistency_m) << " m ["
                 << Fixed(std::chrono::duration<double>(Clock::now() - t_run).count(), 1) << " s]\n";
     }
   }
@@ -443,7 +464,8 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
            "goal_ate_m,no_worse_than_dead_reckoning,pass,backend,ekf_ate_rmse_m,ekf_rpe_1m_m,ekf_rpe_10m_m,"
            "graph_ate_rmse_m,graph_ate_max_m,graph_live_ate_rmse_m,graph_rpe_1m_m,graph_rpe_1m_deg,graph_rpe_10m_m,"
            "graph_rpe_10m_deg,loop_candidates,loop_accepted,loop_rejected,loop_wrong,loop_switched_off,keyframes,"
-           "corrections,graph_front_ms_per_scan,graph_back_ms_per_scan,graph_back_max_ms,graph_goal_ate_m,graph_pass\n";
+           "corrections,graph_front_ms_per_scan,graph_back_ms_per_scan,graph_back_max_ms,graph_goal_ate_m,graph_pass,"
+           "ekf_map_consistency_m,graph_map_consistency_m,reference_map_consistency_m\n";
     const auto num = [](const AteFigure& f, bool max = false) {
       return f.measured ? Fixed(max ? f.max_m : f.rmse_m, 4) : std::string();
     };
@@ -469,7 +491,9 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
       } else {
         csv << ",,,,,,,,,,,,,,,,,,";
       }
-      csv << "\n";
+      const auto opt = [](const std::optional<double>& v) { return v ? Fixed(*v, 4) : std::string(); };
+      csv << "," << opt(r.ekf_consistency_m) << "," << opt(r.graph_consistency_m) << ","
+          << opt(r.reference_consistency_m) << "\n";
     }
   }
   {
@@ -506,6 +530,9 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
       j[k + "pass"] = r.pass;
       j[k + "png"] = r.png;
       if (r.ekf.measured) j[k + "ekf_ate_rmse_m"] = r.ekf.rmse_m;
+      if (r.ekf_consistency_m) j[k + "ekf_map_consistency_m"] = *r.ekf_consistency_m;
+      if (r.graph_consistency_m) j[k + "graph_map_consistency_m"] = *r.graph_consistency_m;
+      if (r.reference_consistency_m) j[k + "reference_map_consistency_m"] = *r.reference_consistency_m;
       if (r.ekf_rpe.measured) {
         j[k + "ekf_rpe_1m_m"] = r.ekf_rpe.translation_1m_m;
         j[k + "ekf_rpe_10m_m"] = r.ekf_rpe.translation_10m_m;

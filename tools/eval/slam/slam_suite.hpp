@@ -112,6 +112,11 @@ struct SuiteResult {
   bool graph_pass = false;        // the graph back end met graph_goal_ate_m, no wrong closure, <= DR if asked
   std::string graph_failed;
   std::string graph_png;          // the graph's map and trajectory over the reference
+  // Map consistency (ComputeMapConsistency: the median distance of a scan's points to the scans
+  // seen on a revisit), over the scans the reference has: a figure that needs no reference, and the
+  // reference's own, which tells a SLAM that blurs the map from a reference that is off itself.
+  // nullopt where no scan is seen again.
+  std::optional<double> ekf_consistency_m, graph_consistency_m, reference_consistency_m;
 };
 
 struct SuiteOptions {
