@@ -39,7 +39,9 @@ TEST(SlamSuiteFile, ShippedSuiteHasEveryLogAtEveryOdometry) {
   const Suite held = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_heldout.ini");
   EXPECT_EQ(held.entries.size(), 17u);  // 12 of the suite's logs, 4 of CSAIL's corrected log, MRPT's simulated loop
   for (const SuiteEntry& e : held.entries) {
-    if (e.kind == "carmen_corrected") EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
+    if (e.kind == "carmen_corrected") {
+      EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
+    }
     EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, 0.10) << e.name;
   }
 }
