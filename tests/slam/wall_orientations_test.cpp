@@ -45,6 +45,38 @@ TEST(WallOrientations, AlignsAScanTurnedAwayFromTheMapsWalls) {
   }
 }
 
+// A scan's directions in its own frame, turned by its heading, align as its normals turned into the
+// map frame do (LaserSlam computes a scan's directions once and aligns them at two headings); and
+// a direction added by its angle counts as the same normal added (turned by a whole turn, or the
+// other way round: a wall has two sides).
+TEST(WallOrientations, DirectionsTurnedByTheHeadingAlignAsTheTurnedNormals) {
+  const WallOrientations walls = Building();
+  const std::vector<Eigen::Vector2d> map_frame = ScanTurnedBy(3.1);
+  for (const double heading : {-170.0, -33.0, 0.0, 47.5, 179.0}) {
+    std::vector<double> robot_frame;
+    for (const Eigen::Vector2d& n : map_frame) {
+      const double a = -heading * kDeg;  // the normal in the robot's frame
+      robot_frame.push_back(WallOrientations::Direction({std::cos(a) * n.x() - std::sin(a) * n.y(),
+                                                          std::sin(a) * n.x() + std::cos(a) * n.y()}));
+    }
+    const auto a = walls.Align(map_frame, 10 * kDeg);
+    const auto b = walls.Align(robot_frame, heading * kDeg, 10 * kDeg);
+    ASSERT_TRUE(a.has_value() && b.has_value()) << heading;
+    EXPECT_NEAR(b->offset_rad, a->offset_rad, 1e-6) << heading;
+    EXPECT_NEAR(b->contrast, a->contrast, 1e-6) << heading;
+  }
+  EXPECT_TRUE(std::isnan(WallOrientations::Direction(Eigen::Vector2d::Zero())));
+  WallOrientations by_angle, by_normal;
+  by_angle.AddDirection(12 * kDeg + 2 * M_PI);
+  by_angle.AddDirection(102 * kDeg - M_PI);
+  by_normal.Add(Normal(12));
+  by_normal.Add(-Normal(102));
+  const auto x = by_angle.Align(ScanTurnedBy(2), 10 * kDeg), y = by_normal.Align(ScanTurnedBy(2), 10 * kDeg);
+  ASSERT_TRUE(x.has_value() && y.has_value());
+  EXPECT_NEAR(x->offset_rad, y->offset_rad, 1e-9);
+  EXPECT_NEAR(x->offset_rad / kDeg, -2, 0.15);
+}
+
 TEST(WallOrientations, NoAnswerWithoutWallsOrOutsideTheWindow) {
   WallOrientations empty;
   EXPECT_FALSE(empty.Align(ScanTurnedBy(0), 10 * kDeg).has_value()) << "a map without walls";

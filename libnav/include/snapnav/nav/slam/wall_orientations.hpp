@@ -53,7 +53,9 @@ class WallOrientations {
   // cost a tenth of the scan's update).
   std::vector<double> smooth_;
   double total_ = 0;
-  mutable std::vector<double> scan_, padded_, score_;  // Align's work space
+  // Align's work space, kept between calls (no allocation per scan): Align is const but not for
+  // concurrent calls on one object.
+  mutable std::vector<double> scan_, padded_, score_;
 };
 
 }  // namespace snapnav::nav
