@@ -160,6 +160,25 @@ int EvalSlamApp::Run() {
   json["laser_slam_ms_per_scan"] = R4(ms_per_scan);
   json["map_points"] = run.map.size();
   json["thesis_slam_ms_per_scan"] = R4(thesis_run.ms_per_scan());
+  {
+    // Map consistency over every scan (the median distance of a scan's points to the scans seen on a
+    // revisit): needs no reference, so it is the figure a lab's own log gives.
+    const auto every_scan = [](const std::vector<nav::Pose2>& poses) {
+      return std::vector<std::optional<nav::Pose2>>(poses.begin(), poses.end());
+    };
+    const auto figure = [](const eval::MapConsistency& c) {
+      return c.scans > 0 ? Fixed(c.median_m, 4) + " m (" + std::to_string(c.scans) + " scans seen again)"
+                         : std::string("- (no scan seen again)");
+    };
+    const eval::MapConsistency c_slam = eval::ComputeMapConsistency(log, every_scan(run.slam));
+    const eval::MapConsistency c_thesis = eval::ComputeMapConsistency(log, every_scan(thesis_run.slam));
+    const eval::MapConsistency c_dr = eval::ComputeMapConsistency(log, every_scan(run.dead_reckoning));
+    std::cerr << "eval-slam: map consistency over every scan (no reference needed): laser slam " << figure(c_slam)
+              << ", thesis configuration " << figure(c_thesis) << ", dead reckoning " << figure(c_dr) << "\n";
+    if (c_slam.scans > 0) json["laser_slam_map_consistency_all_scans_m"] = R4(c_slam.median_m);
+    if (c_thesis.scans > 0) json["thesis_slam_map_consistency_all_scans_m"] = R4(c_thesis.median_m);
+    if (c_dr.scans > 0) json["dead_reckoning_map_consistency_all_scans_m"] = R4(c_dr.median_m);
+  }
   std::vector<std::vector<nav::Pose2>> tracks = {run.slam, run.dead_reckoning};
   std::vector<std::string> names = {"laser slam", "dead reckoning"};
   std::string title = "laser slam on " + fs::path(log_path).filename().string();
