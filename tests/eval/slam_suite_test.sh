@@ -43,5 +43,7 @@ for n in names:
     assert 0.005 < ref < 0.1, (n, ref)
     assert 0.005 < ours < (1.2 if int(row["every"]) == 1 else 3.0) * ref, (n, ours, ref)
     assert abs(s[n + "_ekf_map_consistency_m"] - ours) < 1e-4, n
+assert os.path.getsize(os.path.join(out, "consistency.png")) > 10000  # the consistency of every run, one chart
+assert "consistency.png" in open(os.path.join(out, "suite.md")).read()
 print("suite: %d runs within their bounds" % len(names))
 PY

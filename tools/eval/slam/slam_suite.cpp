@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -454,6 +456,34 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
             "reference. "
          << graph_passed << " of " << graph_runs << " runs meet the graph back end's goals.\n\n";
       WriteGraphTable(md, results);
+    }
+    // Map consistency per run: the EKF's, the graph's and the reference's, side by side.
+    std::vector<plot::BarGroup> groups;
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (const SuiteResult& r : results) {
+      if (r.skipped) continue;
+      groups.push_back({r.entry.name,
+                        {r.ekf_consistency_m.value_or(nan), r.graph_ran ? r.graph_consistency_m.value_or(nan) : nan,
+                         r.reference_consistency_m.value_or(nan)}});
+    }
+    double highest = 0;
+    for (const plot::BarGroup& g : groups) {
+      for (const double v : g.values) {
+        if (std::isfinite(v)) highest = std::max(highest, v);
+      }
+    }
+    if (highest > 0) {
+      plot::Axes axes;
+      axes.y_min = 0;
+      axes.y_max = 1.35 * highest;  // room for the legend above the bars
+      axes.title = "Map consistency per run (lower is sharper; needs no reference)";
+      axes.y_label = "median distance to scans seen again [m]";
+      plot::SavePng(plot::BarChart(axes, {"EKF", "graph back end", "reference"}, groups,
+                                   {std::max(800, 120 * static_cast<int>(groups.size())), 500}),
+                    (out / "consistency.png").string());
+      md << "\n## Map consistency\n\nThe median distance of a scan's points to the scans seen again at that place "
+            "(over the scans the reference has), for each trajectory: a figure that needs no reference.\n\n"
+            "![map consistency per run](consistency.png)\n";
     }
   }
   {
