@@ -130,11 +130,11 @@ void LaserSlam::ResetMap(const std::vector<Eigen::Vector2d>& points, const std::
   for (size_t i = 0; i < points.size(); ++i) AddMapPoint(options_, points[i], normals[i], &map_);
 }
 
-bool LaserSlam::AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
+void LaserSlam::AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
                             PointGridMap* map) {
-  if (!p.allFinite()) return false;
-  if (map->size() > 0 && map->HasPointWithin(p, options.add_distance_m)) return false;
-  return map->Add(p, normal);
+  if (!p.allFinite()) return;
+  if (map->size() > 0 && map->HasPointWithin(p, options.add_distance_m)) return;
+  map->Add(p, normal);
 }
 
 LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {

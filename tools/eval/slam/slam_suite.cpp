@@ -142,12 +142,13 @@ std::string MissingInput(const Suite& suite, const SuiteEntry& e) {
   return "";
 }
 
-// The map consistency of `estimate` (one pose per scan of `run`) over the scans `reference` has.
-std::optional<double> ConsistencyOver(const SlamLog& log, const SlamRun& run, const std::vector<nav::Pose2>& estimate,
-                                      const Reference& reference, bool reference_poses) {
-  std::vector<std::optional<nav::Pose2>> poses(estimate.size());
-  for (size_t i = 0; i < estimate.size() && i < run.utime.size(); ++i) {
-    if (const auto truth = reference.Find(run.ranges_key[i], run.utime[i])) poses[i] = reference_poses ? *truth : estimate[i];
+// The map consistency of `estimate` (one pose per scan of `run`; null: the reference's own poses)
+// over the scans `reference` has.
+std::optional<double> ConsistencyOver(const SlamLog& log, const SlamRun& run, const std::vector<nav::Pose2>* estimate,
+                                      const Reference& reference) {
+  std::vector<std::optional<nav::Pose2>> poses(run.utime.size());
+  for (size_t i = 0; i < run.utime.size() && (!estimate || i < estimate->size()); ++i) {
+    if (const auto truth = reference.Find(run.ranges_key[i], run.utime[i])) poses[i] = estimate ? (*estimate)[i] : *truth;
   }
   const MapConsistency c = ComputeMapConsistency(log, poses);
   if (c.scans == 0) return std::nullopt;
@@ -216,15 +217,15 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
   r.dead_reckoning = MeasureAte(run.dead_reckoning, run, reference);
   r.ekf = MeasureAte(ekf_run.slam, ekf_run, reference);
   r.ekf_rpe = MeasureRpe(ekf_run.slam, ekf_run, reference);
-  r.ekf_consistency_m = ConsistencyOver(log, ekf_run, ekf_run.slam, reference, false);
-  r.reference_consistency_m = ConsistencyOver(log, ekf_run, ekf_run.slam, reference, true);
+  r.ekf_consistency_m = ConsistencyOver(log, ekf_run, &ekf_run.slam, reference);
+  r.reference_consistency_m = ConsistencyOver(log, ekf_run, nullptr, reference);
   if (graph_run) {
     const GraphSlamRun& g = *graph_run;
     r.graph_ran = true;
     r.graph = MeasureAte(g.run.slam, g.run, reference);
     r.graph_live = MeasureAte(g.live, g.run, reference);
     r.graph_rpe = MeasureRpe(g.run.slam, g.run, reference);
-    r.graph_consistency_m = ConsistencyOver(log, g.run, g.run.slam, reference, false);
+    r.graph_consistency_m = ConsistencyOver(log, g.run, &g.run.slam, reference);
     r.graph_front_ms_per_scan = g.front_ms_per_scan();
     r.graph_back_ms_per_scan = g.back_ms_per_scan();
     r.graph_back_max_ms = g.back_max_ms;

@@ -342,7 +342,7 @@ class LaserSlam {
   void ResetMap(PointGridMap map) { map_ = std::move(map); }
   static PointGridMap MakeMap(const LaserSlamOptions& options);
   // Adds p to the map unless a point already kept lies within options' add_distance_m (ResetMap's rule).
-  static bool AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
+  static void AddMapPoint(const LaserSlamOptions& options, const Eigen::Vector2d& p, const Eigen::Vector2d& normal,
                           PointGridMap* map);
 
  private:
