@@ -37,13 +37,20 @@ TEST(SlamSuiteFile, ShippedSuiteHasEveryLogAtEveryOdometry) {
   EXPECT_TRUE(s.graph);
   for (const SuiteEntry& e : s.entries) EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, e.name == "csail" ? 0.05 : 0.10) << e.name;
   const Suite held = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_heldout.ini");
-  EXPECT_EQ(held.entries.size(), 17u);  // 12 of the suite's logs, 4 of CSAIL's corrected log, MRPT's simulated loop
+  // 12 of the suite's logs, 4 of CSAIL's corrected log, MRPT's simulated loop, and 11 runs through a
+  // 5.6 m laser (each lab at noise 0 and 1, CSAIL raw)
+  EXPECT_EQ(held.entries.size(), 28u);
+  int short_range = 0;
   for (const SuiteEntry& e : held.entries) {
+    const bool r56 = e.name.size() > 5 && e.name.compare(e.name.size() - 5, 5, "-r5.6") == 0;
+    EXPECT_DOUBLE_EQ(e.laser_max_range_m, r56 ? 5.6 : 0.0) << e.name;
+    short_range += r56;
     if (e.kind == "carmen_corrected") {
       EXPECT_GE(e.noise_seed, 3) << e.name << ": held-out runs use seeds the suite does not";
     }
     EXPECT_DOUBLE_EQ(e.graph_goal_ate_m, 0.10) << e.name;
   }
+  EXPECT_EQ(short_range, 11);
 }
 
 TEST(SlamSuiteFile, BadSuiteIsAnErrorNamingFileAndKey) {
@@ -60,6 +67,20 @@ TEST(SlamSuiteFile, BadSuiteIsAnErrorNamingFileAndKey) {
     const std::string what = e.what();
     EXPECT_NE(what.find("bad.ini"), std::string::npos) << what;
     EXPECT_NE(what.find("no_worse_than_dead_reckonin"), std::string::npos) << what;
+  }
+  // A laser range that is not a range, or on a rawlog: refused, naming the key.
+  const std::string head = "[suite]\ndata = .\nraw_like_tool = x.py\nlaser_slam_config = l.ini\nicp_slam = false\n";
+  const std::string run = "log = a.gz\ngoal_ate_m = 0.3\nno_worse_than_dead_reckoning = true\n";
+  for (const std::string bad : {"[a]\nkind = carmen_corrected\nreference = corrected\nnoise = 1\nseed = 1\nevery = 1\n"
+                                "laser_max_range_m = 0\n",
+                                "[a]\nkind = rawlog\nreference = r.csv\nlaser_max_range_m = 5.6\n"}) {
+    std::ofstream(path) << head << bad << run;
+    try {
+      LoadSuite(path);
+      ADD_FAILURE() << "loaded: " << bad;
+    } catch (const glue::ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find("laser_max_range_m"), std::string::npos) << e.what();
+    }
   }
   std::filesystem::remove_all(dir);
 }
@@ -121,6 +142,61 @@ TEST(SlamReference, ReadsTheGroundTruthOfMrptsSimulatedLoop) {
   const Reference r = LoadReference(path);
   EXPECT_EQ(r.by_time.size(), 1734u);
   EXPECT_EQ(r.by_time.front().utime, 1464600320989009);
+}
+
+// A log whose laser reaches less far than the reference's (a shorter-range laser, or log-import's
+// --flaser-max-range-m): its far readings are no-returns, so no scan has the reference's ranges;
+// the scans pair by their readings below the lower maximum range, in order.
+TEST(SlamReference, PairsALogOfShorterRangeByItsNearReadings) {
+  const auto dir = std::filesystem::temp_directory_path() / "snapnav_slam_reference_range_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "corrected.log").string();
+  constexpr int kBeams = 20;
+  auto ranges = [](int scan) {
+    std::vector<float> r(kBeams);
+    for (int b = 0; b < kBeams; ++b) r[b] = static_cast<float>(1.0 + 0.37 * ((b * 7 + scan * 3) % 23));  // 1-9.1 m
+    return r;
+  };
+  {
+    std::ofstream out(path);
+    for (int scan = 0; scan < 6; ++scan) {
+      out << "FLASER " << kBeams;
+      for (float r : ranges(scan)) out << " " << r;
+      out << " " << scan << " " << 0.5 * scan << " 0.1 0 0 0 " << 100 + scan << " host " << 100 + scan << "\n";
+    }
+  }
+  // The log: scans 1-4 of the reference through a 5.6 m laser, and one scan the reference lacks.
+  SlamLog log;
+  auto add_scan = [&log](std::vector<float> r, float range_max) {
+    for (float& v : r) v = std::min(v, range_max);
+    SlamStep s;
+    s.is_scan = true;
+    s.range_max_m = range_max;
+    s.ranges_key.assign(reinterpret_cast<const char*>(r.data()), r.size() * sizeof(float));
+    log.steps.push_back(s);
+    ++log.scans;
+  };
+  for (int scan = 1; scan <= 4; ++scan) add_scan(ranges(scan), 5.6f);
+  add_scan(std::vector<float>(kBeams, 2.5f), 5.6f);
+  const Reference r = LoadReference(path, &log);
+  EXPECT_EQ(r.paired_exactly, 0);
+  EXPECT_EQ(r.paired_by_overlap, 4);
+  for (int scan = 1; scan <= 4; ++scan) {
+    const auto p = r.Find(log.steps[scan - 1].ranges_key, 0);
+    ASSERT_TRUE(p.has_value()) << "scan " << scan;
+    EXPECT_DOUBLE_EQ(p->x_m, scan);
+    EXPECT_DOUBLE_EQ(p->y_m, 0.5 * scan);
+  }
+  EXPECT_FALSE(r.Find(log.steps[4].ranges_key, 0).has_value());
+  // A near reading that differs is another scan: not paired.
+  SlamLog other;
+  std::swap(other, log);
+  auto changed = ranges(2);
+  for (float& v : changed) v = v < 5.6f ? v + 0.01f : v;
+  add_scan(changed, 5.6f);
+  const Reference none = LoadReference(path, &log);
+  EXPECT_EQ(none.paired_exactly + none.paired_by_overlap, 0);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -108,7 +108,7 @@ int Main(int argc, char** argv) {
     }
     std::sort(reference.by_time.begin(), reference.by_time.end(), [](const auto& a, const auto& b) { return a.utime < b.utime; });
   } else {
-    reference = eval::LoadReference(reference_path);
+    reference = eval::LoadReference(reference_path, &log);
   }
   std::cerr << "localize-eval: " << log_path << ": " << log.scans << " scans, " << log.odometry << " odometry; map " << map_path
             << " " << map.width << " x " << map.height << " cells; reference " << reference_path << "\n";

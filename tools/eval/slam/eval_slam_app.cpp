@@ -1,7 +1,7 @@
 // eval-slam's app (eval_slam_app.hpp): dead reckoning and laser SLAM (thesis 5.3) run in lockstep over an
 // LCM log of laser scans and odometry (made by log-import), with the absolute trajectory error against a
 // reference: a CSV of utime,x,y,theta, or a CARMEN log of corrected poses whose scans are paired with
-// the log's by identical ranges. With --icp-slam, MRPT's icp-slam runs on the rawlog or CARMEN log the
+// the log's by identical ranges (or their near readings). With --icp-slam, MRPT's icp-slam runs on the rawlog or CARMEN log the
 // LCM log was imported from (icp_slam.hpp), beside ours: its trajectory is paired with ours by scan time
 // and compared (RMS difference after SE(2) alignment, time per scan), and measured against the
 // reference too.
@@ -55,7 +55,8 @@ bool EvalSlamApp::Initialize(int argc, char** argv) {
                     "(see log-import) and writes trajectories, a map image and summary.json; with --reference,\n"
                     "the ATE (RMSE after SE(2) alignment) of each against a CSV (utime,x,y,theta) or MRPT's\n"
                     "ground truth (.txt: timestamp x y phi), paired by time, or a CARMEN log of corrected poses,\n"
-                    "paired with the log's scans by identical ranges. With --icp-slam, MRPT's\n"
+                    "paired with the log's scans by identical ranges (or by the readings below the lower maximum\n"
+                    "range, where the log's laser reaches less far). With --icp-slam, MRPT's\n"
                     "icp-slam runs beside it on the rawlog or CARMEN log the LCM log was imported from (work files\n"
                     "and the generated config in OUT/icp-slam/): time per scan, RMS difference from our trajectory\n"
                     "(paired by scan time, after SE(2) alignment) and its ATE against the reference. The laser SLAM\n"
@@ -223,7 +224,7 @@ int EvalSlamApp::Run() {
   }
 
   if (!reference_path.empty()) {
-    const eval::Reference ref = eval::LoadReference(reference_path);
+    const eval::Reference ref = eval::LoadReference(reference_path, &log);
     const auto slam_pairs = eval::PairWithReference(run.slam, run, ref);
     const auto dr_pairs = eval::PairWithReference(run.dead_reckoning, run, ref);
     if (slam_pairs.size() < 2) throw std::runtime_error("fewer than 2 scans of the log pair with the reference");

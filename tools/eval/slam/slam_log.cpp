@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <iostream>
@@ -83,6 +84,7 @@ SlamLog LoadSlamLog(const std::string& path, bool progress) {
       step.points = nav::ScanToPoints(s->ranges_m, s->angle_min_rad, s->angle_increment_rad, s->range_min_m,
                                       s->range_max_m, nav::Pose2{s->sensor_x_m, s->sensor_y_m, s->sensor_theta_rad});
       step.ranges_key = RangesKey(*s);
+      step.range_max_m = s->range_max_m;
       if (log.beams == 0) log.beams = static_cast<int>(s->ranges_m.size());
       log.steps.push_back(std::move(step));
       ++log.scans;
@@ -153,7 +155,59 @@ void ReadTimedPoses(const std::string& path, bool mrpt, Reference* ref) {
 
 }  // namespace
 
-Reference LoadReference(const std::string& path) {
+namespace {
+
+std::vector<float> RangesOfKey(const std::string& key) {
+  std::vector<float> r(key.size() / sizeof(float));
+  std::memcpy(r.data(), key.data(), r.size() * sizeof(float));
+  return r;
+}
+
+// Whether two readings of the same scan agree (AlignReference).
+bool SameReading(const std::vector<float>& a, float a_max, const std::vector<float>& b, float b_max) {
+  if (a.size() != b.size() || a.empty()) return false;
+  constexpr float kTolerance = 0.001f;
+  const float cap = std::min(a_max, b_max) - kTolerance;
+  size_t compared = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const bool a_far = a[i] >= cap, b_far = b[i] >= cap;
+    if (a_far != b_far) return false;
+    if (a_far) continue;
+    if (std::abs(a[i] - b[i]) > kTolerance) return false;
+    ++compared;
+  }
+  return compared >= std::max<size_t>(5, a.size() / 10);
+}
+
+}  // namespace
+
+void AlignReference(const SlamLog& log, Reference* reference) {
+  reference->paired_exactly = reference->paired_by_overlap = 0;
+  if (reference->scans.empty()) return;
+  std::vector<const SlamStep*> scans;
+  for (const SlamStep& s : log.steps) {
+    if (!s.is_scan) continue;
+    scans.push_back(&s);
+    if (reference->by_ranges.count(s.ranges_key)) ++reference->paired_exactly;
+  }
+  const size_t reference_scans = reference->by_ranges.size();
+  if (static_cast<size_t>(reference->paired_exactly) >= std::min(reference_scans, scans.size())) return;
+  std::map<std::string, nav::Pose2> added;
+  size_t next = 0;
+  for (const Reference::Scan& r : reference->scans) {
+    for (size_t k = next; k < scans.size(); ++k) {
+      if (!SameReading(RangesOfKey(scans[k]->ranges_key), scans[k]->range_max_m, r.ranges_m, r.range_max_m)) continue;
+      if (!reference->by_ranges.count(scans[k]->ranges_key) && added.emplace(scans[k]->ranges_key, r.pose).second) {
+        ++reference->paired_by_overlap;
+      }
+      next = k + 1;
+      break;
+    }
+  }
+  reference->by_ranges.insert(added.begin(), added.end());
+}
+
+Reference LoadReference(const std::string& path, const SlamLog* log) {
   Reference ref;
   ref.path = path;
   if (EndsWith(path, ".txt") || EndsWith(path, ".csv")) {
@@ -169,6 +223,7 @@ Reference LoadReference(const std::string& path) {
   // Each FLASER line gives a scan and its pose, next to each other in the output (the
   // corrected log's times are truncated, so times do not tell lines apart).
   std::optional<std::string> pending_scan;
+  float pending_range_max_m = 0;
   std::optional<nav::Pose2> pending_pose;
   for (const auto& e : sink.events) {
     if (e.channel == channels::kLaserScan) {
@@ -176,15 +231,18 @@ Reference LoadReference(const std::string& path) {
       if (s.decode(e.payload.data(), 0, static_cast<int>(e.payload.size())) <= 0) continue;
       if (pending_pose) {
         ref.by_ranges.emplace(RangesKey(s), *pending_pose);
+        ref.scans.push_back({s.ranges_m, s.range_max_m, *pending_pose});
         pending_pose.reset();
       } else {
         pending_scan = RangesKey(s);
+        pending_range_max_m = s.range_max_m;
       }
     } else if (e.channel == importers::kPoseCarmen) {
       pose_t p;
       if (p.decode(e.payload.data(), 0, static_cast<int>(e.payload.size())) <= 0) continue;
       if (pending_scan) {
         ref.by_ranges.emplace(*pending_scan, glue::FromPoseMsg(p));
+        ref.scans.push_back({RangesOfKey(*pending_scan), pending_range_max_m, glue::FromPoseMsg(p)});
         pending_scan.reset();
       } else {
         pending_pose = glue::FromPoseMsg(p);
@@ -193,6 +251,18 @@ Reference LoadReference(const std::string& path) {
   }
   std::cerr << "eval-slam: reference " << path << ": " << ref.by_ranges.size() << " scans with poses\n";
   if (ref.by_ranges.empty()) throw std::runtime_error("reference " + path + " holds no scans with poses");
+  if (log) {
+    const size_t reference_scans = ref.by_ranges.size();
+    AlignReference(*log, &ref);
+    const int paired = ref.paired_exactly + ref.paired_by_overlap;
+    std::cerr << "eval-slam: " << paired << " of the log's " << log->scans << " scans paired with the reference's "
+              << reference_scans << " (" << ref.paired_exactly << " by identical ranges, " << ref.paired_by_overlap
+              << " by their readings below the lower maximum range)\n";
+    if (2 * static_cast<size_t>(paired) < std::min<size_t>(reference_scans, static_cast<size_t>(log->scans))) {
+      std::cerr << "eval-slam: warning: fewer than half of the scans pair with the reference " << path
+                << ": is it the reference of this log? Its figures are over " << paired << " scans only\n";
+    }
+  }
   return ref;
 }
 

@@ -2,7 +2,7 @@
 // Laser SLAM evaluation inputs: an LCM log of LASER_SCAN and ODOMETRY read into memory (so
 // runs and benchmarks replay it without decoding again), a reference trajectory (a CSV of
 // utime,x,y,theta or a CARMEN log of corrected poses whose scans pair with the log's by
-// identical ranges), and a run of dead reckoning and laser SLAM in lockstep over the log.
+// identical ranges, or by their near readings: AlignReference), and a run of dead reckoning and laser SLAM in lockstep over the log.
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -25,6 +25,7 @@ struct SlamStep {
   nav::Pose2 odometry_delta;                 // !is_scan: increment in the robot frame
   std::vector<Eigen::Vector2d> points;       // is_scan: valid points in the robot frame
   std::string ranges_key;                    // is_scan: the raw ranges, for pairing with a reference
+  float range_max_m = 0;                     // is_scan: the scan's maximum range (readings at it: no return)
 };
 
 struct SlamLog {
@@ -55,11 +56,31 @@ struct Reference {
   std::string path;
   std::map<std::string, nav::Pose2> by_ranges;
   std::vector<nav::StampedPose> by_time;
+  // A CARMEN reference's scans in file order (for pairing a log whose ranges were processed
+  // otherwise: AlignReference).
+  struct Scan {
+    std::vector<float> ranges_m;
+    float range_max_m = 0;
+    nav::Pose2 pose;
+  };
+  std::vector<Scan> scans;
+  int paired_exactly = 0, paired_by_overlap = 0;  // the log's scans paired (with a log: LoadReference)
   // The reference pose of a scan: by identical ranges, else nearest in time within max_dt_us.
   std::optional<nav::Pose2> Find(const std::string& ranges_key, int64_t utime, int64_t max_dt_us = 50000) const;
 };
-// Throws std::runtime_error naming the file and line on malformed input.
-Reference LoadReference(const std::string& path);
+// Throws std::runtime_error naming the file and line on malformed input. With `log`, a CARMEN
+// reference is paired with the log's scans (AlignReference) and the pairing printed, with a warning
+// when fewer than half of the reference's scans pair.
+Reference LoadReference(const std::string& path, const SlamLog* log = nullptr);
+
+// Pairs the log's scans with a CARMEN reference's scans. By identical ranges first; where that
+// leaves reference scans unpaired (the log's ranges were processed otherwise: a laser of shorter
+// range, or an importer's lower maximum range, turns far readings into no-returns), by their
+// overlap: the two sequences are walked in order and a reference scan pairs with the next log scan
+// of the same beam count whose readings agree (within 1 mm) wherever both are below the lower of
+// the two maximum ranges, and are both at or beyond it elsewhere, on at least a tenth of the beams.
+// The pairs are added to by_ranges under the log's ranges, so Find serves them.
+void AlignReference(const SlamLog& log, Reference* reference);
 
 // The pose of every scan of a run.
 struct SlamRun {

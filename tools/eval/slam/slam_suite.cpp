@@ -122,6 +122,13 @@ Suite LoadSuite(const std::string& path) {
                                 "] noise must be >= 0 and every >= 1");
       }
     }
+    if (ini.Has(name, "laser_max_range_m")) {
+      e.laser_max_range_m = ini.GetDouble(name, "laser_max_range_m");
+      const std::string where = path + ":" + std::to_string(ini.KeyLine(name, "laser_max_range_m")) + ": [" + name + "] ";
+      if (e.kind == "rawlog") throw glue::ConfigError(where + "laser_max_range_m applies to CARMEN logs only");
+      if (!(e.laser_max_range_m > 0)) throw glue::ConfigError(where + "laser_max_range_m must be > 0 [m]");
+      if (e.reference == "icp-slam") throw glue::ConfigError(where + "laser_max_range_m cannot have icp-slam as reference");
+    }
     e.goal_ate_m = ini.GetDouble(name, "goal_ate_m");
     e.no_worse_than_dead_reckoning = ini.GetBool(name, "no_worse_than_dead_reckoning");
     if (ini.Has(name, "graph_goal_ate_m")) e.graph_goal_ate_m = ini.GetDouble(name, "graph_goal_ate_m");
@@ -177,7 +184,9 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
     if (e.kind == "rawlog") {
       report = importers::ImportRawlog(input, sink, importers::RawlogOptions{});
     } else {
-      report = importers::ImportCarmenFile(input, sink, importers::CarmenOptions{});
+      importers::CarmenOptions carmen;
+      if (e.laser_max_range_m > 0) carmen.flaser_max_range_m = e.laser_max_range_m;
+      report = importers::ImportCarmenFile(input, sink, carmen);
     }
     sink.Close();
     if (!report.errors.empty()) throw std::runtime_error(input + ": " + report.errors.front());
@@ -197,7 +206,7 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
   r.outcomes = CountOutcomes(run);
   std::optional<IcpSlamRun> icp;
   std::optional<IcpSlamComparison> cmp;
-  if (suite.icp_slam || e.reference == "icp-slam") {  // icp-slam as the reference runs it whatever icp_slam says
+  if ((suite.icp_slam && e.laser_max_range_m == 0) || e.reference == "icp-slam") {  // icp-slam as the reference runs it whatever icp_slam says
     IcpSlamOptions icp_options = so.icp;
     icp_options.progress = false;
     icp = RunIcpSlam(input, (dir / "icp-slam").string(), icp_options);
@@ -210,7 +219,7 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
     reference.path = "icp-slam";
     reference.by_time = icp->poses;
   } else {
-    reference = LoadReference(e.reference);
+    reference = LoadReference(e.reference, &log);
   }
   r.slam = MeasureAte(run.slam, run, reference);
   r.thesis = MeasureAte(thesis.slam, thesis, reference);

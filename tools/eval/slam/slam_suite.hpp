@@ -60,6 +60,10 @@ struct SuiteEntry {
   double goal_ate_m = 0;
   bool no_worse_than_dead_reckoning = false;
   double graph_goal_ate_m = 0;  // the graph back end's (issue 22's goals)
+  // CARMEN kinds: the laser's maximum range as log-import's --flaser-max-range-m (farther readings
+  // become no-returns: a shorter-range laser, as a Hokuyo URG's 5.6 m) [m]; 0: the log's own.
+  // icp-slam, which reads the CARMEN log itself, does not run on such an entry.
+  double laser_max_range_m = 0;
 };
 
 struct Suite {
