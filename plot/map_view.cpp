@@ -30,19 +30,6 @@ std::string FormatMetres(double value, double step) {
   return buf;
 }
 
-// Text turned 90 degrees counter-clockwise, centred on `centre`.
-void DrawTextVertical(cv::Mat& img, const std::string& text, cv::Point centre, double scale) {
-  int baseline = 0;
-  const cv::Size ts = cv::getTextSize(text, kFont, scale, 1, &baseline);
-  cv::Mat patch(ts.height + baseline + 4, ts.width + 4, img.type(), kWhite);
-  cv::putText(patch, text, {2, ts.height + 2}, kFont, scale, kBlack, 1, cv::LINE_AA);
-  cv::Mat turned;
-  cv::rotate(patch, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-  const cv::Rect dst(centre.x - turned.cols / 2, centre.y - turned.rows / 2, turned.cols, turned.rows);
-  const cv::Rect visible = dst & cv::Rect(0, 0, img.cols, img.rows);
-  if (!visible.empty()) turned(visible - dst.tl()).copyTo(img(visible));
-}
-
 }  // namespace
 
 void WorldBounds::Extend(double x_m, double y_m) {
@@ -148,7 +135,7 @@ void MapView::DrawAxes(cv::Mat& img, const std::string& x_label, const std::stri
   const cv::Size xs = cv::getTextSize(x_label, kFont, 0.45, 1, &baseline);
   cv::putText(img, x_label, {area_.x + area_.width / 2 - xs.width / 2, area_.y + area_.height + 36}, kFont, 0.45,
               kBlack, 1, cv::LINE_AA);
-  DrawTextVertical(img, y_label, {area_.x - 38, area_.y + area_.height / 2}, 0.45);
+  PutTextVertical(img, y_label, {area_.x - 38, area_.y + area_.height / 2}, 0.45);
 }
 
 void MapView::DrawScaleBar(cv::Mat& img) const {

@@ -69,20 +69,6 @@ void PutText(cv::Mat& img, const std::string& text, double x, double y, int h_al
   cv::putText(img, text, {cvRound(left), cvRound(y + ts.height / 2.0)}, kFont, scale, colour, 1, cv::LINE_AA);
 }
 
-// Text turned 90 degrees counter-clockwise (reading bottom to top), centred on `centre`.
-void PutTextVertical(cv::Mat& img, const std::string& text, cv::Point centre, double scale) {
-  if (text.empty()) return;
-  int baseline = 0;
-  const cv::Size ts = cv::getTextSize(text, kFont, scale, 1, &baseline);
-  cv::Mat patch(ts.height + baseline + 4, ts.width + 4, img.type(), kWhite);
-  cv::putText(patch, text, {2, ts.height + 2}, kFont, scale, kBlack, 1, cv::LINE_AA);
-  cv::Mat turned;
-  cv::rotate(patch, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-  const cv::Rect dst(centre.x - turned.cols / 2, centre.y - turned.rows / 2, turned.cols, turned.rows);
-  const cv::Rect visible = dst & cv::Rect(0, 0, img.cols, img.rows);
-  if (visible.empty()) return;
-  turned(visible - dst.tl()).copyTo(img(visible));
-}
 
 // Tick label with just enough digits for the step.
 std::string FormatTick(double value, double step) {
@@ -361,6 +347,20 @@ void DrawSeries(cv::Mat& img, const Frame& f, const std::vector<double>& xs, con
 int MaxYTicks(int plot_height_px) { return std::clamp(plot_height_px / 45 + 1, 3, 11); }
 
 }  // namespace
+
+void PutTextVertical(cv::Mat& img, const std::string& text, cv::Point centre, double scale) {
+  if (text.empty()) return;
+  int baseline = 0;
+  const cv::Size ts = cv::getTextSize(text, kFont, scale, 1, &baseline);
+  cv::Mat patch(ts.height + baseline + 4, ts.width + 4, img.type(), kWhite);
+  cv::putText(patch, text, {2, ts.height + 2}, kFont, scale, kBlack, 1, cv::LINE_AA);
+  cv::Mat turned;
+  cv::rotate(patch, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
+  const cv::Rect dst(centre.x - turned.cols / 2, centre.y - turned.rows / 2, turned.cols, turned.rows);
+  const cv::Rect visible = dst & cv::Rect(0, 0, img.cols, img.rows);
+  if (visible.empty()) return;
+  turned(visible - dst.tl()).copyTo(img(visible));
+}
 
 std::vector<double> NiceTicks(double lo, double hi, int max_ticks) {
   if (!std::isfinite(lo) || !std::isfinite(hi)) throw std::invalid_argument("NiceTicks: lo and hi must be finite");

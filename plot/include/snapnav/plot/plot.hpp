@@ -52,6 +52,10 @@ cv::Mat BarChart(const Axes& axes, const std::vector<std::string>& series_names,
 // when it cannot be encoded or written.
 void SavePng(const cv::Mat& image, const std::string& path);
 
+// Text turned 90 degrees counter-clockwise (reading bottom to top), centred on `centre`, black on a
+// white patch (an axis label); clipped to the image; nothing for empty text.
+void PutTextVertical(cv::Mat& img, const std::string& text, cv::Point centre, double scale);
+
 // A fixed palette of 10 distinguishable colours (BGR, Tableau 10), repeating for higher
 // indices. Negative indices wrap too.
 cv::Scalar SeriesColour(int index);
