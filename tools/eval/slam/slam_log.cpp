@@ -192,11 +192,14 @@ void AlignReference(const SlamLog& log, Reference* reference) {
   }
   const size_t reference_scans = reference->by_ranges.size();
   if (static_cast<size_t>(reference->paired_exactly) >= std::min(reference_scans, scans.size())) return;
+  std::vector<std::vector<float>> ranges;
+  ranges.reserve(scans.size());
+  for (const SlamStep* s : scans) ranges.push_back(RangesOfKey(s->ranges_key));
   std::map<std::string, nav::Pose2> added;
   size_t next = 0;
   for (const Reference::Scan& r : reference->scans) {
     for (size_t k = next; k < scans.size(); ++k) {
-      if (!SameReading(RangesOfKey(scans[k]->ranges_key), scans[k]->range_max_m, r.ranges_m, r.range_max_m)) continue;
+      if (!SameReading(ranges[k], scans[k]->range_max_m, r.ranges_m, r.range_max_m)) continue;
       if (!reference->by_ranges.count(scans[k]->ranges_key) && added.emplace(scans[k]->ranges_key, r.pose).second) {
         ++reference->paired_by_overlap;
       }
