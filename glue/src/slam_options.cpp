@@ -39,6 +39,7 @@ const OptionTable<nav::LaserSlamOptions>& LaserSlamOptionTable() {
       .Number("match_sigma_xy_m", "m", &O::match_sigma_xy_m)
       .Degrees("match_sigma_theta_deg", &O::match_sigma_theta_rad)
       .Number("gate_mahalanobis2", "", &O::gate_mahalanobis2)
+      .Number("gate_full_fit", "", &O::gate_full_fit)
       .Number("max_ambiguity", "", &O::max_ambiguity)
       .Flag("ambiguous_update", &O::ambiguous_update)
       .Flag("wall_orientation", &O::wall_orientation)

@@ -315,6 +315,67 @@ TEST(LaserSlam, HeadingSearchRecoversATurnOdometryMissed) {
   EXPECT_LT(std::abs(WrapAngle(slam.pose().theta_rad - start.theta_rad)), 1e-6) << "coasting on the prediction";
 }
 
+// A weak match (gate_full_fit): the same missed turn (24 deg, the prediction uncertain by 8 deg, so
+// inside the gate), seen by a scan of which only a third lies on the mapped walls (the rest on ground
+// the map has not seen). With the gate scaled by the fit (the shipped 0.8) the match is too weak for
+// so large a correction: gated, the filter coasts and the scan does not map; with the whole gate at
+// every fit (0) it is taken. The whole scan (fit above 0.8) is taken either way.
+TEST(LaserSlam, AWeakMatchMustLieCloserToThePrediction) {
+  const sim::Scene scene = SquareRoom();
+  sim::LaserOptions laser;
+  sim::World world(scene, {}, laser, 3);
+  const Pose2 start{2.0, 3.5, 0.3};
+  world.SetTruePose(start);
+  const auto points = [&] {
+    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
+                        {laser.mount_x_m, 0, 0});
+  };
+  const auto first = points();
+  const double turn = 24.0 * M_PI / 180.0;
+  world.SetTruePose({start.x_m, start.y_m, start.theta_rad + turn});
+  const auto whole = points();
+  std::vector<Eigen::Vector2d> weak;
+  for (size_t i = 0; i < whole.size(); i += 3) weak.push_back(whole[i]);
+  const size_t on_walls = weak.size();
+  for (size_t i = 0; i < 2 * on_walls; ++i) {  // new ground: a wall 30 m away, where the map has nothing
+    weak.push_back({30.0, -15.0 + 30.0 * static_cast<double>(i) / static_cast<double>(2 * on_walls)});
+  }
+  LaserSlamOptions shipped;
+  EXPECT_DOUBLE_EQ(shipped.gate_full_fit, 0.8);
+  for (const double full_fit : {0.8, 0.0}) {
+    for (const bool is_weak : {true, false}) {
+      LaserSlamOptions options;
+      options.gate_full_fit = full_fit;
+      options.initial_sigma_theta_rad = 8 * kRadPerDeg;
+      LaserSlam slam(options, start);
+      slam.Update(first);
+      const size_t map_size = slam.map().size();
+      slam.Predict({0, 0, 0});  // odometry saw nothing
+      const LaserSlamUpdate u = slam.Update(is_weak ? weak : whole);
+      std::cout << "gate_full_fit " << full_fit << (is_weak ? ", weak scan" : ", whole scan") << ": "
+                << MatchOutcomeName(u.outcome) << ", fit " << u.fit << ", squared Mahalanobis distance "
+                << u.mahalanobis2 << "\n";
+      ASSERT_TRUE(u.measurement_covariance.allFinite());
+      EXPECT_LT(u.mahalanobis2, options.gate_mahalanobis2) << "inside the full gate";
+      EXPECT_LT(std::abs(WrapAngle(u.measurement.theta_rad - start.theta_rad - turn)), 1 * kRadPerDeg)
+          << "the match finds the turn";
+      if (is_weak) {
+        EXPECT_LT(u.fit, 0.5);
+        EXPECT_GT(u.mahalanobis2, options.gate_mahalanobis2 * u.fit / 0.8) << "beyond the weak match's gate";
+      } else {
+        EXPECT_GT(u.fit, 0.8);
+      }
+      if (is_weak && full_fit > 0) {
+        EXPECT_EQ(u.outcome, MatchOutcome::kGated);
+        EXPECT_EQ(slam.map().size(), map_size) << "a gated scan must not map";
+        EXPECT_LT(std::abs(WrapAngle(slam.pose().theta_rad - start.theta_rad)), 1e-6) << "coasting";
+      } else {
+        EXPECT_EQ(u.outcome, MatchOutcome::kAccepted);
+      }
+    }
+  }
+}
+
 // Odometry that stops reporting while the robot turns (CSAIL: the same odometry pose for up to 5
 // scans, then one increment for the whole turn): the stale-odometry model predicts the frozen
 // scans from the last motion and takes the tracked turn out of the catch-up increment; without

@@ -69,6 +69,7 @@ void LaserSlamOptions::Validate() const {
   if (!(match_sigma_xy_m >= 0) || !(match_sigma_theta_rad >= 0))
     throw std::invalid_argument("laser slam: match_sigma_xy_m and match_sigma_theta_deg must be >= 0");
   if (!(gate_mahalanobis2 >= 0)) throw std::invalid_argument("laser slam: gate_mahalanobis2 must be >= 0 (0: no gate)");
+  if (!(gate_full_fit >= 0 && gate_full_fit <= 1)) throw std::invalid_argument("laser slam: gate_full_fit must be in [0, 1]");
   if (!(outlier_scale >= 1)) throw std::invalid_argument("laser slam: outlier_scale must be >= 1 (1: off)");
   if (!(outlier_min_fit >= 0 && outlier_min_fit <= 1))
     throw std::invalid_argument("laser slam: outlier_min_fit must be in [0, 1]");
@@ -156,6 +157,7 @@ LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {
   thesis.ambiguous_update = false;
   thesis.wall_orientation = false;
   thesis.min_fit = 0;
+  thesis.gate_full_fit = 0;
   thesis.outlier_scale = 1;
   thesis.adaptive_motion_noise = false;
   thesis.update_score_margin = 0;
@@ -457,7 +459,9 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
       }
       if (m.fit < options_.min_fit) {
         m.outcome = MatchOutcome::kNoMatch;
-      } else if (options_.gate_mahalanobis2 > 0 && m.mahalanobis2 > options_.gate_mahalanobis2) {
+      } else if (options_.gate_mahalanobis2 > 0 &&
+                 m.mahalanobis2 > options_.gate_mahalanobis2 *
+                                      (options_.gate_full_fit > 0 ? std::min(1.0, m.fit / options_.gate_full_fit) : 1.0)) {
         m.outcome = MatchOutcome::kGated;
         // Odometry has heavy tails (read at the wrong moment, a wheel slipping): a strong,
         // unambiguous match is kept if the prediction's error is within outlier_scale of its

@@ -108,6 +108,12 @@ struct LaserSlamOptions : MatcherOptions {
   // (chi-square, 3 degrees of freedom: 16.27 for 99.9 %). Beyond it the filter coasts on the
   // prediction and the scan does not map. 0: no gate.
   double gate_mahalanobis2 = 16.27;
+  // A weak match's gate: a match that explains less than gate_full_fit of the scan (its fit) gets
+  // the gate scaled by fit / gate_full_fit: the less of the scan it explains, the closer to the
+  // prediction it must lie (a fifth of a scan far from a sparse map is weak evidence against the
+  // odometry; outlier_min_fit's 0.8, the fit of a strong match). 0: the gate is gate_mahalanobis2
+  // at every fit.
+  double gate_full_fit = 0.8;
   // Adaptive odometry noise: the prediction's noise (motion and interval) is scaled by a factor
   // that follows the innovations of the matches (their squared Mahalanobis distance per degree of
   // freedom, a running mean over about adaptive_window_scans scans), within [adaptive_scale_min,
