@@ -321,19 +321,11 @@ TEST(LaserSlam, HeadingSearchRecoversATurnOdometryMissed) {
 // so large a correction: gated, the filter coasts and the scan does not map; with the whole gate at
 // every fit (0) it is taken. The whole scan (fit above 0.8) is taken either way.
 TEST(LaserSlam, AWeakMatchMustLieCloserToThePrediction) {
-  const sim::Scene scene = SquareRoom();
-  sim::LaserOptions laser;
-  sim::World world(scene, {}, laser, 3);
+  RoomScanner scan_at;
   const Pose2 start{2.0, 3.5, 0.3};
-  world.SetTruePose(start);
-  const auto points = [&] {
-    return ScanToPoints(world.Scan(), laser.angle_min_rad, laser.AngleIncrement(), laser.range_min_m, laser.range_max_m,
-                        {laser.mount_x_m, 0, 0});
-  };
-  const auto first = points();
+  const auto first = scan_at(start);
   const double turn = 24.0 * M_PI / 180.0;
-  world.SetTruePose({start.x_m, start.y_m, start.theta_rad + turn});
-  const auto whole = points();
+  const auto whole = scan_at({start.x_m, start.y_m, start.theta_rad + turn});
   std::vector<Eigen::Vector2d> weak;
   for (size_t i = 0; i < whole.size(); i += 3) weak.push_back(whole[i]);
   const size_t on_walls = weak.size();

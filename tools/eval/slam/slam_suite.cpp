@@ -505,7 +505,7 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
            "graph_ate_rmse_m,graph_ate_max_m,graph_live_ate_rmse_m,graph_rpe_1m_m,graph_rpe_1m_deg,graph_rpe_10m_m,"
            "graph_rpe_10m_deg,loop_candidates,loop_accepted,loop_rejected,loop_wrong,loop_switched_off,keyframes,"
            "corrections,graph_front_ms_per_scan,graph_back_ms_per_scan,graph_back_max_ms,graph_goal_ate_m,graph_pass,"
-           "ekf_map_consistency_m,graph_map_consistency_m,reference_map_consistency_m\n";
+           "ekf_map_consistency_m,graph_map_consistency_m,reference_map_consistency_m,laser_max_range_m\n";
     const auto num = [](const AteFigure& f, bool max = false) {
       return f.measured ? Fixed(max ? f.max_m : f.rmse_m, 4) : std::string();
     };
@@ -533,7 +533,8 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
       }
       const auto opt = [](const std::optional<double>& v) { return v ? Fixed(*v, 4) : std::string(); };
       csv << "," << opt(r.ekf_consistency_m) << "," << opt(r.graph_consistency_m) << ","
-          << opt(r.reference_consistency_m) << "\n";
+          << opt(r.reference_consistency_m) << "," << (e.laser_max_range_m > 0 ? Fixed(e.laser_max_range_m, 2) : "")
+          << "\n";
     }
   }
   {
@@ -554,6 +555,7 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
       j[k + "skipped"] = r.skipped;
       if (r.skipped) continue;
       j[k + "scans"] = r.scans;
+      if (r.entry.laser_max_range_m > 0) j[k + "laser_max_range_m"] = r.entry.laser_max_range_m;
       if (r.slam.measured) {
         j[k + "laser_slam_ate_rmse_m"] = r.slam.rmse_m;
         j[k + "laser_slam_ate_max_m"] = r.slam.max_m;
