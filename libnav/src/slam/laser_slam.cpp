@@ -21,8 +21,6 @@ constexpr int kWallNeighbours = 7;
 constexpr int kNormalNeighbours = 2;
 constexpr double kNormalMaxGapM = 0.3;
 
-Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
-
 }  // namespace
 
 Pose2 EkfPoseUpdate(const Pose2& pose, Eigen::Matrix3d* covariance, const Pose2& z, const Eigen::Matrix3d& r) {
@@ -658,9 +656,9 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
   const double c = std::cos(pose_.theta_rad), s = std::sin(pose_.theta_rad);
   const Eigen::Vector2d t(pose_.x_m, pose_.y_m);
   for (size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector2d w = Rotate(c, s, points[i]) + t;
+    const Eigen::Vector2d w = RotateBy(c, s, points[i]) + t;
     if (map_.size() > 0 && map_.HasPointWithin(w, options_.add_distance_m)) continue;
-    if (map_.Add(w, Rotate(c, s, normals[i]))) {
+    if (map_.Add(w, RotateBy(c, s, normals[i]))) {
       ++u.added;
       if (!wall_directions.empty()) walls_.AddDirection(wall_directions[i] + pose_.theta_rad);
     }

@@ -153,12 +153,10 @@ constexpr size_t kRescoredShifts = 2;
 // ... for the headings whose best raster score is within this fraction of the search's best.
 constexpr double kRescoreMargin = 0.25;
 
-Eigen::Vector2d Rotate(double c, double s, const Eigen::Vector2d& v) { return {c * v.x() - s * v.y(), s * v.x() + c * v.y()}; }
-
 // A pose as a rotation and translation, its sine and cosine computed once for many points.
 struct Rigid {
   explicit Rigid(const Pose2& p) : c(std::cos(p.theta_rad)), s(std::sin(p.theta_rad)), t(p.x_m, p.y_m) {}
-  Eigen::Vector2d operator()(const Eigen::Vector2d& v) const { return Rotate(c, s, v) + t; }
+  Eigen::Vector2d operator()(const Eigen::Vector2d& v) const { return RotateBy(c, s, v) + t; }
   double c, s;
   Eigen::Vector2d t;
 };
@@ -207,7 +205,7 @@ MapMatcher::Icp MapMatcher::Align(const Pose2& start, const std::vector<Eigen::V
         const Eigen::Vector2d& w = world[i];
         const int j = nearest[i];
         if (j < 0) continue;
-        const Eigen::Vector2d scan_normal = Rotate(c, s, normals[i]);
+        const Eigen::Vector2d scan_normal = RotateBy(c, s, normals[i]);
         Eigen::Vector2d n = map_.normals()[static_cast<size_t>(j)];
         if (n.isZero()) n = scan_normal;
         if (n.isZero()) continue;
@@ -286,7 +284,7 @@ MapMatcher::Icp MapMatcher::Align(const Pose2& start, const std::vector<Eigen::V
         // (Pose2::Transform's arithmetic, its sine and cosine computed once.)
         const Eigen::Vector2d at(r.estimate.x_m + c * src[k].x() - s * src[k].y(),
                                  r.estimate.y_m + s * src[k].x() + c * src[k].y());
-        const Eigen::Vector2d n = Rotate(c, s, normals[index[k]]);
+        const Eigen::Vector2d n = RotateBy(c, s, normals[index[k]]);
         if (n.isZero()) continue;  // isolated point or corner: no surface
         const Eigen::Vector2d d_theta(-s * src[k].x() - c * src[k].y(), c * src[k].x() - s * src[k].y());
         const Eigen::Vector3d jac(n.x(), n.y(), n.dot(d_theta));
@@ -398,7 +396,7 @@ std::vector<MapMatcher::Candidate> MapMatcher::SearchPoses(const Pose2& around, 
     const double c = std::cos(around.theta_rad + dt), sn = std::sin(around.theta_rad + dt);
     rotated.clear();
     for (size_t i = 0; i < points.size(); i += stride) {
-      rotated.push_back(Rotate(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
+      rotated.push_back(RotateBy(c, sn, points[i]) + Eigen::Vector2d(around.x_m, around.y_m));
     }
   };
   std::vector<Eigen::Vector2d> shifted;  // the rotated points, shifted

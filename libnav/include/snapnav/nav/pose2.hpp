@@ -23,4 +23,9 @@ struct Pose2 {
   Eigen::Vector2d Transform(const Eigen::Vector2d& point) const;
 };
 
+// `v` rotated by the angle whose cosine and sine are c and s (computed once for many points).
+inline Eigen::Vector2d RotateBy(double c, double s, const Eigen::Vector2d& v) {
+  return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
+}
+
 }  // namespace snapnav::nav
