@@ -199,5 +199,47 @@ TEST(SlamReference, PairsALogOfShorterRangeByItsNearReadings) {
   std::filesystem::remove_all(dir);
 }
 
+// CheckReference: a reference pose turned away from what its scan shows is suspect; the others are not.
+TEST(SlamReferenceCheck, FlagsAPoseItsScanContradicts) {
+  // A 6 m x 4 m room with a box in one corner (no symmetry), every 2 cm of wall.
+  std::vector<Eigen::Vector2d> world;
+  const auto wall = [&](Eigen::Vector2d a, Eigen::Vector2d b) {
+    const int n = static_cast<int>((b - a).norm() / 0.02);
+    for (int i = 0; i <= n; ++i) world.push_back(a + (b - a) * (static_cast<double>(i) / n));
+  };
+  wall({0, 0}, {6, 0});
+  wall({6, 0}, {6, 4});
+  wall({6, 4}, {0, 4});
+  wall({0, 4}, {0, 0});
+  wall({4.5, 3}, {5.2, 3});
+  wall({4.5, 3}, {4.5, 3.6});
+  SlamLog log;
+  Reference reference;
+  for (int k = 0; k < 12; ++k) {
+    const nav::Pose2 pose{1.0 + 0.3 * k, 1.5 + 0.05 * k, 0.1 * k};
+    SlamStep step;
+    step.is_scan = true;
+    step.utime = 1000000 + k * 100000;
+    step.ranges_key = std::to_string(k);
+    for (const Eigen::Vector2d& w : world) step.points.push_back(pose.Inverse().Transform(w));
+    log.steps.push_back(step);
+    ++log.scans;
+    nav::Pose2 recorded = pose;
+    if (k == 8) recorded.theta_rad += 12 * M_PI / 180;  // the reference's own error
+    reference.by_time.push_back({step.utime, recorded});
+  }
+  const ReferenceCheck check = CheckReference(log, reference);
+  EXPECT_EQ(check.checked, 8);  // every scan after the first 4
+  ASSERT_EQ(check.suspects.size(), 1u) << DescribeReferenceCheck(check);
+  EXPECT_EQ(check.suspects[0].scan, 8);
+  EXPECT_NEAR(check.suspects[0].turn_deg, -12, 1);
+  EXPECT_LT(check.suspects[0].fit, 0.6);
+  EXPECT_GT(check.suspects[0].turned_fit, 0.95);
+  EXPECT_NE(DescribeReferenceCheck(check).find("scan 8 (fit"), std::string::npos);
+  // The same reference without the error: nothing suspect.
+  reference.by_time[8].pose.theta_rad -= 12 * M_PI / 180;
+  EXPECT_TRUE(CheckReference(log, reference).suspects.empty());
+}
+
 }  // namespace
 }  // namespace snapnav::eval

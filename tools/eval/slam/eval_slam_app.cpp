@@ -259,6 +259,15 @@ int EvalSlamApp::Run() {
       json["laser_slam_map_consistency_m"] = R4(c_ours.median_m);
       json["reference_map_consistency_m"] = R4(c_ref.median_m);
     }
+    {
+      // The reference's own consistency: poses its scans contradict (a corrected log is another
+      // SLAM's output).
+      const eval::ReferenceCheck check = eval::CheckReference(log, ref);
+      std::cerr << "eval-slam: reference check: " << eval::DescribeReferenceCheck(check) << "\n";
+      eval::WriteReferenceCheckCsv((out / "reference_suspects.csv").string(), check);
+      json["reference_checked_poses"] = check.checked;
+      json["reference_suspect_poses"] = check.suspects.size();
+    }
     const auto thesis_pairs = eval::PairWithReference(thesis_run.slam, thesis_run, ref);
     const auto thesis_ate = nav::ComputeAte(thesis_pairs, nav::AlignSE2(thesis_pairs));
     std::cerr << "eval-slam: " << slam_pairs.size() << " scans paired with the reference; ATE RMSE: laser slam "

@@ -10,9 +10,11 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 
 #include "importers.hpp"
+#include "report_text.hpp"
 #include "snapnav/glue/strings.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
@@ -385,6 +387,94 @@ MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::
     c.median_m = medians[medians.size() / 2];
   }
   return c;
+}
+
+ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, int window, double near_m,
+                              double max_turn_deg, double min_gain) {
+  // Cells of near_m / 2: a point is near the others' when its cell is within two cells of one of theirs.
+  const double cell = near_m / 2;
+  const auto key = [](int64_t x, int64_t y) { return (x << 32) ^ (y & 0xffffffff); };
+  struct Placed {
+    const std::vector<Eigen::Vector2d>* points;
+    nav::Pose2 pose;
+    int scan;
+  };
+  std::vector<Placed> placed;
+  int scan = -1;
+  for (const SlamStep& step : log.steps) {
+    if (!step.is_scan) continue;
+    ++scan;
+    if (step.points.empty()) continue;
+    if (const auto pose = reference.Find(step.ranges_key, step.utime)) placed.push_back({&step.points, *pose, scan});
+  }
+  ReferenceCheck check;
+  const int turns = static_cast<int>(std::floor(max_turn_deg));
+  std::unordered_set<int64_t> near;
+  for (size_t k = static_cast<size_t>(std::max(window, 1)); k < placed.size(); ++k) {
+    near.clear();
+    for (size_t j = k - static_cast<size_t>(window); j < k; ++j) {
+      for (const Eigen::Vector2d& p : *placed[j].points) {
+        const Eigen::Vector2d w = placed[j].pose.Transform(p);
+        const int64_t cx = static_cast<int64_t>(std::floor(w.x() / cell)), cy = static_cast<int64_t>(std::floor(w.y() / cell));
+        for (int64_t dx = -2; dx <= 2; ++dx) {
+          for (int64_t dy = -2; dy <= 2; ++dy) near.insert(key(cx + dx, cy + dy));
+        }
+      }
+    }
+    const auto fit = [&](const nav::Pose2& pose) {
+      size_t n = 0;
+      for (const Eigen::Vector2d& p : *placed[k].points) {
+        const Eigen::Vector2d w = pose.Transform(p);
+        n += near.count(key(static_cast<int64_t>(std::floor(w.x() / cell)), static_cast<int64_t>(std::floor(w.y() / cell))));
+      }
+      return static_cast<double>(n) / static_cast<double>(placed[k].points->size());
+    };
+    ReferenceSuspect s;
+    s.scan = placed[k].scan;
+    s.fit = s.turned_fit = fit(placed[k].pose);
+    ++check.checked;
+    if (s.fit > 1 - min_gain) continue;  // no heading can fit min_gain better
+    // The best heading; where several fit equally (the 0.1 m tolerance), the middle of them.
+    std::vector<double> fits;
+    for (int d = -turns; d <= turns; ++d) {
+      nav::Pose2 turned = placed[k].pose;
+      turned.theta_rad += d * M_PI / 180;
+      fits.push_back(d == 0 ? s.fit : fit(turned));
+    }
+    s.turned_fit = *std::max_element(fits.begin(), fits.end());
+    double sum = 0;
+    int n = 0;
+    for (int d = -turns; d <= turns; ++d) {
+      if (fits[static_cast<size_t>(d + turns)] >= s.turned_fit - 1e-9) {
+        sum += d;
+        ++n;
+      }
+    }
+    s.turn_deg = std::round(sum / n);
+    if (s.turned_fit - s.fit >= min_gain) check.suspects.push_back(s);
+  }
+  return check;
+}
+
+std::string DescribeReferenceCheck(const ReferenceCheck& check) {
+  std::ostringstream o;
+  o << check.suspects.size() << " of " << check.checked << " reference poses disagree with their scans";
+  for (size_t i = 0; i < check.suspects.size(); ++i) {
+    const ReferenceSuspect& s = check.suspects[i];
+    o << (i == 0 ? ": " : ", ") << "scan " << s.scan << " (fit " << Fixed(s.fit, 2) << " at the reference, "
+      << Fixed(s.turned_fit, 2) << " turned " << (s.turn_deg > 0 ? "+" : "") << Fixed(s.turn_deg, 0)
+      << " deg)";
+  }
+  return o.str();
+}
+
+void WriteReferenceCheckCsv(const std::string& path, const ReferenceCheck& check) {
+  std::ofstream csv(path);
+  if (!csv) throw std::runtime_error("cannot write " + path);
+  csv << "scan,fit,turned_fit,turn_deg\n";
+  for (const ReferenceSuspect& s : check.suspects) {
+    csv << s.scan << "," << Fixed(s.fit, 4) << "," << Fixed(s.turned_fit, 4) << "," << s.turn_deg << "\n";
+  }
 }
 
 }  // namespace snapnav::eval

@@ -117,4 +117,28 @@ struct MapConsistency {
 MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::optional<nav::Pose2>>& poses,
                                      int min_separation_scans = 30, double max_distance_m = 0.5, int min_pairs = 30);
 
+// The reference's own consistency: a corrected log is another SLAM's output and can hold poses
+// its scan contradicts (CSAIL's corrected log: three poses 11-20 deg off what their scans show).
+// Each scan with a reference pose, placed there, is compared with the `window` scans with a
+// reference pose before it, placed at theirs: the share of its points within `near_m` of theirs
+// at the reference pose, and the best share over headings within +-max_turn_deg of it (1 deg
+// steps). A pose whose scan fits at least `min_gain` better turned is suspect. Odometry made from
+// such a reference (carmen_raw_like.py) carries the jump.
+struct ReferenceSuspect {
+  int scan = 0;                 // the scan's index in the log (0-based, scans only)
+  double fit = 0;               // share of the scan's points near the previous scans' at the reference pose
+  double turned_fit = 0;        // ... at the best heading
+  double turn_deg = 0;          // that heading less the reference's
+};
+struct ReferenceCheck {
+  int checked = 0;              // scans compared with their predecessors
+  std::vector<ReferenceSuspect> suspects;
+};
+ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, int window = 4, double near_m = 0.1,
+                              double max_turn_deg = 20, double min_gain = 0.15);
+// "0 of 405 reference poses disagree with their scans" or "3 of 402 ...: scan 42 (fit 0.44 at
+// the reference, 0.78 turned +11 deg), ...", and reference_suspects.csv (scan,fit,turned_fit,turn_deg).
+std::string DescribeReferenceCheck(const ReferenceCheck& check);
+void WriteReferenceCheckCsv(const std::string& path, const ReferenceCheck& check);
+
 }  // namespace snapnav::eval

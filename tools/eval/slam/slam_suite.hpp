@@ -121,6 +121,8 @@ struct SuiteResult {
   // reference's own, which tells a SLAM that blurs the map from a reference that is off itself.
   // nullopt where no scan is seen again.
   std::optional<double> ekf_consistency_m, graph_consistency_m, reference_consistency_m;
+  // The reference's poses its scans contradict (CheckReference; the run's reference_suspects.csv).
+  ReferenceCheck reference_check;
 };
 
 struct SuiteOptions {
