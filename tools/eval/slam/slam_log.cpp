@@ -393,7 +393,9 @@ ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, in
                               double max_turn_deg, double min_gain) {
   // Cells of near_m / 2: a point is near the others' when its cell is within two cells of one of theirs.
   const double cell = near_m / 2;
-  const auto key = [](int64_t x, int64_t y) { return (x << 32) ^ (y & 0xffffffff); };
+  const auto key = [](int64_t x, int64_t y) {
+    return (static_cast<uint64_t>(x) << 32) ^ static_cast<uint64_t>(static_cast<uint32_t>(y));
+  };
   struct Placed {
     const std::vector<Eigen::Vector2d>* points;
     nav::Pose2 pose;
@@ -409,8 +411,9 @@ ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, in
   }
   ReferenceCheck check;
   const int turns = static_cast<int>(std::floor(max_turn_deg));
-  std::unordered_set<int64_t> near;
-  for (size_t k = static_cast<size_t>(std::max(window, 1)); k < placed.size(); ++k) {
+  std::unordered_set<uint64_t> near;
+  if (window < 1) throw std::invalid_argument("reference check: window must be >= 1");
+  for (size_t k = static_cast<size_t>(window); k < placed.size(); ++k) {
     near.clear();
     for (size_t j = k - static_cast<size_t>(window); j < k; ++j) {
       for (const Eigen::Vector2d& p : *placed[j].points) {
