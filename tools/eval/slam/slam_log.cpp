@@ -10,7 +10,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
-#include <unordered_set>
 
 
 #include "importers.hpp"
@@ -21,6 +20,7 @@
 #include "snapnav/glue/log_reader.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
+#include "snapnav/nav/slam/point_grid_map.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/pose_t.hpp"
 
@@ -389,13 +389,10 @@ MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::
   return c;
 }
 
-ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, int window, double near_m,
-                              double max_turn_deg, double min_gain) {
-  // Cells of near_m / 2: a point is near the others' when its cell is within two cells of one of theirs.
-  const double cell = near_m / 2;
-  const auto key = [](int64_t x, int64_t y) {
-    return (static_cast<uint64_t>(x) << 32) ^ static_cast<uint64_t>(static_cast<uint32_t>(y));
-  };
+ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, const ReferenceCheckOptions& options) {
+  if (options.window < 1 || !(options.near_m > 0) || !(options.max_turn_deg >= 1) || !(options.min_gain > 0)) {
+    throw std::invalid_argument("reference check: window >= 1, near_m > 0, max_turn_deg >= 1 and min_gain > 0 needed");
+  }
   struct Placed {
     const std::vector<Eigen::Vector2d>* points;
     nav::Pose2 pose;
@@ -410,39 +407,30 @@ ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, in
     if (const auto pose = reference.Find(step.ranges_key, step.utime)) placed.push_back({&step.points, *pose, scan});
   }
   ReferenceCheck check;
-  const int turns = static_cast<int>(std::floor(max_turn_deg));
-  std::unordered_set<uint64_t> near;
-  if (window < 1) throw std::invalid_argument("reference check: window must be >= 1");
-  for (size_t k = static_cast<size_t>(window); k < placed.size(); ++k) {
-    near.clear();
-    for (size_t j = k - static_cast<size_t>(window); j < k; ++j) {
-      for (const Eigen::Vector2d& p : *placed[j].points) {
-        const Eigen::Vector2d w = placed[j].pose.Transform(p);
-        const int64_t cx = static_cast<int64_t>(std::floor(w.x() / cell)), cy = static_cast<int64_t>(std::floor(w.y() / cell));
-        for (int64_t dx = -2; dx <= 2; ++dx) {
-          for (int64_t dy = -2; dy <= 2; ++dy) near.insert(key(cx + dx, cy + dy));
-        }
-      }
+  const int turns = static_cast<int>(std::floor(options.max_turn_deg));
+  const auto window = static_cast<size_t>(options.window);
+  std::vector<double> fits(static_cast<size_t>(2 * turns + 1));
+  for (size_t k = window; k < placed.size(); ++k) {
+    // The previous scans at their reference poses (every point: a cell of a fifth of near_m).
+    nav::PointGridMap before(options.near_m / 5, options.near_m);
+    for (size_t j = k - window; j < k; ++j) {
+      for (const Eigen::Vector2d& p : *placed[j].points) before.Add(placed[j].pose.Transform(p));
     }
     const auto fit = [&](const nav::Pose2& pose) {
       size_t n = 0;
-      for (const Eigen::Vector2d& p : *placed[k].points) {
-        const Eigen::Vector2d w = pose.Transform(p);
-        n += near.count(key(static_cast<int64_t>(std::floor(w.x() / cell)), static_cast<int64_t>(std::floor(w.y() / cell))));
-      }
+      for (const Eigen::Vector2d& p : *placed[k].points) n += before.NearestIndex(pose.Transform(p), options.near_m) >= 0;
       return static_cast<double>(n) / static_cast<double>(placed[k].points->size());
     };
     ReferenceSuspect s;
     s.scan = placed[k].scan;
     s.fit = s.turned_fit = fit(placed[k].pose);
     ++check.checked;
-    if (s.fit > 1 - min_gain) continue;  // no heading can fit min_gain better
-    // The best heading; where several fit equally (the 0.1 m tolerance), the middle of them.
-    std::vector<double> fits;
+    if (s.fit > 1 - options.min_gain) continue;  // no heading can fit min_gain better
+    // The best heading; where several fit equally, the middle of them.
     for (int d = -turns; d <= turns; ++d) {
       nav::Pose2 turned = placed[k].pose;
       turned.theta_rad += d * M_PI / 180;
-      fits.push_back(d == 0 ? s.fit : fit(turned));
+      fits[static_cast<size_t>(d + turns)] = d == 0 ? s.fit : fit(turned);
     }
     s.turned_fit = *std::max_element(fits.begin(), fits.end());
     double sum = 0;
@@ -454,7 +442,7 @@ ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, in
       }
     }
     s.turn_deg = std::round(sum / n);
-    if (s.turned_fit - s.fit >= min_gain) check.suspects.push_back(s);
+    if (s.turned_fit - s.fit >= options.min_gain) check.suspects.push_back(s);
   }
   return check;
 }

@@ -124,18 +124,24 @@ MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::
 // at the reference pose, and the best share over headings within +-max_turn_deg of it (1 deg
 // steps). A pose whose scan fits at least `min_gain` better turned is suspect. Odometry made from
 // such a reference (carmen_raw_like.py) carries the jump.
+struct ReferenceCheckOptions {
+  int window = 4;               // scans before each one [count, >= 1]
+  double near_m = 0.1;          // a point fits within this of the others' [m]
+  double max_turn_deg = 20;     // headings searched on either side [deg]
+  double min_gain = 0.15;       // suspect when turned fits this much better [share of the points]
+};
 struct ReferenceSuspect {
   int scan = 0;                 // the scan's index in the log (0-based, scans only)
   double fit = 0;               // share of the scan's points near the previous scans' at the reference pose
   double turned_fit = 0;        // ... at the best heading
-  double turn_deg = 0;          // that heading less the reference's
+  double turn_deg = 0;          // that heading less the reference's (the middle of equally good ones)
 };
 struct ReferenceCheck {
   int checked = 0;              // scans compared with their predecessors
   std::vector<ReferenceSuspect> suspects;
 };
-ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, int window = 4, double near_m = 0.1,
-                              double max_turn_deg = 20, double min_gain = 0.15);
+// Throws std::invalid_argument on options out of range.
+ReferenceCheck CheckReference(const SlamLog& log, const Reference& reference, const ReferenceCheckOptions& options = {});
 // "0 of 405 reference poses disagree with their scans" or "3 of 402 ...: scan 42 (fit 0.44 at
 // the reference, 0.78 turned +11 deg), ...", and reference_suspects.csv (scan,fit,turned_fit,turn_deg).
 std::string DescribeReferenceCheck(const ReferenceCheck& check);

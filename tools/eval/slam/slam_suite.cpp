@@ -474,10 +474,12 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
     }
     {
       // The references' own consistency (CheckReference).
+      const ReferenceCheckOptions c;
       md << "\n## The references checked against their scans\n\n"
-            "Each reference pose with a scan, against the 4 scans before it at their reference poses: suspect when "
-            "the scan fits at least 0.15 better (share of points within 0.1 m) at another heading within 20 deg. "
-            "Odometry made from such a reference (carmen_raw_like.py) carries the jump.\n\n";
+         << "Each reference pose with a scan, against the " << c.window << " scans before it at their reference "
+         << "poses: suspect when the scan fits at least " << Fixed(c.min_gain, 2) << " better (share of points within "
+         << Fixed(c.near_m, 2) << " m) at another heading within " << Fixed(c.max_turn_deg, 0) << " deg. Odometry made "
+         << "from such a reference (carmen_raw_like.py) carries the jump.\n\n";
       int clean = 0, checked = 0;
       for (const SuiteResult& r : results) {
         if (r.skipped) continue;
