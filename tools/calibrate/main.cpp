@@ -67,7 +67,8 @@ int Main(int argc, char** argv) {
   int device = -1, frames_wanted = 0;
   std::string log_path, channel = "OMNI_FRAME", out_path, png_path, mask_path, mask_out;
   std::string template_path = SNAPNAV_CONFIG_DIR "/omni_camera.ini";
-  double rim_deg = NAN, centre_deg = NAN, min_radius_frac = -1, max_radius_frac = -1, max_std = 0;
+  double rim_deg = NAN, centre_deg = NAN, min_radius_frac = -1, max_radius_frac = -1, max_std = 0,
+         holder_max_frac = -1;
   int grow_px = 2;
   glue::Flags flags(
       "calibrate-mirror",
@@ -97,6 +98,9 @@ int Main(int argc, char** argv) {
                   "the mirror's profile: elevation of the linear model at the centre [deg] (default: --config's)");
   flags.AddDouble("min-radius-frac", &min_radius_frac, "smallest rim radius, of the image's smaller side (default 0.15)");
   flags.AddDouble("max-radius-frac", &max_radius_frac, "largest rim radius, of the image's smaller side (default 0.75)");
+  flags.AddDouble("holder-max-frac", &holder_max_frac,
+                  "where the band inside the strongest circle is flat (a ring holding the mirror), look for the "
+                  "mirror's edge this far inside it, of its radius (default 0.12; 0: off)");
   flags.AddDouble("mask-max-std", &max_std,
                   "mask: grey-level std. dev. below which a pixel is the robot's (0: 3x the noise)");
   flags.AddInt("mask-grow-px", &grow_px, "mask: margin added around the robot's parts [px]");
@@ -135,6 +139,7 @@ int Main(int argc, char** argv) {
   nav::MirrorSearchOptions search;
   if (min_radius_frac > 0) search.min_radius_frac = min_radius_frac;
   if (max_radius_frac > 0) search.max_radius_frac = max_radius_frac;
+  if (holder_max_frac != -1) search.holder_max_frac = holder_max_frac;
   std::string why;
   const auto cal = nav::CalibrateMirror(mean, profile, search, &why);
   if (!cal) throw std::runtime_error(input + ": " + why);

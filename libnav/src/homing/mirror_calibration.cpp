@@ -302,6 +302,8 @@ void MirrorSearchOptions::Validate() const {
   }
   if (!(inner_default_frac >= 0 && inner_default_frac < 1))
     throw std::invalid_argument("mirror search: inner_default_frac in [0, 1)");
+  if (!(holder_max_frac >= 0 && holder_max_frac < 0.5))
+    throw std::invalid_argument("mirror search: holder_max_frac in [0, 0.5)");
 }
 
 std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const MirrorProfile& profile,
@@ -447,6 +449,68 @@ std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const Mir
     return fail("no circle found: the refined rim covers " + Fixed(100 * rim.coverage, 0) +
                 " % of its circumference (at least " + Fixed(100 * o.min_rim_coverage, 0) + " % needed)");
   }
+  // The grey levels, smoothed, for how much they vary along circles (AnnulusSpread).
+  cv::Mat smooth;
+  const double smooth_radius = rim.radius_px;
+  gray.convertTo(smooth, CV_32F);
+  cv::GaussianBlur(smooth, smooth, {0, 0}, std::max(2.0, 0.008 * smooth_radius));
+  // 4b. A mirror held in a ring: the strongest circle may be the holder's outer edge, with a flat
+  // ring (the holder, no scene in it) between it and the mirror's own edge. The mirror shows the
+  // scene right up to its edge; where the band inside the circle found is no more varied than the
+  // housing outside it, the rim is the outermost concentric edge circle within holder_max_frac of
+  // its radius that has a varied scene inside and only that flat ring outside.
+  if (o.holder_max_frac > 0) {
+    const double R0 = rim.radius_px, cx = rim.center_x_px, cy = rim.center_y_px;
+    const double band = std::max(4.0, 0.03 * R0);
+    const double noise = 4.0;  // grey levels of spread that any band shows (noise, JPEG)
+    const double outside = AnnulusSpread(smooth, cx, cy, R0 + 2.5, R0 + 2.5 + band);
+    const double inside = AnnulusSpread(smooth, cx, cy, R0 - 2.5 - band, R0 - 2.5);
+    // The scene's own variation, well inside the mirror: a band is flat against it.
+    const double scene_ref = AnnulusSpread(smooth, cx, cy, 0.75 * R0, 0.9 * R0);
+    const auto flat = [&](double spread) { return spread + noise < 0.3 * (scene_ref + noise); };
+    if (flat(inside)) {
+      const double bin_r = 0.5, lo = (1 - o.holder_max_frac) * R0, hi = R0 - 3;
+      const int nb = static_cast<int>((hi - lo) / bin_r) + 1;
+      std::vector<std::vector<uint16_t>> sec(static_cast<size_t>(std::max(0, nb)), std::vector<uint16_t>(kSectors, 0));
+      for (const auto& p : fe.points) {
+        double d;
+        if (!Radial(p, cx, cy, o.radial_cos, &d) || d < lo || d >= lo + nb * bin_r) continue;
+        ++sec[static_cast<size_t>((d - lo) / bin_r)][SectorOf(p.x - cx, p.y - cy)];
+      }
+      std::vector<double> coverage(static_cast<size_t>(std::max(0, nb)), 0.0);
+      for (int b = 3; b + 3 < nb; ++b) {
+        const auto visible = VisibleSectors(cx, cy, lo + b * bin_r, gray.size());
+        const int need = PointsPerSector(lo + b * bin_r);
+        int vis = 0, cov = 0;
+        for (int k = 0; k < kSectors; ++k) {
+          int n = 0;
+          for (int j = -3; j <= 3; ++j) n += sec[static_cast<size_t>(b + j)][k];  // +-1.5 px
+          vis += visible[k];
+          cov += visible[k] && n >= need;
+        }
+        coverage[static_cast<size_t>(b)] = vis > 0 ? static_cast<double>(cov) / vis : 0.0;
+      }
+      for (int b = nb - 4; b >= 3; --b) {  // the outermost first
+        const double c = coverage[static_cast<size_t>(b)];
+        if (c < o.min_rim_coverage || c < coverage[static_cast<size_t>(b - 1)] || c < coverage[static_cast<size_t>(b + 1)])
+          continue;
+        const double r = lo + b * bin_r;
+        const double ring = r + 5 < R0 - 2.5 ? AnnulusSpread(smooth, cx, cy, r + 2.5, R0 - 2.5) : outside;
+        const double scene = AnnulusSpread(smooth, cx, cy, r - 2.5 - band, r - 2.5);
+        if (!(flat(ring) && scene + noise >= 2 * (ring + noise) && scene + noise >= 0.5 * (scene_ref + noise))) continue;
+        const CircleFit f = RefineCircle(fe.points, fe.magnitude, gray.size(), cx, cy, r, 3.0, o.radial_cos);
+        if (f.inliers < 12 || f.coverage < o.min_rim_coverage ||
+            std::hypot(f.center_x_px - cx, f.center_y_px - cy) > 0.02 * R0 || f.radius_px >= R0)
+          continue;
+        cal.warnings.push_back("the strongest circle (radius " + Fixed(R0, 1) + " px) has a flat ring of " +
+                               Fixed(R0 - f.radius_px, 1) +
+                               " px inside it (the mirror's holder?): the rim is the mirror's edge inside that ring; "
+                               "check the overlay");
+        cal.rim = f;
+        break;
+      }
+    }
+  }
   // 5. The camera's reflection: the concentric circle seen in the most directions.
   const double R = rim.radius_px;
   const double bin_in = 0.5;
@@ -475,9 +539,10 @@ std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const Mir
   // outside to inside. A lens barrel's ring is flat on both sides, a circle of the scene (a room's
   // floor line seen from its centre) varied on both. When no candidate has a clearly flat inside
   // (a plain floor around the reflection), the outermost well-seen circle.
-  cv::Mat smooth;
-  gray.convertTo(smooth, CV_32F);
-  cv::GaussianBlur(smooth, smooth, {0, 0}, std::max(2.0, 0.008 * R));
+  if (R != smooth_radius) {
+    gray.convertTo(smooth, CV_32F);
+    cv::GaussianBlur(smooth, smooth, {0, 0}, std::max(2.0, 0.008 * R));
+  }
   struct InnerCandidate {
     int bin;
     double coverage, ratio;

@@ -48,6 +48,9 @@ struct MirrorSearchOptions {
   double inner_min_coverage = 0.45;  // share of directions its edge must be seen in
   double inner_margin_px = 1.5;      // added to the reflection's radius (its soft edge)
   double inner_default_frac = 0.17;  // inner radius when no reflection is found
+  // A ring around the mirror (its holder): where the strongest circle has no scene just inside it,
+  // the mirror's edge is looked for this far inside it (fraction of its radius; 0: never)
+  double holder_max_frac = 0.12;
   // Warnings (MirrorCalibration::warnings): a fit worse than these is reported as poor.
   double warn_rms_px = 1.0;
   double warn_inlier_fraction = 0.5;
