@@ -302,6 +302,7 @@ void MirrorSearchOptions::Validate() const {
   }
   if (!(inner_default_frac >= 0 && inner_default_frac < 1))
     throw std::invalid_argument("mirror search: inner_default_frac in [0, 1)");
+  if (!(ellipse_min_ratio >= 1)) throw std::invalid_argument("mirror search: ellipse_min_ratio >= 1 (1: off)");
   if (!(holder_max_frac >= 0 && holder_max_frac < 0.5))
     throw std::invalid_argument("mirror search: holder_max_frac in [0, 0.5)");
 }
@@ -508,6 +509,54 @@ std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const Mir
                                "check the overlay");
         cal.rim = f;
         break;
+      }
+    }
+  }
+  // 4c. A camera tilted against the mirror's axis sees the rim as an ellipse, which the [mirror]
+  // model (a circle) cannot hold: where an ellipse explains the rim's edge clearly better than the
+  // circle, say so (the circle stays: an ellipse fitted to parts of the rim places its centre worse).
+  if (o.ellipse_min_ratio > 1) {
+    const double R0 = rim.radius_px, cx = rim.center_x_px, cy = rim.center_y_px;
+    const double band = std::max(4.0, 0.04 * R0);
+    std::vector<cv::Point2f> near;
+    for (const auto& p : fe.points) {
+      double d;
+      if (!Radial(p, cx, cy, o.radial_cos, &d) || std::abs(d - R0) > band) continue;
+      const EdgePoint q = Subpixel(p, cx, cy, fe.magnitude);
+      near.emplace_back(q.x, q.y);
+    }
+    // Distance of a point from an ellipse (its normalised radius, scaled back to pixels).
+    const auto off = [](const cv::RotatedRect& e, const cv::Point2f& p) {
+      const double a = 0.5 * e.size.width, b = 0.5 * e.size.height, t = e.angle * M_PI / 180;
+      const double dx = p.x - e.center.x, dy = p.y - e.center.y;
+      const double u = std::cos(t) * dx + std::sin(t) * dy, v = -std::sin(t) * dx + std::cos(t) * dy;
+      const double rho = std::hypot(u / a, v / b), r = std::hypot(u, v);
+      return rho > 1e-9 ? std::abs(r - r / rho) : r;
+    };
+    std::vector<cv::Point2f> inl = near;
+    std::optional<cv::RotatedRect> ellipse;
+    for (int it = 0; it < 4 && inl.size() >= 20; ++it) {
+      const cv::RotatedRect e = cv::fitEllipseAMS(inl);
+      if (!(e.size.width > 0 && e.size.height > 0)) break;
+      ellipse = e;
+      const double tol = it == 0 ? 4.0 : 2.0;
+      inl.clear();
+      for (const auto& p : near) {
+        if (off(e, p) <= tol) inl.push_back(p);
+      }
+    }
+    if (ellipse && inl.size() >= 20) {
+      const double a = 0.5 * std::max(ellipse->size.width, ellipse->size.height),
+                   b = 0.5 * std::min(ellipse->size.width, ellipse->size.height);
+      int circle_inliers = 0;
+      for (const auto& p : near) circle_inliers += std::abs(std::hypot(p.x - cx, p.y - cy) - R0) <= 2.0;
+      if (a / b >= o.ellipse_min_ratio && static_cast<double>(inl.size()) >= 1.2 * circle_inliers &&
+          std::abs(0.5 * (a + b) - R0) < 0.05 * R0) {
+        cal.warnings.push_back("the rim is an ellipse (axes " + Fixed(2 * a, 1) + " and " + Fixed(2 * b, 1) +
+                               " px): the camera looks at the mirror tilted by about " +
+                               Fixed(std::acos(b / a) * 180 / M_PI, 0) +
+                               " deg; the [mirror] model is a circle: align the camera with the mirror's axis for an "
+                               "exact unwrap");
       }
     }
   }

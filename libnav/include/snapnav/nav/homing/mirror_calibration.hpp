@@ -51,6 +51,9 @@ struct MirrorSearchOptions {
   // A ring around the mirror (its holder): where the strongest circle has no scene just inside it,
   // the mirror's edge is looked for this far inside it (fraction of its radius; 0: never)
   double holder_max_frac = 0.12;
+  // A rim whose edge an ellipse with axes at least this far apart explains clearly better (a camera
+  // tilted against the mirror's axis) is reported (a warning; 1: off)
+  double ellipse_min_ratio = 1.01;
   // Warnings (MirrorCalibration::warnings): a fit worse than these is reported as poor.
   double warn_rms_px = 1.0;
   double warn_inlier_fraction = 0.5;
