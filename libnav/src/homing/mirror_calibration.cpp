@@ -285,6 +285,108 @@ std::string Fixed(double v, int digits = 1) {
   return s.str();
 }
 
+
+// 4b. A mirror held in a ring: the strongest circle may be the ring's outer edge, with a flat band
+// (the ring, no scene in it) between it and the mirror's own edge. The mirror shows the scene right up
+// to its edge; where the band just inside `rim` is flat against the scene's own variation (along
+// circles, at 0.75-0.9 of the radius), the mirror's edge is the outermost concentric edge circle
+// within holder_max_frac of the radius inside it that has a varied scene inside and only a flat band
+// between it and `rim`. nullopt: `rim` is the mirror's edge (or no such circle).
+std::optional<CircleFit> MirrorEdgeInsideHolder(const Edges& fe, const cv::Mat& smooth, cv::Size size,
+                                                const CircleFit& rim, const MirrorSearchOptions& o) {
+  const double R0 = rim.radius_px, cx = rim.center_x_px, cy = rim.center_y_px;
+  const double band = std::max(4.0, 0.03 * R0);
+  const double noise = 4.0;  // grey levels of spread that any band shows (noise, JPEG)
+  const double outside = AnnulusSpread(smooth, cx, cy, R0 + 2.5, R0 + 2.5 + band);
+  const double inside = AnnulusSpread(smooth, cx, cy, R0 - 2.5 - band, R0 - 2.5);
+  const double scene_ref = AnnulusSpread(smooth, cx, cy, 0.75 * R0, 0.9 * R0);
+  const auto flat = [&](double spread) { return spread + noise < 0.3 * (scene_ref + noise); };
+  if (!flat(inside)) return std::nullopt;
+  // The coverage of the concentric circles inside (0.5 px bins), as for the camera's reflection.
+  const double bin_r = 0.5, lo = (1 - o.holder_max_frac) * R0, hi = R0 - 3;
+  const int nb = std::max(0, static_cast<int>((hi - lo) / bin_r) + 1);
+  std::vector<std::vector<uint16_t>> sec(static_cast<size_t>(nb), std::vector<uint16_t>(kSectors, 0));
+  for (const auto& p : fe.points) {
+    double d;
+    if (!Radial(p, cx, cy, o.radial_cos, &d) || d < lo || d >= lo + nb * bin_r) continue;
+    ++sec[static_cast<size_t>((d - lo) / bin_r)][SectorOf(p.x - cx, p.y - cy)];
+  }
+  std::vector<double> coverage(static_cast<size_t>(nb), 0.0);
+  for (int b = 3; b + 3 < nb; ++b) {
+    const auto visible = VisibleSectors(cx, cy, lo + b * bin_r, size);
+    const int need = PointsPerSector(lo + b * bin_r);
+    int vis = 0, cov = 0;
+    for (int k = 0; k < kSectors; ++k) {
+      int n = 0;
+      for (int j = -3; j <= 3; ++j) n += sec[static_cast<size_t>(b + j)][k];  // +-1.5 px
+      vis += visible[k];
+      cov += visible[k] && n >= need;
+    }
+    coverage[static_cast<size_t>(b)] = vis > 0 ? static_cast<double>(cov) / vis : 0.0;
+  }
+  for (int b = nb - 4; b >= 3; --b) {  // the outermost first
+    const double c = coverage[static_cast<size_t>(b)];
+    if (c < o.min_rim_coverage || c < coverage[static_cast<size_t>(b - 1)] || c < coverage[static_cast<size_t>(b + 1)])
+      continue;
+    const double r = lo + b * bin_r;
+    const double ring = r + 5 < R0 - 2.5 ? AnnulusSpread(smooth, cx, cy, r + 2.5, R0 - 2.5) : outside;
+    const double scene = AnnulusSpread(smooth, cx, cy, r - 2.5 - band, r - 2.5);
+    if (!(flat(ring) && scene + noise >= 2 * (ring + noise) && scene + noise >= 0.5 * (scene_ref + noise))) continue;
+    const CircleFit f = RefineCircle(fe.points, fe.magnitude, size, cx, cy, r, 3.0, o.radial_cos);
+    if (f.inliers < 12 || f.coverage < o.min_rim_coverage || std::hypot(f.center_x_px - cx, f.center_y_px - cy) > 0.02 * R0 ||
+        f.radius_px >= R0)
+      continue;
+    return f;
+  }
+  return std::nullopt;
+}
+
+// 4c. A camera tilted against the mirror's axis sees the rim as an ellipse, which the [mirror] model
+// (a circle) cannot hold. The ellipse (cv::fitEllipseAMS, refitted on its inliers) of the edge points
+// near `rim`, where it has axes at least ellipse_min_ratio apart and explains at least 1.2 times as
+// many of them as the circle. Only reported: fitted to the parts of the rim that are seen, its centre
+// lies worse than the circle's.
+std::optional<cv::RotatedRect> RimEllipse(const Edges& fe, const CircleFit& rim, const MirrorSearchOptions& o) {
+  const double R0 = rim.radius_px, cx = rim.center_x_px, cy = rim.center_y_px;
+  const double band = std::max(4.0, 0.04 * R0);
+  std::vector<cv::Point2f> near;
+  for (const auto& p : fe.points) {
+    double d;
+    if (!Radial(p, cx, cy, o.radial_cos, &d) || std::abs(d - R0) > band) continue;
+    const EdgePoint q = Subpixel(p, cx, cy, fe.magnitude);
+    near.emplace_back(q.x, q.y);
+  }
+  // A point's distance from an ellipse (from its normalised radius, in pixels).
+  const auto off = [](const cv::RotatedRect& e, const cv::Point2f& p) {
+    const double a = 0.5 * e.size.width, b = 0.5 * e.size.height, t = e.angle * M_PI / 180;
+    const double dx = p.x - e.center.x, dy = p.y - e.center.y;
+    const double u = std::cos(t) * dx + std::sin(t) * dy, v = -std::sin(t) * dx + std::cos(t) * dy;
+    const double rho = std::hypot(u / a, v / b), r = std::hypot(u, v);
+    return rho > 1e-9 ? std::abs(r - r / rho) : r;
+  };
+  std::vector<cv::Point2f> inliers = near;
+  std::optional<cv::RotatedRect> ellipse;
+  for (int it = 0; it < 4 && inliers.size() >= 20; ++it) {
+    const cv::RotatedRect e = cv::fitEllipseAMS(inliers);
+    if (!(e.size.width > 0 && e.size.height > 0)) break;
+    ellipse = e;
+    const double tol = it == 0 ? 4.0 : 2.0;
+    inliers.clear();
+    for (const auto& p : near) {
+      if (off(e, p) <= tol) inliers.push_back(p);
+    }
+  }
+  if (!ellipse || inliers.size() < 20) return std::nullopt;
+  const double a = 0.5 * std::max(ellipse->size.width, ellipse->size.height),
+               b = 0.5 * std::min(ellipse->size.width, ellipse->size.height);
+  int circle_inliers = 0;
+  for (const auto& p : near) circle_inliers += std::abs(std::hypot(p.x - cx, p.y - cy) - R0) <= 2.0;
+  if (a / b < o.ellipse_min_ratio || static_cast<double>(inliers.size()) < 1.2 * circle_inliers ||
+      std::abs(0.5 * (a + b) - R0) >= 0.05 * R0)
+    return std::nullopt;
+  return ellipse;
+}
+
 }  // namespace
 
 void MirrorSearchOptions::Validate() const {
@@ -455,109 +557,26 @@ std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const Mir
   const double smooth_radius = rim.radius_px;
   gray.convertTo(smooth, CV_32F);
   cv::GaussianBlur(smooth, smooth, {0, 0}, std::max(2.0, 0.008 * smooth_radius));
-  // 4b. A mirror held in a ring: the strongest circle may be the holder's outer edge, with a flat
-  // ring (the holder, no scene in it) between it and the mirror's own edge. The mirror shows the
-  // scene right up to its edge; where the band inside the circle found is no more varied than the
-  // housing outside it, the rim is the outermost concentric edge circle within holder_max_frac of
-  // its radius that has a varied scene inside and only that flat ring outside.
+  // 4b. A mirror held in a ring (below).
   if (o.holder_max_frac > 0) {
-    const double R0 = rim.radius_px, cx = rim.center_x_px, cy = rim.center_y_px;
-    const double band = std::max(4.0, 0.03 * R0);
-    const double noise = 4.0;  // grey levels of spread that any band shows (noise, JPEG)
-    const double outside = AnnulusSpread(smooth, cx, cy, R0 + 2.5, R0 + 2.5 + band);
-    const double inside = AnnulusSpread(smooth, cx, cy, R0 - 2.5 - band, R0 - 2.5);
-    // The scene's own variation, well inside the mirror: a band is flat against it.
-    const double scene_ref = AnnulusSpread(smooth, cx, cy, 0.75 * R0, 0.9 * R0);
-    const auto flat = [&](double spread) { return spread + noise < 0.3 * (scene_ref + noise); };
-    if (flat(inside)) {
-      const double bin_r = 0.5, lo = (1 - o.holder_max_frac) * R0, hi = R0 - 3;
-      const int nb = static_cast<int>((hi - lo) / bin_r) + 1;
-      std::vector<std::vector<uint16_t>> sec(static_cast<size_t>(std::max(0, nb)), std::vector<uint16_t>(kSectors, 0));
-      for (const auto& p : fe.points) {
-        double d;
-        if (!Radial(p, cx, cy, o.radial_cos, &d) || d < lo || d >= lo + nb * bin_r) continue;
-        ++sec[static_cast<size_t>((d - lo) / bin_r)][SectorOf(p.x - cx, p.y - cy)];
-      }
-      std::vector<double> coverage(static_cast<size_t>(std::max(0, nb)), 0.0);
-      for (int b = 3; b + 3 < nb; ++b) {
-        const auto visible = VisibleSectors(cx, cy, lo + b * bin_r, gray.size());
-        const int need = PointsPerSector(lo + b * bin_r);
-        int vis = 0, cov = 0;
-        for (int k = 0; k < kSectors; ++k) {
-          int n = 0;
-          for (int j = -3; j <= 3; ++j) n += sec[static_cast<size_t>(b + j)][k];  // +-1.5 px
-          vis += visible[k];
-          cov += visible[k] && n >= need;
-        }
-        coverage[static_cast<size_t>(b)] = vis > 0 ? static_cast<double>(cov) / vis : 0.0;
-      }
-      for (int b = nb - 4; b >= 3; --b) {  // the outermost first
-        const double c = coverage[static_cast<size_t>(b)];
-        if (c < o.min_rim_coverage || c < coverage[static_cast<size_t>(b - 1)] || c < coverage[static_cast<size_t>(b + 1)])
-          continue;
-        const double r = lo + b * bin_r;
-        const double ring = r + 5 < R0 - 2.5 ? AnnulusSpread(smooth, cx, cy, r + 2.5, R0 - 2.5) : outside;
-        const double scene = AnnulusSpread(smooth, cx, cy, r - 2.5 - band, r - 2.5);
-        if (!(flat(ring) && scene + noise >= 2 * (ring + noise) && scene + noise >= 0.5 * (scene_ref + noise))) continue;
-        const CircleFit f = RefineCircle(fe.points, fe.magnitude, gray.size(), cx, cy, r, 3.0, o.radial_cos);
-        if (f.inliers < 12 || f.coverage < o.min_rim_coverage ||
-            std::hypot(f.center_x_px - cx, f.center_y_px - cy) > 0.02 * R0 || f.radius_px >= R0)
-          continue;
-        cal.warnings.push_back("the strongest circle (radius " + Fixed(R0, 1) + " px) has a flat ring of " +
-                               Fixed(R0 - f.radius_px, 1) +
-                               " px inside it (the mirror's holder?): the rim is the mirror's edge inside that ring; "
-                               "check the overlay");
-        cal.rim = f;
-        break;
-      }
+    const double R0 = rim.radius_px;
+    if (const auto edge = MirrorEdgeInsideHolder(fe, smooth, gray.size(), rim, o)) {
+      cal.warnings.push_back("the strongest circle (radius " + Fixed(R0, 1) + " px) has a flat ring of " +
+                             Fixed(R0 - edge->radius_px, 1) +
+                             " px inside it (the mirror's holder?): the rim is the mirror's edge inside that ring; "
+                             "check the overlay");
+      cal.rim = *edge;
     }
   }
-  // 4c. A camera tilted against the mirror's axis sees the rim as an ellipse, which the [mirror]
-  // model (a circle) cannot hold: where an ellipse explains the rim's edge clearly better than the
-  // circle, say so (the circle stays: an ellipse fitted to parts of the rim places its centre worse).
+  // 4c. A tilted camera (below): reported; the circle stays.
   if (o.ellipse_min_ratio > 1) {
-    const double R0 = rim.radius_px, cx = rim.center_x_px, cy = rim.center_y_px;
-    const double band = std::max(4.0, 0.04 * R0);
-    std::vector<cv::Point2f> near;
-    for (const auto& p : fe.points) {
-      double d;
-      if (!Radial(p, cx, cy, o.radial_cos, &d) || std::abs(d - R0) > band) continue;
-      const EdgePoint q = Subpixel(p, cx, cy, fe.magnitude);
-      near.emplace_back(q.x, q.y);
-    }
-    // Distance of a point from an ellipse (its normalised radius, scaled back to pixels).
-    const auto off = [](const cv::RotatedRect& e, const cv::Point2f& p) {
-      const double a = 0.5 * e.size.width, b = 0.5 * e.size.height, t = e.angle * M_PI / 180;
-      const double dx = p.x - e.center.x, dy = p.y - e.center.y;
-      const double u = std::cos(t) * dx + std::sin(t) * dy, v = -std::sin(t) * dx + std::cos(t) * dy;
-      const double rho = std::hypot(u / a, v / b), r = std::hypot(u, v);
-      return rho > 1e-9 ? std::abs(r - r / rho) : r;
-    };
-    std::vector<cv::Point2f> inl = near;
-    std::optional<cv::RotatedRect> ellipse;
-    for (int it = 0; it < 4 && inl.size() >= 20; ++it) {
-      const cv::RotatedRect e = cv::fitEllipseAMS(inl);
-      if (!(e.size.width > 0 && e.size.height > 0)) break;
-      ellipse = e;
-      const double tol = it == 0 ? 4.0 : 2.0;
-      inl.clear();
-      for (const auto& p : near) {
-        if (off(e, p) <= tol) inl.push_back(p);
-      }
-    }
-    if (ellipse && inl.size() >= 20) {
-      const double a = 0.5 * std::max(ellipse->size.width, ellipse->size.height),
-                   b = 0.5 * std::min(ellipse->size.width, ellipse->size.height);
-      int circle_inliers = 0;
-      for (const auto& p : near) circle_inliers += std::abs(std::hypot(p.x - cx, p.y - cy) - R0) <= 2.0;
-      if (a / b >= o.ellipse_min_ratio && static_cast<double>(inl.size()) >= 1.2 * circle_inliers &&
-          std::abs(0.5 * (a + b) - R0) < 0.05 * R0) {
-        cal.warnings.push_back("the rim is an ellipse (axes " + Fixed(2 * a, 1) + " and " + Fixed(2 * b, 1) +
-                               " px): the camera looks at the mirror tilted by about " +
-                               Fixed(std::acos(b / a) * 180 / M_PI, 0) +
-                               " deg; the [mirror] model is a circle: align the camera with the mirror's axis for an "
-                               "exact unwrap");
-      }
+    if (const auto e = RimEllipse(fe, rim, o)) {
+      const double a = 0.5 * std::max(e->size.width, e->size.height), b = 0.5 * std::min(e->size.width, e->size.height);
+      cal.warnings.push_back("the rim is an ellipse (axes " + Fixed(2 * a, 1) + " and " + Fixed(2 * b, 1) +
+                             " px): the camera looks at the mirror tilted by about " +
+                             Fixed(std::acos(b / a) * 180 / M_PI, 0) +
+                             " deg; the [mirror] model is a circle: align the camera with the mirror's axis for an "
+                             "exact unwrap");
     }
   }
   // 5. The camera's reflection: the concentric circle seen in the most directions.
