@@ -96,6 +96,7 @@ TEST(CalibrateMirror, FindsTheRimOfRealisticRendersWithinTheGoal) {
     EXPECT_NEAR(cal->mirror.elevation_outer_rad / kDeg, 20, 1e-6);
     EXPECT_NEAR(cal->mirror.elevation_inner_rad,
                 Profile().ElevationAt(cal->mirror.inner_radius_px / cal->mirror.outer_radius_px), 1e-9);
+    EXPECT_FALSE(cal->holder.has_value());
     for (const auto& w : cal->warnings) {
       EXPECT_EQ(w.find("holder"), std::string::npos) << w;
       EXPECT_EQ(w.find("ellipse"), std::string::npos) << w;
@@ -142,6 +143,8 @@ TEST(CalibrateMirror, AHolderRingAroundTheMirrorIsNotTheRim) {
     bool said = false;
     for (const auto& w : cal->warnings) said = said || w.find("holder") != std::string::npos;
     EXPECT_TRUE(said) << "the ring left out of the rim is reported";
+    ASSERT_TRUE(cal->holder.has_value());
+    EXPECT_NEAR(cal->holder->radius_px, r1, 3.0) << "the circle left out is the ring's outer edge";
     std::cerr << h.what << ": radius error " << cal->mirror.outer_radius_px - h.c.radius << " px (the ring's outer edge "
               << r1 - h.c.radius << " px out)\n";
     // Without the fallback the ring's outer edge is the rim.

@@ -229,7 +229,7 @@ int Main(int argc, char** argv) {
   }
   if (!png_path.empty()) {
     MakeParentFolder(png_path);
-    if (!cv::imwrite(png_path, nav::DrawCalibrationOverlay(mean, m, mask)))
+    if (!cv::imwrite(png_path, nav::DrawCalibrationOverlay(mean, m, mask, cal->holder)))
       throw std::runtime_error("cannot write " + png_path);
     std::cout << "wrote " << png_path << "\n";
   }

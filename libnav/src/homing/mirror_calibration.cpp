@@ -565,6 +565,7 @@ std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const Mir
                              Fixed(R0 - edge->radius_px, 1) +
                              " px inside it (the mirror's holder?): the rim is the mirror's edge inside that ring; "
                              "check the overlay");
+      cal.holder = cal.rim;
       cal.rim = *edge;
     }
   }
@@ -822,7 +823,8 @@ cv::Mat SelfOcclusionMask(const std::vector<cv::Mat>& frames, const MirrorModel&
   return usable;
 }
 
-cv::Mat DrawCalibrationOverlay(const cv::Mat& image, const MirrorModel& m, const cv::Mat& mask) {
+cv::Mat DrawCalibrationOverlay(const cv::Mat& image, const MirrorModel& m, const cv::Mat& mask,
+                               const std::optional<CircleFit>& holder) {
   cv::Mat out;
   if (image.channels() == 1)
     cv::cvtColor(image, out, cv::COLOR_GRAY2BGR);
@@ -841,6 +843,13 @@ cv::Mat DrawCalibrationOverlay(const cv::Mat& image, const MirrorModel& m, const
              cv::LINE_AA, shift);
   cv::circle(out, c, static_cast<int>(std::lround(m.inner_radius_px * (1 << shift))), cv::Scalar(0, 255, 255), thick,
              cv::LINE_AA, shift);
+  if (holder) {
+    cv::circle(out,
+               cv::Point(static_cast<int>(std::lround(holder->center_x_px * (1 << shift))),
+                         static_cast<int>(std::lround(holder->center_y_px * (1 << shift)))),
+               static_cast<int>(std::lround(holder->radius_px * (1 << shift))), cv::Scalar(0, 140, 255), thick,
+               cv::LINE_AA, shift);
+  }
   const int arm = 8 * thick << shift;
   cv::line(out, c - cv::Point(arm, 0), c + cv::Point(arm, 0), cv::Scalar(0, 255, 0), thick, cv::LINE_AA, shift);
   cv::line(out, c - cv::Point(0, arm), c + cv::Point(0, arm), cv::Scalar(0, 255, 0), thick, cv::LINE_AA, shift);

@@ -73,6 +73,8 @@ struct MirrorCalibration {
   MirrorModel mirror;  // centre, inner and outer radius; elevations from the profile
   CircleFit rim;
   std::optional<CircleFit> inner;     // the camera's reflection (nullopt: not found, default fraction used)
+  std::optional<CircleFit> holder;    // the strongest circle, left out as the outer edge of a ring holding the
+                                      // mirror (MirrorSearchOptions::holder_max_frac; nullopt: none)
   std::vector<std::string> warnings;  // a poor fit, no reflection found, the rim cut by the image border
 };
 
@@ -106,7 +108,9 @@ cv::Mat SelfOcclusionMask(const std::vector<cv::Mat>& frames, const MirrorModel&
                           const OcclusionOptions& options, OcclusionStats* stats = nullptr);
 
 // The overlay to check a calibration by eye: the image, the rim (green), the inner circle (yellow),
-// the masked pixels tinted red, the centre marked.
-cv::Mat DrawCalibrationOverlay(const cv::Mat& image, const MirrorModel& mirror, const cv::Mat& mask);
+// the masked pixels tinted red, the centre marked; a circle left out as the mirror's holder
+// (MirrorCalibration::holder) orange.
+cv::Mat DrawCalibrationOverlay(const cv::Mat& image, const MirrorModel& mirror, const cv::Mat& mask,
+                               const std::optional<CircleFit>& holder = std::nullopt);
 
 }  // namespace snapnav::nav
