@@ -285,6 +285,37 @@ std::string Fixed(double v, int digits = 1) {
   return s.str();
 }
 
+// The coverage of the circles about (cx, cy) of radii r0 + b * bin, b = 0 .. n - 1: the share of the
+// 2-degree sectors holding enough edge points (PointsPerSector) within +-1.5 px of the circle whose
+// gradient is radial; edge points between r_min and r_max only; of the sectors inside an image of
+// `size` when one is given, of all of them otherwise. The 3 bins at each end stay 0.
+std::vector<double> ConcentricCoverage(const std::vector<EdgePoint>& points, double cx, double cy, double r0, int n,
+                                       double bin, double r_min, double r_max, double radial_cos,
+                                       cv::Size size = {}) {
+  std::vector<std::vector<uint16_t>> sec(static_cast<size_t>(std::max(0, n)), std::vector<uint16_t>(kSectors, 0));
+  for (const auto& p : points) {
+    double d;
+    if (!Radial(p, cx, cy, radial_cos, &d) || d < r_min || d > r_max) continue;
+    const long b = std::lround((d - r0) / bin);
+    if (b >= 0 && b < n) ++sec[static_cast<size_t>(b)][SectorOf(p.x - cx, p.y - cy)];
+  }
+  std::vector<double> coverage(static_cast<size_t>(std::max(0, n)), 0.0);
+  for (int b = 3; b + 3 < n; ++b) {
+    const double r = r0 + b * bin;
+    const int need = PointsPerSector(r);
+    std::vector<bool> visible(kSectors, true);
+    if (!size.empty()) visible = VisibleSectors(cx, cy, r, size);
+    int vis = 0, cov = 0;
+    for (int k = 0; k < kSectors; ++k) {
+      int count = 0;
+      for (int j = -3; j <= 3; ++j) count += sec[static_cast<size_t>(b + j)][k];  // +-1.5 px
+      vis += visible[k];
+      cov += visible[k] && count >= need;
+    }
+    coverage[static_cast<size_t>(b)] = vis > 0 ? static_cast<double>(cov) / vis : 0.0;
+  }
+  return coverage;
+}
 
 // 4b. A mirror held in a ring: the strongest circle may be the ring's outer edge, with a flat band
 // (the ring, no scene in it) between it and the mirror's own edge. The mirror shows the scene right up
@@ -305,25 +336,8 @@ std::optional<CircleFit> MirrorEdgeInsideHolder(const Edges& fe, const cv::Mat& 
   // The coverage of the concentric circles inside (0.5 px bins), as for the camera's reflection.
   const double bin_r = 0.5, lo = (1 - o.holder_max_frac) * R0, hi = R0 - 3;
   const int nb = std::max(0, static_cast<int>((hi - lo) / bin_r) + 1);
-  std::vector<std::vector<uint16_t>> sec(static_cast<size_t>(nb), std::vector<uint16_t>(kSectors, 0));
-  for (const auto& p : fe.points) {
-    double d;
-    if (!Radial(p, cx, cy, o.radial_cos, &d) || d < lo || d >= lo + nb * bin_r) continue;
-    ++sec[static_cast<size_t>((d - lo) / bin_r)][SectorOf(p.x - cx, p.y - cy)];
-  }
-  std::vector<double> coverage(static_cast<size_t>(nb), 0.0);
-  for (int b = 3; b + 3 < nb; ++b) {
-    const auto visible = VisibleSectors(cx, cy, lo + b * bin_r, size);
-    const int need = PointsPerSector(lo + b * bin_r);
-    int vis = 0, cov = 0;
-    for (int k = 0; k < kSectors; ++k) {
-      int n = 0;
-      for (int j = -3; j <= 3; ++j) n += sec[static_cast<size_t>(b + j)][k];  // +-1.5 px
-      vis += visible[k];
-      cov += visible[k] && n >= need;
-    }
-    coverage[static_cast<size_t>(b)] = vis > 0 ? static_cast<double>(cov) / vis : 0.0;
-  }
+  const std::vector<double> coverage =
+      ConcentricCoverage(fe.points, cx, cy, lo, nb, bin_r, lo, hi + 1.5, o.radial_cos, size);
   for (int b = nb - 4; b >= 3; --b) {  // the outermost first
     const double c = coverage[static_cast<size_t>(b)];
     if (c < o.min_rim_coverage || c < coverage[static_cast<size_t>(b - 1)] || c < coverage[static_cast<size_t>(b + 1)])
@@ -584,25 +598,8 @@ std::optional<MirrorCalibration> CalibrateMirror(const cv::Mat& image, const Mir
   const double R = rim.radius_px;
   const double bin_in = 0.5;
   const int nin = static_cast<int>(o.inner_max_frac * R / bin_in) + 4;
-  std::vector<std::vector<uint16_t>> sec(static_cast<size_t>(nin), std::vector<uint16_t>(kSectors, 0));
-  for (const auto& p : fe.points) {
-    double d;
-    if (!Radial(p, rim.center_x_px, rim.center_y_px, o.radial_cos, &d)) continue;
-    if (d < o.inner_min_frac * R || d > o.inner_max_frac * R) continue;
-    const int b = static_cast<int>(std::lround(d / bin_in));
-    if (b >= 0 && b < nin) ++sec[b][SectorOf(p.x - rim.center_x_px, p.y - rim.center_y_px)];
-  }
-  std::vector<double> coverage(static_cast<size_t>(nin), 0.0);
-  for (int b = 3; b < nin - 3; ++b) {
-    const int need = PointsPerSector(b * bin_in);
-    int cov = 0;
-    for (int k = 0; k < kSectors; ++k) {
-      int n = 0;
-      for (int j = -3; j <= 3; ++j) n += sec[b + j][k];  // +-1.5 px
-      cov += n >= need;
-    }
-    coverage[b] = static_cast<double>(cov) / kSectors;
-  }
+  const std::vector<double> coverage = ConcentricCoverage(fe.points, rim.center_x_px, rim.center_y_px, 0, nin, bin_in,
+                                                          o.inner_min_frac * R, o.inner_max_frac * R, o.radial_cos);
   // Candidates: the peaks of the coverage seen in enough directions. The reflection's edge has
   // the flat reflection inside and the scene outside: the largest ratio of the grey-level spread
   // outside to inside. A lens barrel's ring is flat on both sides, a circle of the scene (a room's
