@@ -54,6 +54,17 @@ const OptionTable<nav::LaserSlamOptions>& LaserSlamOptionTable() {
       .Number("adaptive_window_scans", "", &O::adaptive_window_scans)
       .Number("adaptive_scale_min", "", &O::adaptive_scale_min)
       .Number("adaptive_scale_max", "", &O::adaptive_scale_max)
+      .Flag("odometry_calibration", [](auto& o) -> auto& { return o.odometry_calibration.apply; })
+      .Number("odometry_calibration_memory_m", "m", [](auto& o) -> auto& { return o.odometry_calibration.memory_m; })
+      .Degrees("odometry_calibration_prior_drift_deg_per_m",
+               [](auto& o) -> auto& { return o.odometry_calibration.prior_drift_rad_per_m; }, "deg/m")
+      .Number("odometry_calibration_prior_turn_scale", "", [](auto& o) -> auto& { return o.odometry_calibration.prior_turn_scale; })
+      .Number("odometry_calibration_prior_distance_scale", "",
+              [](auto& o) -> auto& { return o.odometry_calibration.prior_distance_scale; })
+      .Number("odometry_calibration_stretch_m", "m", [](auto& o) -> auto& { return o.odometry_calibration.segment_m; })
+      .Degrees("odometry_calibration_stretch_deg", [](auto& o) -> auto& { return o.odometry_calibration.segment_rad; })
+      .Flag("odometry_calibration_noise", [](auto& o) -> auto& { return o.odometry_calibration.noise; })
+      .Number("odometry_calibration_noise_min", "", [](auto& o) -> auto& { return o.odometry_calibration.noise_scale_min; })
       .Number("outlier_scale", "", &O::outlier_scale)
       .Number("outlier_min_fit", "", &O::outlier_min_fit)
       .Number("update_score_margin", "", &O::update_score_margin)

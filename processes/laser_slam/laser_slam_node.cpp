@@ -261,6 +261,14 @@ void LaserSlamNode::Report(std::ostream& out) const {
         << " candidates, " << graph_->corrections() << " corrections, map " << graph_->Map().size() << " points";
   }
   out << "\n";
+  if (const nav::LaserSlam* s = slam(); s && s->odometry_calibration().observations() > 0) {
+    // Odometry's systematic errors as the matches calibrate them (odometry_calibration applies them).
+    const nav::OdometryCalibration& c = s->odometry_calibration();
+    out << "laser-slam: odometry as the scans calibrate it: heading drift " << c.drift_rad_per_m() / nav::kRadPerDeg
+        << " deg/m, turn scale " << 100 * c.turn_scale() << " %, distance scale " << 100 * c.distance_scale()
+        << " % (" << c.observations() << " stretches; " << (config_.options.odometry_calibration.apply ? "applied" : "not applied")
+        << ")\n";
+  }
   if (grid_) {
     out << "laser-slam: ";
     grid_->Report(out);

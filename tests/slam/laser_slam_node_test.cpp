@@ -242,6 +242,14 @@ TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
   }
   EXPECT_EQ(off_wall, 0);
   EXPECT_EQ(bus.total_errors(), 0u);
+
+  // The odometry's 2 % long steps, as the scans calibrate them (estimated, not applied), in the report.
+  ASSERT_NE(node.slam(), nullptr);
+  EXPECT_NEAR(node.slam()->odometry_calibration().distance_scale(), kScale - 1, 0.005);
+  std::ostringstream report;
+  node.Report(report);
+  EXPECT_NE(report.str().find("odometry as the scans calibrate it"), std::string::npos) << report.str();
+  EXPECT_NE(report.str().find("not applied"), std::string::npos) << report.str();
 }
 
 // The graph back end (backend = graph) in the same room: three times around the circle with the

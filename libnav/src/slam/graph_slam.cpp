@@ -123,8 +123,12 @@ namespace {
 // The graph's front end: the EKF's options without the walls' heading measurement. The loop closures
 // bound the heading drift it corrects; on the every 2nd and 3rd scan runs it turned two recoverable
 // runs into front-end failures the graph did not undo (docs/experiments/2026-12-05-wall-orientation.md).
+// And without applying the odometry calibration (estimated all the same): its narrower prediction
+// makes the keyframe edges' covariances narrower, and the graph lost 3-8 of 76 runs within its goal
+// (docs/experiments/2026-12-07-odometry-calibration.md).
 LaserSlamOptions GraphFrontEnd(LaserSlamOptions o) {
   o.wall_orientation = false;
+  o.odometry_calibration.apply = false;
   return o;
 }
 

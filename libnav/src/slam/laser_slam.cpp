@@ -36,6 +36,7 @@ Pose2 EkfPoseUpdate(const Pose2& pose, Eigen::Matrix3d* covariance, const Pose2&
 
 void LaserSlamOptions::Validate() const {
   motion.Validate();
+  odometry_calibration.Validate();
   if (!(initial_sigma_xy_m >= 0) || !(initial_sigma_theta_rad >= 0))
     throw std::invalid_argument("laser slam: initial_sigma_xy_m and initial_sigma_theta_deg must be >= 0");
   if (!(match_distance_m > 0)) throw std::invalid_argument("laser slam: match_distance_m must be > 0");
@@ -103,7 +104,8 @@ void LaserSlamOptions::Validate() const {
 LaserSlam::LaserSlam(const LaserSlamOptions& options, const Pose2& start)
     : options_(options),
       pose_(start),
-      map_(MakeMap(options)) {
+      map_(MakeMap(options)),
+      calibration_(options.odometry_calibration) {
   options_.Validate();
   walls_ = WallOrientations(options_.wall_kernel_rad);
   covariance_ = Eigen::Vector3d(options.initial_sigma_xy_m * options.initial_sigma_xy_m,
@@ -158,6 +160,7 @@ LaserSlamOptions ThesisLaserSlamOptions(const LaserSlamOptions& base) {
   thesis.gate_full_fit = 0;
   thesis.outlier_scale = 1;
   thesis.adaptive_motion_noise = false;
+  thesis.odometry_calibration.apply = false;
   thesis.update_score_margin = 0;
   thesis.lookup_cell_m = 0;  // the exact nearest map point
   return thesis;
@@ -184,6 +187,14 @@ const char* PredictionSourceName(PredictionSource p) {
 }
 
 void LaserSlam::Predict(const Pose2& odometry_delta) {
+  // Odometry's raw motion for the calibration's stretch; the prediction from it corrected.
+  stretch_raw_ = stretch_raw_.Compose(odometry_delta);
+  stretch_path_m_ += std::copysign(std::hypot(odometry_delta.x_m, odometry_delta.y_m), odometry_delta.x_m);
+  stretch_turn_rad_ += odometry_delta.theta_rad;
+  PredictCorrected(calibration_.Correct(odometry_delta));
+}
+
+void LaserSlam::PredictCorrected(const Pose2& odometry_delta) {
   if (!options_.motion_noise_per_scan) {
     PredictWithOdometry(options_.motion, odometry_delta, &pose_, &covariance_);
   } else {
@@ -206,7 +217,7 @@ void LaserSlam::Predict(const Pose2& odometry_delta) {
 Eigen::Matrix3d LaserSlam::IntervalCovariance(const Pose2& from, const Eigen::Matrix3d& covariance,
                                               const Pose2& motion, double path_m, double turn_rad) const {
   // The motion noise and the interval's own, scaled by the odometry noise scale (adaptive_motion_noise).
-  const double k = std::sqrt(motion_scale2_);
+  const double k = std::sqrt(motion_scale2_ * calibration_.NoiseScale2());
   DeadReckoningOptions noise = options_.motion;
   noise.translation_noise_m_per_m *= k;
   noise.rotation_noise_rad_per_rad *= k;
@@ -238,9 +249,10 @@ void LaserSlam::Reanchor() {
 }
 
 void LaserSlam::Predict(const Pose2& odometry_delta, int64_t end_utime) {
+  const Pose2 corrected = calibration_.Correct(odometry_delta);
   Predict(odometry_delta);
   const int64_t start = last_odometry_utime_ ? std::min(*last_odometry_utime_, end_utime) : end_utime;
-  recent_odometry_.push_back({start, end_utime, odometry_delta});
+  recent_odometry_.push_back({start, end_utime, corrected});
   last_odometry_utime_ = end_utime;
 }
 
@@ -281,7 +293,7 @@ LaserSlamUpdate LaserSlam::Update(const std::vector<Eigen::Vector2d>& points_rob
     pose_ = scan_pose_;
     const Pose2 tail = tail_;
     odometry_since_scan_ = {};
-    Predict(tail);
+    PredictCorrected(tail);
     odometry_since_scan_ = {};
   }
   return u;
@@ -633,8 +645,11 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     const double hi = options_.adaptive_scale_max * options_.adaptive_scale_max;
     motion_scale2_ = std::clamp(motion_scale2_ * (1 + (q - 1) / n), lo, hi);
   }
-  u.motion_noise_scale = std::sqrt(motion_scale2_);
+  u.motion_noise_scale = std::sqrt(motion_scale2_ * calibration_.NoiseScale2());
   u.coasting = coasting_;
+  ObserveStretch(&u, (u.outcome == MatchOutcome::kAccepted && u.fit >= options_.outlier_min_fit && !u.widened &&
+                      predictions[chosen].source == PredictionSource::kOdometry) ||
+                         u.outcome == MatchOutcome::kMapStart);
   // The stale-odometry state: a stale prediction taken starts (or continues) it; odometry's or the
   // catch-up ends it.
   if (predictions[chosen].source == PredictionSource::kStale) {
@@ -664,6 +679,34 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
     }
   }
   return u;
+}
+
+void LaserSlam::ObserveStretch(LaserSlamUpdate* u, bool good) {
+  // A stretch of good matches from one scan pose to another is one observation of odometry's
+  // error; a scan that is not good ends it unobserved, and the next good one starts another.
+  bool restart = true;
+  if (!good) {
+    stretch_start_.reset();
+  } else if (!stretch_start_) {
+    stretch_start_ = pose_;
+  } else if (std::abs(stretch_path_m_) >= options_.odometry_calibration.segment_m ||
+             std::abs(stretch_turn_rad_) >= options_.odometry_calibration.segment_rad) {
+    const double a = options_.motion.rotation_noise_rad_per_rad * stretch_turn_rad_;
+    const double b = options_.motion.rotation_noise_rad_per_m * stretch_path_m_;
+    u->calibration_observed = calibration_.Observe(stretch_raw_, stretch_path_m_, stretch_turn_rad_,
+                                                   stretch_start_->Between(pose_), a * a + b * b);
+    stretch_start_ = pose_;
+  } else {
+    restart = false;  // too short yet: the stretch goes on
+  }
+  if (restart) {
+    stretch_raw_ = {};
+    stretch_path_m_ = stretch_turn_rad_ = 0;
+  }
+  u->odometry_drift_rad_per_m = calibration_.drift_rad_per_m();
+  u->odometry_turn_scale = calibration_.turn_scale();
+  u->odometry_distance_scale = calibration_.distance_scale();
+  u->odometry_calibration_stretches = calibration_.observations();
 }
 
 LaserSlam::WallMeasurement LaserSlam::AlignWalls(const std::vector<double>& directions_robot, const Pose2& pose,
@@ -716,6 +759,7 @@ void LaserSlam::ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) 
   const auto carry = [&](const Pose2& p) { return pose_.Compose(old.Between(p)); };
   if (last_scan_pose_) last_scan_pose_ = carry(*last_scan_pose_);
   if (stale_since_) stale_since_ = carry(*stale_since_);
+  if (stretch_start_) stretch_start_ = carry(*stretch_start_);
   scan_pose_ = carry(scan_pose_);
   Reanchor();
 }

@@ -224,8 +224,28 @@ int EvalSlamApp::Run() {
       csv << p.utime << "," << p.pose.x_m << "," << p.pose.y_m << "," << p.pose.theta_rad << "\n";
   }
 
+  const auto odometry_json = [&json](const std::string& prefix, const eval::OdometryFigure& f) {
+    if (!f.measured) return;
+    json[prefix + "drift_deg_per_m"] = R4(f.drift_deg_per_m);
+    json[prefix + "turn_scale"] = R4(f.turn_scale);
+    json[prefix + "distance_scale"] = R4(f.distance_scale);
+    json[prefix + "stretches"] = f.stretches;
+  };
+  {
+    // Odometry's systematic errors as the matches calibrate them (UMBmark from any log).
+    const eval::OdometryFigure odometry = eval::SlamOdometryCalibration(run);
+    std::cerr << "eval-slam: odometry as the scans calibrate it: " << eval::DescribeOdometry(odometry)
+              << (options.odometry_calibration.apply ? " (applied)" : " (not applied: odometry_calibration = false)")
+              << "\n";
+    odometry_json("odometry_", odometry);
+  }
   if (!reference_path.empty()) {
     const eval::Reference ref = eval::LoadReference(reference_path, &log);
+    {
+      const eval::OdometryFigure implied = eval::ReferenceOdometryCalibration(run, ref);
+      std::cerr << "eval-slam: odometry against the reference's motion: " << eval::DescribeOdometry(implied) << "\n";
+      odometry_json("reference_odometry_", implied);
+    }
     const auto slam_pairs = eval::PairWithReference(run.slam, run, ref);
     const auto dr_pairs = eval::PairWithReference(run.dead_reckoning, run, ref);
     if (slam_pairs.size() < 2) throw std::runtime_error("fewer than 2 scans of the log pair with the reference");
@@ -411,7 +431,8 @@ int EvalSlamApp::Run() {
            "predicted_x_m,predicted_y_m,predicted_theta_rad,predicted_sigma_xy_m,predicted_sigma_theta_deg,"
            "measured_x_m,measured_y_m,measured_theta_rad,measured_sigma_x_m,measured_sigma_y_m,"
            "measured_sigma_theta_deg,x_m,y_m,theta_rad,start_x_m,start_y_m,start_theta_rad,outcome,prediction,"
-           "predictions,mahalanobis2,ambiguity,kernel,coasting,wall_measured,wall_gated,wall_offset_deg,wall_contrast\n"
+           "predictions,mahalanobis2,ambiguity,kernel,coasting,wall_measured,wall_gated,wall_offset_deg,wall_contrast,"
+           "odometry_drift_deg_per_m,odometry_turn_scale,odometry_distance_scale,motion_noise_scale\n"
         << std::setprecision(9);
     for (size_t i = 0; i < run.updates.size(); ++i) {
       const nav::LaserSlamUpdate& u = run.updates[i];
@@ -428,7 +449,8 @@ int EvalSlamApp::Run() {
           << u.start.theta_rad << "," << nav::MatchOutcomeName(u.outcome) << ","
           << nav::PredictionSourceName(u.prediction) << "," << u.predictions << "," << u.mahalanobis2 << ","
           << u.ambiguity << "," << u.kernel << "," << u.coasting << "," << u.wall_measured << "," << u.wall_gated << ","
-          << u.wall_offset_rad * deg << "," << u.wall_contrast << "\n";
+          << u.wall_offset_rad * deg << "," << u.wall_contrast << "," << u.odometry_drift_rad_per_m * deg << ","
+          << u.odometry_turn_scale << "," << u.odometry_distance_scale << "," << u.motion_noise_scale << "\n";
     }
   }
   std::cerr << "eval-slam: wrote " << (out / "summary.json").string() << ", trajectories.png, trajectories.csv"

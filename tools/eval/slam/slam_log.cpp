@@ -297,6 +297,65 @@ SlamRun RunSlam(const SlamLog& log, const nav::LaserSlamOptions& options) {
   return run;
 }
 
+namespace {
+OdometryFigure FigureOf(const nav::OdometryCalibration& c) {
+  OdometryFigure f;
+  f.measured = c.observations() > 0;
+  f.drift_deg_per_m = c.drift_rad_per_m() / nav::kRadPerDeg;
+  f.turn_scale = c.turn_scale();
+  f.distance_scale = c.distance_scale();
+  f.stretches = c.observations();
+  return f;
+}
+}  // namespace
+
+OdometryFigure SlamOdometryCalibration(const SlamRun& run) {
+  OdometryFigure f;
+  if (run.updates.empty()) return f;
+  const nav::LaserSlamUpdate& u = run.updates.back();
+  f.measured = u.odometry_calibration_stretches > 0;
+  f.drift_deg_per_m = u.odometry_drift_rad_per_m / nav::kRadPerDeg;
+  f.turn_scale = u.odometry_turn_scale;
+  f.distance_scale = u.odometry_distance_scale;
+  f.stretches = u.odometry_calibration_stretches;
+  return f;
+}
+
+OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference& reference) {
+  nav::OdometryCalibration calibration;
+  const nav::OdometryCalibrationOptions& o = calibration.options();
+  std::optional<size_t> start;
+  std::optional<nav::Pose2> start_reference;
+  double path = 0, turn = 0;
+  for (size_t i = 0; i < run.dead_reckoning.size() && i < run.utime.size(); ++i) {
+    if (start && i > 0) {
+      const nav::Pose2 step = run.dead_reckoning[i - 1].Between(run.dead_reckoning[i]);
+      path += std::copysign(std::hypot(step.x_m, step.y_m), step.x_m);
+      turn += step.theta_rad;
+    }
+    const auto truth = reference.Find(run.ranges_key[i], run.utime[i]);
+    if (!truth) continue;
+    if (start && (std::abs(path) >= o.segment_m || std::abs(turn) >= o.segment_rad)) {
+      calibration.Observe(run.dead_reckoning[*start].Between(run.dead_reckoning[i]), path, turn,
+                          start_reference->Between(*truth));
+    } else if (start) {
+      continue;  // the stretch goes on
+    }
+    start = i;
+    start_reference = *truth;
+    path = turn = 0;
+  }
+  return FigureOf(calibration);
+}
+
+std::string DescribeOdometry(const OdometryFigure& f) {
+  if (!f.measured) return "no stretch of good matches to measure it";
+  char text[160];
+  std::snprintf(text, sizeof text, "heading drift %+.2f deg/m, turns %+.1f %%, distance %+.1f %% (%d stretches)",
+                f.drift_deg_per_m, 100 * f.turn_scale, 100 * f.distance_scale, f.stretches);
+  return text;
+}
+
 std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vector<nav::Pose2>& estimate,
                                                                  const SlamRun& run, const Reference& reference) {
   std::vector<std::pair<nav::Pose2, nav::Pose2>> pairs;

@@ -95,6 +95,19 @@ struct SlamRun {
 // Runs dead reckoning and laser SLAM in lockstep over the log.
 SlamRun RunSlam(const SlamLog& log, const nav::LaserSlamOptions& options);
 
+// Odometry's systematic errors (nav::OdometryCalibration): as the run's laser SLAM estimated them
+// from its matches (its last update), and as the reference implies them (the same estimator fed
+// odometry against the reference's motion, over stretches between scans the reference has).
+struct OdometryFigure {
+  bool measured = false;  // at least one stretch
+  double drift_deg_per_m = 0, turn_scale = 0, distance_scale = 0;
+  int stretches = 0;
+};
+OdometryFigure SlamOdometryCalibration(const SlamRun& run);
+OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference& reference);
+// "heading drift 1.45 deg/m, turns +2.0 %, distance +3.1 % (312 stretches)" or "no stretch".
+std::string DescribeOdometry(const OdometryFigure& f);
+
 // (estimate, reference) pairs of the scans that have a reference pose.
 std::vector<std::pair<nav::Pose2, nav::Pose2>> PairWithReference(const std::vector<nav::Pose2>& estimate,
                                                                  const SlamRun& run, const Reference& reference);

@@ -121,6 +121,8 @@ struct SuiteResult {
   // reference's own, which tells a SLAM that blurs the map from a reference that is off itself.
   // nullopt where no scan is seen again.
   std::optional<double> ekf_consistency_m, graph_consistency_m, reference_consistency_m;
+  // Odometry's systematic errors as the EKF's scans estimated them and as the reference implies.
+  OdometryFigure odometry, reference_odometry;
   // The reference's poses its scans contradict (CheckReference; the run's reference_suspects.csv).
   ReferenceCheck reference_check;
 };
@@ -138,6 +140,8 @@ std::vector<SuiteResult> RunSuite(const Suite& suite, const std::string& out_dir
 
 // The suite table as Markdown (suite.md's table).
 void WriteSuiteTable(std::ostream& out, const std::vector<SuiteResult>& results);
+// Odometry's systematic errors per run, the EKF's estimate and the reference's (suite.md).
+void WriteOdometryTable(std::ostream& out, const std::vector<SuiteResult>& results);
 // The graph back end beside the EKF as Markdown (suite.md's second table).
 void WriteGraphTable(std::ostream& out, const std::vector<SuiteResult>& results);
 

@@ -23,6 +23,7 @@
 
 #include "snapnav/nav/dead_reckoning.hpp"
 #include "snapnav/nav/slam/map_matcher.hpp"
+#include "snapnav/nav/slam/odometry_calibration.hpp"
 #include "snapnav/nav/slam/point_grid_map.hpp"
 #include "snapnav/nav/slam/wall_orientations.hpp"
 #include "snapnav/nav/pose2.hpp"
@@ -187,6 +188,12 @@ struct LaserSlamOptions : MatcherOptions {
   // table lookup per query, the nearest of the points nearest to the cell's centre. 0: exact
   // search over buckets.
   double lookup_cell_m = 0.05;
+  // Odometry's systematic errors (heading drift per metre, turn and distance scale) estimated
+  // online from stretches of good matches (OdometryCalibration), always (LaserSlamUpdate's
+  // odometry_* fields); with `apply` the prediction uses odometry corrected by them. Evidence:
+  // stretches whose every scan was accepted from odometry's prediction with a fit of at least
+  // outlier_min_fit.
+  OdometryCalibrationOptions odometry_calibration;
   void Validate() const;                    // throws std::invalid_argument
 };
 
@@ -233,11 +240,15 @@ struct LaserSlamUpdate {
   bool stale_odometry = false; // predicted from the last motion (prediction kStale)
   bool widened = false;        // the update scored below the ICP pose: the prediction was widened
   int64_t coasting = 0;        // scans since the last accepted match (0: this one was accepted)
-  double motion_noise_scale = 1;  // the odometry noise scale after this scan (adaptive_motion_noise)
+  double motion_noise_scale = 1;  // the odometry noise scale after this scan (adaptive_motion_noise, odometry_calibration_noise)
   bool wall_measured = false;  // the walls' directions measured the heading (wall_orientation)
   bool wall_gated = false;     // ... and gated the match, which turned the heading away from them
   double wall_offset_rad = 0;  // ... the alignment's offset (the heading innovation), 0 without one
   double wall_contrast = 0;    // ... its contrast (0: no alignment)
+  // The odometry calibration after this scan (LaserSlamOptions::odometry_calibration; 0: none).
+  double odometry_drift_rad_per_m = 0, odometry_turn_scale = 0, odometry_distance_scale = 0;
+  bool calibration_observed = false;  // this scan closed a stretch that joined the calibration
+  int odometry_calibration_stretches = 0;  // stretches in the calibration so far
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();
   Pose2 start;      // the pose ICP started from (the search's best; after a recovery, its)
@@ -269,6 +280,7 @@ class LaserSlam {
   const Eigen::Matrix3d& covariance() const { return covariance_; }
   const PointGridMap& map() const { return map_; }
   int64_t scans() const { return scans_; }
+  const OdometryCalibration& odometry_calibration() const { return calibration_; }
 
  private:
   MapMatcher matcher() const { return MapMatcher(map_, options_); }
@@ -301,7 +313,16 @@ class LaserSlam {
   Pose2 scan_pose_;
   std::optional<int64_t> last_odometry_utime_;  // end of the last timed increment
   Pose2 tail_;                                  // odometry after the last scan's match time (re-applied after it)
-  Pose2 odometry_since_scan_;         // odometry's motion since the last scan
+  Pose2 odometry_since_scan_;         // odometry's motion since the last scan (corrected)
+  // The prediction from one increment of odometry already corrected by the calibration.
+  void PredictCorrected(const Pose2& odometry_delta);
+  // The odometry calibration and its current stretch: the scan pose it started at (after a good
+  // match) and odometry's raw motion since (composed, signed path, summed turn).
+  OdometryCalibration calibration_;
+  std::optional<Pose2> stretch_start_;
+  Pose2 stretch_raw_;
+  double stretch_path_m_ = 0, stretch_turn_rad_ = 0;
+  void ObserveStretch(LaserSlamUpdate* u, bool good);
   // The covariance's anchor: the pose's covariance at the last scan (or external update), and
   // odometry's motion since (motion_noise_per_scan: the prediction's noise from it as a whole).
   Eigen::Matrix3d anchor_covariance_;
