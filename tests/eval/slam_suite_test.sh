@@ -43,6 +43,19 @@ for n in names:
     assert 0.005 < ref < 0.1, (n, ref)
     assert 0.005 < ours < (1.2 if int(row["every"]) == 1 else 3.0) * ref, (n, ours, ref)
     assert abs(s[n + "_ekf_map_consistency_m"] - ours) < 1e-4, n
+    # Odometry's systematic errors as the matches calibrate them: the raw-like logs' generator drifts
+    # 1.5 deg/m, turns 2 % large and drives 3 % far per unit of noise (perfect odometry: none); CSAIL's
+    # real odometry turns about 6 % short (a least-squares fit against its corrected log).
+    drift, turn, dist = (float(row["odometry_" + k]) for k in ("drift_deg_per_m", "turn_scale", "distance_scale"))
+    assert int(row["odometry_stretches"]) >= 10, n
+    if row["kind"] == "carmen_corrected":
+        k = float(row["noise"])
+        assert abs(drift - 1.5 * k) < 0.3 and abs(turn - 0.02 * k) < 0.02 and abs(dist - 0.03 * k) < 0.01, (n, drift, turn, dist)
+        assert abs(float(row["reference_odometry_drift_deg_per_m"]) - 1.5 * k) < 0.15, n
+    else:
+        assert -0.10 < turn < -0.02, (n, turn)
+    assert abs(s[n + "_odometry_turn_scale"] - turn) < 1e-3, n
+assert "Odometry's systematic errors" in open(os.path.join(out, "suite.md")).read()
 assert os.path.getsize(os.path.join(out, "consistency.png")) > 10000  # the consistency of every run, one chart
 assert "consistency.png" in open(os.path.join(out, "suite.md")).read()
 print("suite: %d runs within their bounds" % len(names))

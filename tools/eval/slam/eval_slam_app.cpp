@@ -62,7 +62,10 @@ bool EvalSlamApp::Initialize(int argc, char** argv) {
                     "and the generated config in OUT/icp-slam/): time per scan, RMS difference from our trajectory\n"
                     "(paired by scan time, after SE(2) alignment) and its ATE against the reference. The laser SLAM\n"
                     "runs the [laser_slam] options of --config (default: the shipped config/laser_slam.ini), with\n"
-                    "--set overrides; the effective options are printed. The trajectory is each scan's pose.");
+                    "--set overrides; the effective options are printed. The trajectory is each scan's pose.\n"
+                    "Odometry's systematic errors (heading drift per metre, turn and distance scale) as the\n"
+                    "matches calibrate them are printed and written (summary.json odometry_*, scans.csv), with\n"
+                    "--reference also as the reference's motion implies them (reference_odometry_*).");
   flags.AddString("log", &log_path, "LCM log (required)");
   flags.AddString("reference", &reference_path, "reference trajectory: .csv, MRPT ground truth (.txt) or CARMEN log (.log, .clf, .gz)");
   flags.AddString("icp-slam", &icp_input,
