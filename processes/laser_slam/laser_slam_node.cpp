@@ -1,5 +1,6 @@
 #include "laser_slam_node.hpp"
 
+#include <cstdio>
 #include <chrono>
 #include <cmath>
 #include <iostream>
@@ -213,6 +214,14 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
     s.wall_contrast = u->wall_contrast;
   }
   s.wall_measurements = wall_measured_;
+  if (const nav::LaserSlam* f = slam()) {
+    const nav::OdometryCalibration& c = f->odometry_calibration();
+    s.odometry_drift_deg_per_m = c.drift_rad_per_m() * kDegPerRad;
+    s.odometry_turn_scale = c.turn_scale();
+    s.odometry_distance_scale = c.distance_scale();
+    s.odometry_stretches = c.observations();
+    s.odometry_calibration_applied = config_.options.odometry_calibration.apply && !graph_;
+  }
   if (graph_) {
     s.backend = laser_slam_status_t::BACKEND_GRAPH;
     s.keyframes = graph_->keyframes();
@@ -264,10 +273,13 @@ void LaserSlamNode::Report(std::ostream& out) const {
   if (const nav::LaserSlam* s = slam(); s && s->odometry_calibration().observations() > 0) {
     // Odometry's systematic errors as the matches calibrate them (odometry_calibration applies them).
     const nav::OdometryCalibration& c = s->odometry_calibration();
-    out << "laser-slam: odometry as the scans calibrate it: heading drift " << c.drift_rad_per_m() / nav::kRadPerDeg
-        << " deg/m, turn scale " << 100 * c.turn_scale() << " %, distance scale " << 100 * c.distance_scale()
-        << " % (" << c.observations() << " stretches; " << (config_.options.odometry_calibration.apply ? "applied" : "not applied")
-        << ")\n";
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "laser-slam: odometry as the scans calibrate it: heading drift %+.2f deg/m, turn scale %+.1f %%, "
+                  "distance scale %+.1f %% (%d stretches; %s)\n",
+                  c.drift_rad_per_m() / nav::kRadPerDeg, 100 * c.turn_scale(), 100 * c.distance_scale(), c.observations(),
+                  config_.options.odometry_calibration.apply && !graph_ ? "applied" : "not applied");
+    out << line;
   }
   if (grid_) {
     out << "laser-slam: ";

@@ -246,6 +246,9 @@ TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
   // The odometry's 2 % long steps, as the scans calibrate them (estimated, not applied), in the report.
   ASSERT_NE(node.slam(), nullptr);
   EXPECT_NEAR(node.slam()->odometry_calibration().distance_scale(), kScale - 1, 0.005);
+  EXPECT_NEAR(statuses.back().odometry_distance_scale, kScale - 1, 0.005);  // on the bus too
+  EXPECT_GT(statuses.back().odometry_stretches, 10);
+  EXPECT_FALSE(statuses.back().odometry_calibration_applied);
   std::ostringstream report;
   node.Report(report);
   EXPECT_NE(report.str().find("odometry as the scans calibrate it"), std::string::npos) << report.str();
