@@ -45,7 +45,7 @@ for n in names:
     assert abs(s[n + "_ekf_map_consistency_m"] - ours) < 1e-4, n
     # Odometry's systematic errors as the matches calibrate them: the raw-like logs' generator drifts
     # 1.5 deg/m, turns 2 % large and drives 3 % far per unit of noise (perfect odometry: none); CSAIL's
-    # real odometry turns about 6 % short (a least-squares fit against its corrected log).
+    # real odometry turns about 5 % short (as its corrected log's motion says too).
     drift, turn, dist = (float(row["odometry_" + k]) for k in ("drift_deg_per_m", "turn_scale", "distance_scale"))
     assert int(row["odometry_stretches"]) >= 10, n
     if row["kind"] == "carmen_corrected":
@@ -53,7 +53,9 @@ for n in names:
         assert abs(drift - 1.5 * k) < 0.3 and abs(turn - 0.02 * k) < 0.02 and abs(dist - 0.03 * k) < 0.01, (n, drift, turn, dist)
         assert abs(float(row["reference_odometry_drift_deg_per_m"]) - 1.5 * k) < 0.15, n
     else:
+        # Real odometry: the matches and the corrected log's motion agree on its turn scale.
         assert -0.10 < turn < -0.02, (n, turn)
+        assert abs(turn - float(row["reference_odometry_turn_scale"])) < 0.02, (n, turn, row["reference_odometry_turn_scale"])
     assert abs(s[n + "_odometry_turn_scale"] - turn) < 1e-3, n
 assert "Odometry's systematic errors" in open(os.path.join(out, "suite.md")).read()
 assert os.path.getsize(os.path.join(out, "consistency.png")) > 10000  # the consistency of every run, one chart

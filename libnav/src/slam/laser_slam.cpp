@@ -681,6 +681,11 @@ LaserSlamUpdate LaserSlam::UpdateAtScan(const std::vector<Eigen::Vector2d>& all_
   return u;
 }
 
+double MotionHeadingVariance(const DeadReckoningOptions& motion, double path_m, double turn_rad) {
+  const double a = motion.rotation_noise_rad_per_rad * turn_rad, b = motion.rotation_noise_rad_per_m * path_m;
+  return a * a + b * b;
+}
+
 void LaserSlam::ObserveStretch(LaserSlamUpdate* u, bool good) {
   // A stretch of good matches from one scan pose to another is one observation of odometry's
   // error; a scan that is not good ends it unobserved, and the next good one starts another.
@@ -689,12 +694,9 @@ void LaserSlam::ObserveStretch(LaserSlamUpdate* u, bool good) {
     stretch_start_.reset();
   } else if (!stretch_start_) {
     stretch_start_ = pose_;
-  } else if (std::abs(stretch_path_m_) >= options_.odometry_calibration.segment_m ||
-             std::abs(stretch_turn_rad_) >= options_.odometry_calibration.segment_rad) {
-    const double a = options_.motion.rotation_noise_rad_per_rad * stretch_turn_rad_;
-    const double b = options_.motion.rotation_noise_rad_per_m * stretch_path_m_;
-    u->calibration_observed = calibration_.Observe(stretch_raw_, stretch_path_m_, stretch_turn_rad_,
-                                                   stretch_start_->Between(pose_), a * a + b * b);
+  } else if (calibration_.LongEnough(stretch_path_m_, stretch_turn_rad_)) {
+    calibration_.Observe(stretch_raw_, stretch_path_m_, stretch_turn_rad_, stretch_start_->Between(pose_),
+                         MotionHeadingVariance(options_.motion, stretch_path_m_, stretch_turn_rad_));
     stretch_start_ = pose_;
   } else {
     restart = false;  // too short yet: the stretch goes on

@@ -68,7 +68,7 @@ bool OdometryCalibration::Observe(const Pose2& raw, double raw_path_m, double ra
   // The turn the scans saw, unwrapped as odometry's (a stretch can turn more than half a circle).
   const double residual = WrapAngle(raw_turn_rad - estimated.theta_rad);
   const double turn = raw_turn_rad - residual;
-  if (std::abs(raw_path_m) < options_.segment_m && std::abs(raw_turn_rad) < options_.segment_rad) return false;
+  if (!LongEnough(raw_path_m, raw_turn_rad)) return false;
 
   const double forget = std::exp(-std::abs(raw_path_m) / options_.memory_m);
   const Eigen::Vector2d h(turn, raw_path_m);
@@ -76,10 +76,7 @@ bool OdometryCalibration::Observe(const Pose2& raw, double raw_path_m, double ra
   const double var = 2 * sp * sp + options_.random_rad_per_sqrt_m * options_.random_rad_per_sqrt_m * std::abs(raw_path_m) +
                      st * st;
   // The prior's and the evidence's uncertainty of the fit where this observation looks.
-  Eigen::Matrix2d information = heading_information_;
-  information(0, 0) += 1 / (options_.prior_turn_scale * options_.prior_turn_scale);
-  information(1, 1) += 1 / (options_.prior_drift_rad_per_m * options_.prior_drift_rad_per_m);
-  const double fit_var = h.dot(information.ldlt().solve(h));
+  const double fit_var = h.dot(HeadingInformation().ldlt().solve(h));
   const double off = residual - h.dot(heading_);
   // The corrected odometry's error on this stretch (against the fit before it) against the
   // model's variance: every stretch counts (poor odometry is no outlier of itself), an outlier's
@@ -104,9 +101,8 @@ bool OdometryCalibration::Observe(const Pose2& raw, double raw_path_m, double ra
     const double dres = std::hypot(raw.x_m, raw.y_m) - est_m;
     const double sd = options_.random_distance_fraction * est_m;
     const double dvar = 2 * options_.pose_sigma_m * options_.pose_sigma_m + sd * sd;
-    const double dinfo = distance_information_ + 1 / (options_.prior_distance_scale * options_.prior_distance_scale);
     const double doff = dres - distance_ * est_m;
-    if (doff * doff <= options_.outlier_sigmas * options_.outlier_sigmas * (dvar + est_m * est_m / dinfo)) {
+    if (doff * doff <= o2 * (dvar + est_m * est_m / DistanceInformation())) {
       distance_information_ = forget * distance_information_ + est_m * est_m / dvar;
       distance_vector_ = forget * distance_vector_ + est_m * dres / dvar;
     }
@@ -116,15 +112,26 @@ bool OdometryCalibration::Observe(const Pose2& raw, double raw_path_m, double ra
   return true;
 }
 
-void OdometryCalibration::Solve() {
+bool OdometryCalibration::LongEnough(double raw_path_m, double raw_turn_rad) const {
+  return std::abs(raw_path_m) >= options_.segment_m || std::abs(raw_turn_rad) >= options_.segment_rad;
+}
+
+Eigen::Matrix2d OdometryCalibration::HeadingInformation() const {
   Eigen::Matrix2d information = heading_information_;
   information(0, 0) += 1 / (options_.prior_turn_scale * options_.prior_turn_scale);
   information(1, 1) += 1 / (options_.prior_drift_rad_per_m * options_.prior_drift_rad_per_m);
-  heading_ = information.ldlt().solve(heading_vector_);
+  return information;
+}
+
+double OdometryCalibration::DistanceInformation() const {
+  return distance_information_ + 1 / (options_.prior_distance_scale * options_.prior_distance_scale);
+}
+
+void OdometryCalibration::Solve() {
+  heading_ = HeadingInformation().ldlt().solve(heading_vector_);
   heading_(0) = std::clamp(heading_(0), -kMaxScale, kMaxScale);
   heading_(1) = std::clamp(heading_(1), -kMaxDriftRadPerM, kMaxDriftRadPerM);
-  const double dinfo = distance_information_ + 1 / (options_.prior_distance_scale * options_.prior_distance_scale);
-  distance_ = std::clamp(distance_vector_ / dinfo, -kMaxScale, kMaxScale);
+  distance_ = std::clamp(distance_vector_ / DistanceInformation(), -kMaxScale, kMaxScale);
 }
 
 }  // namespace snapnav::nav

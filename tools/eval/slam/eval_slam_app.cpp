@@ -245,7 +245,7 @@ int EvalSlamApp::Run() {
   if (!reference_path.empty()) {
     const eval::Reference ref = eval::LoadReference(reference_path, &log);
     {
-      const eval::OdometryFigure implied = eval::ReferenceOdometryCalibration(run, ref);
+      const eval::OdometryFigure implied = eval::ReferenceOdometryCalibration(run, ref, options);
       std::cerr << "eval-slam: odometry against the reference's motion: " << eval::DescribeOdometry(implied) << "\n";
       odometry_json("reference_odometry_", implied);
     }

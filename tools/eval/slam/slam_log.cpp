@@ -321,9 +321,9 @@ OdometryFigure SlamOdometryCalibration(const SlamRun& run) {
   return f;
 }
 
-OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference& reference) {
-  nav::OdometryCalibration calibration;
-  const nav::OdometryCalibrationOptions& o = calibration.options();
+OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference& reference,
+                                            const nav::LaserSlamOptions& options) {
+  nav::OdometryCalibration calibration(options.odometry_calibration);
   std::optional<size_t> start;
   std::optional<nav::Pose2> start_reference;
   double path = 0, turn = 0;
@@ -335,9 +335,9 @@ OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference&
     }
     const auto truth = reference.Find(run.ranges_key[i], run.utime[i]);
     if (!truth) continue;
-    if (start && (std::abs(path) >= o.segment_m || std::abs(turn) >= o.segment_rad)) {
+    if (start && calibration.LongEnough(path, turn)) {
       calibration.Observe(run.dead_reckoning[*start].Between(run.dead_reckoning[i]), path, turn,
-                          start_reference->Between(*truth));
+                          start_reference->Between(*truth), nav::MotionHeadingVariance(options.motion, path, turn));
     } else if (start) {
       continue;  // the stretch goes on
     }

@@ -104,7 +104,9 @@ struct OdometryFigure {
   int stretches = 0;
 };
 OdometryFigure SlamOdometryCalibration(const SlamRun& run);
-OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference& reference);
+// `options`: the laser SLAM's (its odometry_calibration and motion noise: the same estimator).
+OdometryFigure ReferenceOdometryCalibration(const SlamRun& run, const Reference& reference,
+                                            const nav::LaserSlamOptions& options);
 // "heading drift 1.45 deg/m, turns +2.0 %, distance +3.1 % (312 stretches)" or "no stretch".
 std::string DescribeOdometry(const OdometryFigure& f);
 

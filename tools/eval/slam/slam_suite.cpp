@@ -230,7 +230,7 @@ SuiteResult RunEntry(const Suite& suite, const SuiteEntry& e, const nav::LaserSl
   r.reference_consistency_m = ConsistencyOver(log, ekf_run, nullptr, reference);
   r.reference_check = CheckReference(log, reference);
   r.odometry = SlamOdometryCalibration(ekf_run);
-  r.reference_odometry = ReferenceOdometryCalibration(ekf_run, reference);
+  r.reference_odometry = ReferenceOdometryCalibration(ekf_run, reference, options);
   WriteReferenceCheckCsv((dir / "reference_suspects.csv").string(), r.reference_check);
   if (graph_run) {
     const GraphSlamRun& g = *graph_run;

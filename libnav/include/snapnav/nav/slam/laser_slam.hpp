@@ -197,6 +197,10 @@ struct LaserSlamOptions : MatcherOptions {
   void Validate() const;                    // throws std::invalid_argument
 };
 
+// The motion noise model's heading variance over a stretch of odometry (its rotation noise per
+// radian turned and per metre driven): what OdometryCalibration weighs corrected odometry against.
+double MotionHeadingVariance(const DeadReckoningOptions& motion, double path_m, double turn_rad);
+
 // The thesis' own procedure (5.3.1) on `base`'s map settings: point-to-point ICP at one match
 // distance (0.25 m) from the odometry prediction, no search, dead reckoning's odometry noise summed
 // per increment, the exact nearest map point, every match an update (no gate, no stale odometry,
@@ -247,7 +251,6 @@ struct LaserSlamUpdate {
   double wall_contrast = 0;    // ... its contrast (0: no alignment)
   // The odometry calibration after this scan (LaserSlamOptions::odometry_calibration; 0: none).
   double odometry_drift_rad_per_m = 0, odometry_turn_scale = 0, odometry_distance_scale = 0;
-  bool calibration_observed = false;  // this scan closed a stretch that joined the calibration
   int odometry_calibration_stretches = 0;  // stretches in the calibration so far
   Pose2 measurement;           // the ICP pose
   Eigen::Matrix3d measurement_covariance = Eigen::Matrix3d::Zero();

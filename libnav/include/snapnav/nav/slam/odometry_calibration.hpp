@@ -69,11 +69,14 @@ class OdometryCalibration {
   // motion the scans estimated (`estimated`, the pose change between two scan poses). Returns
   // false when the stretch is too short to count or was an outlier. (With a reference trajectory's
   // motion as `estimated`, the calibration that the reference implies.)
-  // `model_variance`: the motion noise model's heading variance for the stretch (NoiseScale2).
+  // `model_variance`: the motion noise model's heading variance for the stretch (NoiseScale2, and
+  // the outlier test allows for it).
   bool Observe(const Pose2& raw, double raw_path_m, double raw_turn_rad, const Pose2& estimated,
                double model_variance = 0);
   // The square of the scale of the motion noise that corrected odometry deserves (1: as modelled).
   double NoiseScale2() const;
+  // A stretch of odometry's raw motion long enough to be an observation (segment_m, segment_rad).
+  bool LongEnough(double raw_path_m, double raw_turn_rad) const;
 
   double drift_rad_per_m() const { return heading_(1); }
   double turn_scale() const { return heading_(0); }
@@ -84,6 +87,9 @@ class OdometryCalibration {
 
  private:
   void Solve();
+  // The information of the heading fit and of the distance fit, the prior's included.
+  Eigen::Matrix2d HeadingInformation() const;
+  double DistanceInformation() const;
 
   OdometryCalibrationOptions options_;
   // Heading: raw turn - estimated turn = turn_scale * estimated turn + drift * signed distance.
