@@ -186,13 +186,15 @@ const char* PredictionSourceName(PredictionSource p) {
   return "?";
 }
 
-void LaserSlam::Predict(const Pose2& odometry_delta) {
+Pose2 LaserSlam::TakeOdometry(const Pose2& raw) {
   // Odometry's raw motion for the calibration's stretch; the prediction from it corrected.
-  stretch_raw_ = stretch_raw_.Compose(odometry_delta);
-  stretch_path_m_ += std::copysign(std::hypot(odometry_delta.x_m, odometry_delta.y_m), odometry_delta.x_m);
-  stretch_turn_rad_ += odometry_delta.theta_rad;
-  PredictCorrected(calibration_.Correct(odometry_delta));
+  stretch_raw_ = stretch_raw_.Compose(raw);
+  stretch_path_m_ += std::copysign(std::hypot(raw.x_m, raw.y_m), raw.x_m);
+  stretch_turn_rad_ += raw.theta_rad;
+  return calibration_.Correct(raw);
 }
+
+void LaserSlam::Predict(const Pose2& odometry_delta) { PredictCorrected(TakeOdometry(odometry_delta)); }
 
 void LaserSlam::PredictCorrected(const Pose2& odometry_delta) {
   if (!options_.motion_noise_per_scan) {
@@ -249,8 +251,8 @@ void LaserSlam::Reanchor() {
 }
 
 void LaserSlam::Predict(const Pose2& odometry_delta, int64_t end_utime) {
-  const Pose2 corrected = calibration_.Correct(odometry_delta);
-  Predict(odometry_delta);
+  const Pose2 corrected = TakeOdometry(odometry_delta);
+  PredictCorrected(corrected);
   const int64_t start = last_odometry_utime_ ? std::min(*last_odometry_utime_, end_utime) : end_utime;
   recent_odometry_.push_back({start, end_utime, corrected});
   last_odometry_utime_ = end_utime;

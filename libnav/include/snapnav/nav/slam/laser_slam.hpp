@@ -319,6 +319,8 @@ class LaserSlam {
   Pose2 odometry_since_scan_;         // odometry's motion since the last scan (corrected)
   // The prediction from one increment of odometry already corrected by the calibration.
   void PredictCorrected(const Pose2& odometry_delta);
+  // One raw increment of odometry: added to the calibration's stretch; returned corrected.
+  Pose2 TakeOdometry(const Pose2& raw);
   // The odometry calibration and its current stretch: the scan pose it started at (after a good
   // match) and odometry's raw motion since (composed, signed path, summed turn).
   OdometryCalibration calibration_;
