@@ -64,6 +64,7 @@ void GraphSlamOptions::Validate() const {
   require(nonneg(local_map_m), "local_map_m", "must be >= 0");
   require(nonneg(frontend_reset_m), "frontend_reset_m", "must be >= 0");
   require(nonneg(frontend_reset_rad), "frontend_reset_deg", "must be >= 0");
+  require(nonneg(frontend_match_sigma_theta_rad), "frontend_match_sigma_theta_deg", "must be >= 0");
   require(nonneg(loop_min_travel_m), "loop_min_travel_m", "must be >= 0");
   require(nonneg(loop_distance_m), "loop_distance_m", "must be >= 0");
   require(positive(loop_search_sigmas), "loop_search_sigmas", "must be > 0");
@@ -125,17 +126,19 @@ namespace {
 // runs into front-end failures the graph did not undo (docs/experiments/2026-12-05-wall-orientation.md).
 // And without applying the odometry calibration (estimated all the same): its narrower prediction
 // makes the keyframe edges' covariances narrower, and the graph lost 3-8 of 76 runs within its goal
-// (docs/experiments/2026-12-07-odometry-calibration.md).
-LaserSlamOptions GraphFrontEnd(LaserSlamOptions o) {
+// (docs/experiments/2026-12-07-odometry-calibration.md). And with the graph's own floor of the
+// heading's std. dev. after a match (GraphSlamOptions::frontend_match_sigma_theta_rad).
+LaserSlamOptions GraphFrontEnd(LaserSlamOptions o, const GraphSlamOptions& graph) {
   o.wall_orientation = false;
   o.odometry_calibration.apply = false;
+  o.match_sigma_theta_rad = graph.frontend_match_sigma_theta_rad;
   return o;
 }
 
 }  // namespace
 
 GraphSlam::GraphSlam(const LaserSlamOptions& front_end, const GraphSlamOptions& options, const Pose2& start)
-    : front_options_(GraphFrontEnd(front_end)), options_(options), front_(front_options_, start), start_(start) {
+    : front_options_(GraphFrontEnd(front_end, options)), options_(options), front_(front_options_, start), start_(start) {
   options_.Validate();
   last_posterior_ = front_.covariance();
 }

@@ -103,7 +103,7 @@ struct LaserSlamOptions : MatcherOptions {
   // covariance after each update (std. devs.; scaled as the interval noise, interval_full_*), so
   // the next prediction and its gate allow for it.
   double match_sigma_xy_m = 0.02;
-  double match_sigma_theta_rad = 0.5 * kRadPerDeg;
+  double match_sigma_theta_rad = 0.75 * kRadPerDeg;
   // The gate: a match is a measurement only when the squared Mahalanobis distance of its
   // innovation (ICP pose - prediction, covariance prediction + measurement) is below this
   // (chi-square, 3 degrees of freedom: 16.27 for 99.9 %). Beyond it the filter coasts on the
