@@ -53,6 +53,38 @@ TEST(SlamSuiteFile, ShippedSuiteHasEveryLogAtEveryOdometry) {
   EXPECT_EQ(short_range, 11);
 }
 
+// The sparse set (every 2nd and 3rd scan, seeds 6-8) and the runs made after the heading floor was
+// chosen (seeds 13-16): the five labs each, with seeds the suite and the held-out file do not use
+// at those rates.
+TEST(SlamSuiteFile, TheSparseAndUnseenSetsLoad) {
+  const Suite suite = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite.ini");
+  const Suite held = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_heldout.ini");
+  std::set<std::pair<int, int>> used;  // (seed, every) of the suite's and held-out file's noisy runs
+  for (const Suite* f : {&suite, &held}) {
+    for (const SuiteEntry& e : f->entries) {
+      if (e.kind == "carmen_corrected" && e.noise > 0) used.insert({e.noise_seed, e.every});
+    }
+  }
+  const Suite sparse = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_sparse.ini");
+  EXPECT_EQ(sparse.entries.size(), 30u);
+  for (const SuiteEntry& e : sparse.entries) {
+    EXPECT_EQ(e.kind, "carmen_corrected") << e.name;
+    EXPECT_GE(e.every, 2) << e.name;
+    EXPECT_DOUBLE_EQ(e.goal_ate_m, 0.30) << e.name;
+    EXPECT_FALSE(used.count({e.noise_seed, e.every})) << e.name;
+  }
+  const Suite unseen = LoadSuite(SNAPNAV_CONFIG_DIR "/slam_suite_unseen.ini");
+  EXPECT_EQ(unseen.entries.size(), 25u);
+  int perfect = 0;
+  for (const SuiteEntry& e : unseen.entries) {
+    EXPECT_GE(e.noise_seed, 13) << e.name;
+    EXPECT_DOUBLE_EQ(e.goal_ate_m, e.noise > 0 ? 0.30 : 0.10) << e.name;
+    EXPECT_EQ(e.no_worse_than_dead_reckoning, e.noise > 0) << e.name;
+    perfect += e.noise == 0;
+  }
+  EXPECT_EQ(perfect, 5);
+}
+
 TEST(SlamSuiteFile, BadSuiteIsAnErrorNamingFileAndKey) {
   const auto dir = std::filesystem::temp_directory_path() / "snapnav_slam_suite_file_test";
   std::filesystem::create_directories(dir);

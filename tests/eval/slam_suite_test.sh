@@ -50,7 +50,9 @@ for n in names:
     assert int(row["odometry_stretches"]) >= 10, n
     if row["kind"] == "carmen_corrected":
         k = float(row["noise"])
-        assert abs(drift - 1.5 * k) < 0.3 and abs(turn - 0.02 * k) < 0.02 and abs(dist - 0.03 * k) < 0.01, (n, drift, turn, dist)
+        # (every 3rd scan: about 45 stretches against 120-350 at the full rate, a wider estimate)
+        w = 1.0 if int(row["every"]) == 1 else 1.5
+        assert abs(drift - 1.5 * k) < 0.3 * w and abs(turn - 0.02 * k) < 0.02 * w and abs(dist - 0.03 * k) < 0.01 * w, (n, drift, turn, dist)
         assert abs(float(row["reference_odometry_drift_deg_per_m"]) - 1.5 * k) < 0.15, n
     else:
         # Real odometry: the matches and the corrected log's motion agree on its turn scale.

@@ -71,13 +71,15 @@ TEST(ConfigFiles, EveryShippedIniIsKnown) {
   // landmarks.ini.
   // laser_slam.ini: tests/slam/laser_slam_node_test.cpp; placecells.ini: tests/placecells/place_cells_glue_test.cpp;
   // navigator.ini: tests/navigator/; viewer.ini: tests/viewer/viewer_test.cpp; ratslam.ini:
-  // tests/ratslam/ratslam_node_test.cpp; slam_suite.ini, slam_suite_heldout.ini (eval-slam --suite):
+  // tests/ratslam/ratslam_node_test.cpp; slam_suite.ini, slam_suite_heldout.ini, slam_suite_sparse.ini,
+  // slam_suite_unseen.ini (eval-slam --suite):
   // tests/eval/slam_suite_file_test.cpp. Deployment files (config/deploy/*.deploy) and the demo's
   // config variants (config/deploy/demo/*.ini): tests/launch/.
   const std::set<std::string> known{"dead_reckoning.ini", "bus_check.ini", "sim.ini", "omni_camera.ini",
                                     "laser_hokuyo.ini", "homing.ini", "laser_slam.ini", "landmarks.ini",
                                     "placecells.ini", "navigator.ini", "viewer.ini", "ratslam.ini", "fused_slam.ini",
-                                    "slam_suite.ini", "slam_suite_heldout.ini"};
+                                    "slam_suite.ini", "slam_suite_heldout.ini", "slam_suite_sparse.ini",
+                                    "slam_suite_unseen.ini"};
   for (const auto& entry : std::filesystem::directory_iterator(kConfigDir)) {
     if (entry.path().extension() == ".ini") {
       EXPECT_TRUE(known.count(entry.path().filename().string())) << "untested config " << entry.path();
