@@ -1,8 +1,8 @@
 #include "laser_slam_node.hpp"
 
-#include <cstdio>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <ostream>
 #include <stdexcept>
