@@ -87,6 +87,7 @@ const OptionTable<nav::GraphSlamOptions>& GraphSlamOptionTable() {
       .Degrees("graph_keyframe_angle_deg", &G::keyframe_angle_rad)
       .Number("graph_keyframe_reuse_m", "m", &G::keyframe_reuse_m)
       .Degrees("graph_keyframe_reuse_deg", &G::keyframe_reuse_rad)
+      .Number("graph_keyframes_per_place", "", &G::keyframes_per_place)
       .Number("graph_edge_sigma_xy_m", "m", &G::edge_sigma_xy_m)
       .Number("graph_edge_sigma_xy_per_m", "1/m", &G::edge_sigma_xy_per_m)
       .Degrees("graph_edge_sigma_theta_deg", &G::edge_sigma_theta_rad)

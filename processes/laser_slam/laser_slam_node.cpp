@@ -265,7 +265,8 @@ void LaserSlamNode::Report(std::ostream& out) const {
   if (slam_) out << ", map " << slam_->map().size() << " points";
   if (!graph_ && config_.options.wall_orientation) out << ", heading measured by the walls on " << wall_measured_ << " scans";
   if (graph_) {
-    out << ", graph back end: " << graph_->keyframes() << " keyframes, loop closures " << graph_->loop_accepted()
+    out << ", graph back end: " << graph_->keyframes() << " keyframes (" << graph_->keyframe_reuses()
+        << " due but reused), loop closures " << graph_->loop_accepted()
         << " accepted / " << graph_->loop_rejected() << " rejected of " << graph_->loop_candidates()
         << " candidates, " << graph_->corrections() << " corrections, map " << graph_->Map().size() << " points";
   }

@@ -458,9 +458,10 @@ TEST(GraphSlam, OffTheScanThreadTheLoopIsClosedTheSameOnEveryRun) {
   EXPECT_LT(std::hypot(a.live.back().x_m - path.back().x_m, a.live.back().y_m - path.back().y_m), 0.3);
 }
 
-// Laps of one room for a long time (8 laps, 350 m): with keyframe reuse the graph stops growing
-// once the room is mapped (keyframes and map points plateau after the second lap) while the
-// trajectory stays on the truth; without it, it grows with every lap.
+// Laps of one room for a long time (8-10 laps, 320-400 m): with keyframe reuse the graph stops
+// growing once the room is mapped (from the first revisit: keyframes and map points plateau after
+// the first lap; with five keyframes per place, after the fifth) while the trajectory stays on the
+// truth; without it, it grows with every lap.
 struct LapCounts {
   std::vector<int> keyframes;      // after each lap
   std::vector<size_t> map_points;  // ...
@@ -497,7 +498,8 @@ LapCounts DriveLaps(int laps, const GraphSlamOptions& options) {
 TEST(GraphSlam, KeyframeReuseKeepsTheGraphBoundedInOneRoom) {
   GraphSlamOptions o = TestGraphOptions();
   o.keyframe_reuse_m = 0.3;
-  o.loop_async = true;  // (as a live robot would run it)
+  o.keyframes_per_place = 1;  // reuse from the first revisit
+  o.loop_async = true;        // (as a live robot would run it)
   const LapCounts reuse = DriveLaps(8, o);
   ASSERT_EQ(reuse.keyframes.size(), 8u);
   std::string counts;
@@ -510,6 +512,20 @@ TEST(GraphSlam, KeyframeReuseKeepsTheGraphBoundedInOneRoom) {
   EXPECT_LE(reuse.map_points.back(), reuse.map_points[1] + reuse.map_points[1] / 10) << counts;
   EXPECT_GT(reuse.reuses, 300) << counts;
   EXPECT_LT(reuse.rmse_m, 0.1) << counts;
+  // With five keyframes per place (as shipped) the first passes each add theirs, as without reuse
+  // (the real logs' few revisits never reach five: their graphs are as without reuse), and once a
+  // place holds five the graph stays as it is.
+  o.keyframes_per_place = 5;
+  const LapCounts five = DriveLaps(10, o);
+  ASSERT_EQ(five.keyframes.size(), 10u);
+  counts.clear();
+  for (size_t i = 0; i < five.keyframes.size(); ++i) counts += std::to_string(five.keyframes[i]) + " ";
+  std::cout << "10 laps, 5 keyframes per place: keyframes after each lap " << counts << "; " << five.reuses
+            << " reuses, RMSE " << five.rmse_m << " m\n";
+  EXPECT_GE(five.keyframes[3], five.keyframes[0] * 3) << "the first passes add their keyframes: " << counts;
+  EXPECT_LE(five.keyframes.back(), five.keyframes[6] + 10) << "then the graph stays: " << counts;
+  EXPECT_GT(five.reuses, 100) << counts;
+  EXPECT_LT(five.rmse_m, 0.1) << counts;
   // Without reuse every lap adds its keyframes.
   o.keyframe_reuse_m = 0;
   const LapCounts grow = DriveLaps(4, o);
@@ -624,6 +640,9 @@ TEST(GraphSlamOptions, InvalidValuesAreRejected) {
   EXPECT_THROW(GraphSlam(LaserSlamOptions{}, o), std::invalid_argument);
   o = {};
   o.loop_async_scans = 0;
+  EXPECT_THROW(o.Validate(), std::invalid_argument);
+  o = {};
+  o.keyframes_per_place = 0;
   EXPECT_THROW(o.Validate(), std::invalid_argument);
   EXPECT_NO_THROW(GraphSlamOptions{}.Validate());
   EXPECT_STREQ(LoopOutcomeName(LoopOutcome::kSwitchedOff), "switched_off");

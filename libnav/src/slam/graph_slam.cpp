@@ -53,6 +53,7 @@ void GraphSlamOptions::Validate() const {
   require(positive(keyframe_angle_rad), "keyframe_angle_deg", "must be > 0");
   require(nonneg(keyframe_reuse_m), "keyframe_reuse_m", "must be >= 0");
   require(nonneg(keyframe_reuse_rad), "keyframe_reuse_deg", "must be >= 0");
+  require(keyframes_per_place >= 1, "keyframes_per_place", "must be >= 1");
   require(nonneg(edge_sigma_xy_m), "edge_sigma_xy_m", "must be >= 0");
   require(nonneg(edge_sigma_xy_per_m), "edge_sigma_xy_per_m", "must be >= 0");
   require(nonneg(edge_sigma_theta_rad), "edge_sigma_theta_deg", "must be >= 0");
@@ -372,7 +373,7 @@ int GraphSlam::ReusableKeyframe(const Pose2& pose) const {
     }
     near.push_back({d, k});
   }
-  if (near.empty()) return -1;
+  if (near.empty() || near.size() < static_cast<size_t>(options_.keyframes_per_place)) return -1;
   std::sort(near.begin(), near.end());
   // Only where the graph knows the keyframe's position relative to the last one (as a closure may
   // join alone: loop_confident_sigma_m); where it does not (drift since the last closure), a new

@@ -55,8 +55,14 @@ struct GraphSlamOptions {
   // loop_confident_sigma_m (no drift since: not a loop yet to close), no keyframe joins: the scan's
   // pose is kept relative to that keyframe instead, and the next keyframe's edge starts from it. New keyframes then lie at least keyframe_reuse_m from all
   // others (as the graph placed them), so their number is bounded by the area driven (0: off).
-  double keyframe_reuse_m = 0;
+  double keyframe_reuse_m = 0.3;
   double keyframe_reuse_rad = 30 * kRadPerDeg;
+  // ... and only where at least this many keyframes already lie within keyframe_reuse_m and
+  // keyframe_reuse_rad of the scan's pose (the place mapped on that many passes): the first passes
+  // of a place each add their keyframes, scan-matched edges and loop searches, as without reuse,
+  // and from the next pass on the place's keyframes are reused, so a place keeps at most about this
+  // many keyframes however often the robot comes back (1: reuse from the first revisit).
+  int keyframes_per_place = 5;
   // The edge between consecutive keyframes: the front end's motion; its covariance the front end's
   // uncertainty relative to the keyframe before (its prediction noise since, narrowed by each
   // accepted match's measurement covariance) plus this much per edge and per metre of the edge's
