@@ -95,7 +95,6 @@ const OptionTable<nav::GraphSlamOptions>& GraphSlamOptionTable() {
       .Number("graph_local_map_m", "m", &G::local_map_m)
       .Number("graph_frontend_reset_m", "m", &G::frontend_reset_m)
       .Degrees("graph_frontend_reset_deg", &G::frontend_reset_rad)
-      .Degrees("graph_frontend_match_sigma_theta_deg", &G::frontend_match_sigma_theta_rad)
       .Number("graph_loop_min_travel_m", "m", &G::loop_min_travel_m)
       .Number("graph_loop_distance_m", "m", &G::loop_distance_m)
       .Number("graph_loop_search_sigmas", "", &G::loop_search_sigmas)

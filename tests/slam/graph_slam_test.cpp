@@ -360,6 +360,7 @@ LaserSlamOptions DeadReckoningFrontEnd() {
   LaserSlamOptions f;
   f.gate_mahalanobis2 = 1e-12;  // every match beyond the gate
   f.outlier_scale = 1;          // ... and no heavy tail
+  f.wall_orientation = false;   // ... and no heading from the walls either
   return f;
 }
 
@@ -600,31 +601,28 @@ TEST(LaserSlam, ResetMapReplacesTheMapAndTheFilterMatchesAgainstIt) {
   EXPECT_THROW(slam.ResetMap(points, {}), std::invalid_argument);
 }
 
-// The graph's front end runs with the graph's own heading floor after a match
-// (frontend_match_sigma_theta_rad), whatever the EKF's (match_sigma_theta_rad, 0.75 deg): after every
-// accepted match its heading's std. dev. is the floor it was given, scaled as the interval noise
-// (scans 0.1 m apart: a third of it, interval_full_m being 0.3 m).
-TEST(GraphSlam, TheFrontEndKeepsTheGraphsHeadingFloor) {
-  std::mt19937 rng(5);
+// The graph's front end is the EKF's, the walls' heading measurement included (unless the EKF's
+// options turn it off), but it never applies the odometry calibration.
+TEST(GraphSlam, TheFrontEndIsTheEkfsButNeverAppliesTheCalibration) {
   const std::vector<Segment> world = LoopWorld();
   const std::vector<Pose2> path = SquarePath(1);
-  const LaserSlamOptions front;  // the EKF's defaults
-  ASSERT_NEAR(front.match_sigma_theta_rad, 0.75 * kDeg, 1e-12);
-  const double share = std::min(1.0, 0.1 / front.interval_full_m);
-  for (const double floor_deg : {0.5, 2.0}) {
-    GraphSlamOptions o = TestGraphOptions();
-    o.frontend_match_sigma_theta_rad = floor_deg * kDeg;
-    GraphSlam slam(front, o, path.front());
-    int checked = 0;
-    for (size_t i = 0; i < 40 && i < path.size(); ++i) {
+  for (const bool walls : {true, false}) {
+    std::mt19937 rng(5);
+    LaserSlamOptions front;  // the EKF's defaults
+    front.wall_orientation = walls;
+    front.odometry_calibration.apply = true;
+    GraphSlam slam(front, TestGraphOptions(), path.front());
+    EXPECT_FALSE(slam.front_end().odometry_calibration().options().apply);
+    int measured = 0;
+    for (size_t i = 0; i < path.size(); ++i) {
       if (i > 0) slam.Predict(path[i - 1].Between(path[i]));
-      const GraphSlamUpdate u = slam.Update(Scan(world, path[i], &rng));
-      if (i == 0 || u.front_end.outcome != MatchOutcome::kAccepted) continue;
-      const double sigma_deg = std::sqrt(slam.front_end().covariance()(2, 2)) / kDeg;
-      EXPECT_NEAR(sigma_deg, share * floor_deg, 0.05 * share * floor_deg) << "scan " << i;
-      ++checked;
+      measured += slam.Update(Scan(world, path[i], &rng)).front_end.wall_measured;
     }
-    EXPECT_GE(checked, 20) << "floor " << floor_deg;
+    if (walls) {
+      EXPECT_GT(measured, static_cast<int>(path.size()) / 2) << "the walls measure the heading";
+    } else {
+      EXPECT_EQ(measured, 0);
+    }
   }
 }
 

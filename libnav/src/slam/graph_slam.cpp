@@ -65,7 +65,6 @@ void GraphSlamOptions::Validate() const {
   require(nonneg(local_map_m), "local_map_m", "must be >= 0");
   require(nonneg(frontend_reset_m), "frontend_reset_m", "must be >= 0");
   require(nonneg(frontend_reset_rad), "frontend_reset_deg", "must be >= 0");
-  require(nonneg(frontend_match_sigma_theta_rad), "frontend_match_sigma_theta_deg", "must be >= 0");
   require(nonneg(loop_min_travel_m), "loop_min_travel_m", "must be >= 0");
   require(nonneg(loop_distance_m), "loop_distance_m", "must be >= 0");
   require(positive(loop_search_sigmas), "loop_search_sigmas", "must be > 0");
@@ -122,24 +121,21 @@ const char* LoopOutcomeName(LoopOutcome o) {
 
 namespace {
 
-// The graph's front end: the EKF's options without the walls' heading measurement. The loop closures
-// bound the heading drift it corrects; on the every 2nd and 3rd scan runs it turned two recoverable
-// runs into front-end failures the graph did not undo (docs/experiments/2026-12-05-wall-orientation.md).
-// And without applying the odometry calibration (estimated all the same): its narrower prediction
-// makes the keyframe edges' covariances narrower, and the graph lost 3-8 of 76 runs within its goal
-// (docs/experiments/2026-12-07-odometry-calibration.md). And with the graph's own floor of the
-// heading's std. dev. after a match (GraphSlamOptions::frontend_match_sigma_theta_rad).
-LaserSlamOptions GraphFrontEnd(LaserSlamOptions o, const GraphSlamOptions& graph) {
-  o.wall_orientation = false;
+// The graph's front end: the EKF's, its walls' heading measurement and heading floor included (with
+// them the graph's geometric mean ATE over the 101 real runs went from 0.136 to 0.119 m,
+// docs/experiments/2026-12-07-graph-front-end-walls.md), but without applying the odometry
+// calibration (estimated all the same): its narrower prediction makes the keyframe edges'
+// covariances narrower, and the graph lost 3-8 of 76 runs within its goal
+// (docs/experiments/2026-12-07-odometry-calibration.md).
+LaserSlamOptions GraphFrontEnd(LaserSlamOptions o) {
   o.odometry_calibration.apply = false;
-  o.match_sigma_theta_rad = graph.frontend_match_sigma_theta_rad;
   return o;
 }
 
 }  // namespace
 
 GraphSlam::GraphSlam(const LaserSlamOptions& front_end, const GraphSlamOptions& options, const Pose2& start)
-    : front_options_(GraphFrontEnd(front_end, options)), options_(options), front_(front_options_, start), start_(start) {
+    : front_options_(GraphFrontEnd(front_end)), options_(options), front_(front_options_, start), start_(start) {
   options_.Validate();
   last_posterior_ = front_.covariance();
 }

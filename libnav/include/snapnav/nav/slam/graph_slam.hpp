@@ -79,11 +79,6 @@ struct GraphSlamOptions {
   // its map rebuilt from the optimized keyframes; smaller ones only move the published pose.
   double frontend_reset_m = 0.05;
   double frontend_reset_rad = 0.5 * kRadPerDeg;
-  // The front end's floor of the heading's std. dev. after a match (LaserSlamOptions::
-  // match_sigma_theta_rad, which it replaces): the EKF's 0.75 deg gives its walls' measurement its
-  // weight; the graph's front end runs without the walls, and kept its own 0.5 deg
-  // (docs/experiments/2026-12-07-match-heading-floor.md).
-  double frontend_match_sigma_theta_rad = 0.5 * kRadPerDeg;
   // Loop closure: candidates are keyframes at least loop_min_travel_m of travel behind the new one
   // whose position lies within loop_distance_m plus loop_search_sigmas relative std. devs. of it.
   double loop_min_travel_m = 10;

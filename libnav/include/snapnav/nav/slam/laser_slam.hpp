@@ -153,7 +153,7 @@ struct LaserSlamOptions : MatcherOptions {
   // A building's walls stay parallel over a floor: the local map's small turns scan by scan do not
   // add up. The map's histogram is built from the scans' points as they join the map (ResetMap keeps
   // it; SeedMap adds none: localization in a saved map runs without it). false: off. (GraphSlam's
-  // front end runs without it.)
+  // front end uses it as the EKF does.)
   bool wall_orientation = true;
   double wall_window_rad = 10 * kRadPerDeg;
   double wall_kernel_rad = 1 * kRadPerDeg;
