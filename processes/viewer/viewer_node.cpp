@@ -82,6 +82,8 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.place_cell_match_channel = channel_prefix + ini.GetString("channels", "place_cell_match");
   c.scan_channel = channel_prefix + ini.GetString("channels", "scan");
   c.grid_channel = channel_prefix + ini.GetString("channels", "grid");
+  c.laser_slam_status_channel = channel_prefix + ini.GetString("channels", "laser_slam_status");
+  c.laser_slam_pose_channel = channel_prefix + ini.GetString("channels", "laser_slam_pose");
 
   ViewerTable().ReadKeys(ini, "viewer", &c);
   for (auto& ch : c.render.robot_pose_channels) ch = channel_prefix + ch;
@@ -113,7 +115,9 @@ void ViewerConfig::Print(std::ostream& out) const {
   out << "[channels]\npoint_map = " << point_map_channel << "\nposes = " << pose_channels
       << "\nground_truth = " << truth_channel << "\npanorama = " << panorama_channel << "\nomni = " << omni_channel
       << "\nlandmarks = " << landmark_channels << "\nhoming_vector = " << homing_vector_channel
-      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\ngrid = " << grid_channel << "\n[viewer]\n";
+      << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\ngrid = " << grid_channel
+      << "\nlaser_slam_status = " << laser_slam_status_channel << "\nlaser_slam_pose = " << laser_slam_pose_channel
+      << "\n[viewer]\n";
   ViewerTable().Print(out, *this);
   glue::PrintPanoramaConfig(out, panorama);
   glue::PrintMirrorConfig(out, mirror, mask_path, "mirror");
@@ -136,6 +140,22 @@ ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
   bus_.Subscribe(config_.place_cell_match_channel, &ViewerNode::OnPlaceCellMatch, this);
   bus_.Subscribe(config_.scan_channel, &ViewerNode::OnScan, this);
   bus_.Subscribe(config_.grid_channel, &ViewerNode::OnGrid, this);
+  bus_.Subscribe(config_.laser_slam_status_channel, &ViewerNode::OnLaserSlamStatus, this);
+}
+
+void ViewerNode::OnLaserSlamStatus(const laser_slam_status_t& msg) {
+  SawUtime(msg.utime);
+  if (!msg.corrected) return;
+  // The pose of the correction's scan was published just before this status: the trail is broken
+  // from the pose before it.
+  const int64_t at = msg.correction_utime > 0 ? msg.correction_utime : msg.utime;
+  const auto track = scene_.tracks.find(config_.laser_slam_pose_channel);
+  if (track == scene_.tracks.end()) return;  // no trail yet to break
+  std::vector<int64_t>& jumps = track->second.jumps;
+  if (!jumps.empty() && at <= jumps.back()) return;  // announced already (or out of order)
+  jumps.push_back(at);
+  ++jumps_;
+  if (static_cast<int>(jumps.size()) > config_.max_poses_per_channel) jumps.erase(jumps.begin());
 }
 
 void ViewerNode::SawUtime(int64_t utime) {
@@ -161,7 +181,10 @@ void ViewerNode::OnPose(const void* data, size_t size) {
   viewer::PoseSample sample{msg->utime, pose, glue::CovarianceOf(*msg)};
   if (!sample.covariance.allFinite()) sample.covariance.setZero();
   // Time going back by more than a second: a new run on the same channel starts a new track.
-  if (track.received > 0 && msg->utime < track.latest.utime - 1'000'000) track.poses.clear();
+  if (track.received > 0 && msg->utime < track.latest.utime - 1'000'000) {
+    track.poses.clear();
+    track.jumps.clear();
+  }
   track.estimator = msg->estimator;
   track.frame = msg->frame;
   track.latest = sample;
@@ -370,7 +393,8 @@ const viewer::ViewerScene& ViewerNode::Scene() {
 void ViewerNode::Report(std::ostream& out) const {
   out << "viewer: " << scene_.tracks.size() << " pose channels, " << scene_.matches.size() << " place-cell matches, "
       << scene_.map_points.size() << " map points, "
-      << (scene_.grid ? std::to_string(scene_.grid->width) + " x " + std::to_string(scene_.grid->height) + " grid cells, " : std::string("no grid, ")) << rejected_total() << " refused";
+      << (scene_.grid ? std::to_string(scene_.grid->width) + " x " + std::to_string(scene_.grid->height) + " grid cells, " : std::string("no grid, "))
+      << jumps_ << " laser SLAM corrections marked, " << rejected_total() << " refused";
   for (const auto& [reason, n] : rejected_) out << "; " << reason << ": " << n;
   out << "\n";
 }

@@ -61,11 +61,28 @@ double PositionError(const Eigen::Matrix3d& cov, double sigma) {
 
 void DrawTrack(cv::Mat& img, const plot::MapView& view, const Track& track, bool truth, const cv::Scalar& colour,
                const RenderOptions& options) {
+  std::vector<const PoseSample*> samples;
+  samples.reserve(track.poses.size() + 1);
+  for (const auto& p : track.poses) samples.push_back(&p);
+  if (track.poses.empty() || track.poses.back().utime != track.latest.utime) samples.push_back(&track.latest);
+  // One polyline per stretch between announced jumps; a ring where each jump landed.
   std::vector<cv::Point2d> pts;
-  pts.reserve(track.poses.size() + 1);
-  for (const auto& p : track.poses) pts.emplace_back(p.pose.x_m, p.pose.y_m);
-  if (track.poses.empty() || track.poses.back().utime != track.latest.utime) {
-    pts.emplace_back(track.latest.pose.x_m, track.latest.pose.y_m);
+  size_t next_jump = 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const PoseSample& p = *samples[i];
+    bool jumped = false;
+    while (i > 0 && next_jump < track.jumps.size() && track.jumps[next_jump] <= p.utime) {
+      jumped = jumped || track.jumps[next_jump] > samples[i - 1]->utime;
+      ++next_jump;
+    }
+    if (jumped) {
+      view.DrawPolyline(img, pts, colour, truth ? 3 : 2);
+      pts.clear();
+      const cv::Point2d at = view.ToPixel(p.pose.x_m, p.pose.y_m);
+      cv::circle(img, cv::Point(static_cast<int>(std::lround(at.x)), static_cast<int>(std::lround(at.y))), 6, colour, 2,
+                 cv::LINE_8);
+    }
+    pts.emplace_back(p.pose.x_m, p.pose.y_m);
   }
   view.DrawPolyline(img, pts, colour, truth ? 3 : 2);
   if (truth) return;  // the ground truth has no covariance

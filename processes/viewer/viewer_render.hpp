@@ -31,6 +31,9 @@ struct Track {
   std::vector<PoseSample> poses;
   PoseSample latest;
   int64_t received = 0;
+  // The message times of the jumps its estimator announced (laser SLAM's graph corrections): the
+  // trail is not joined across them and a ring marks where each landed.
+  std::vector<int64_t> jumps;
 };
 
 // The current panorama (BGR or grey) and the bearing of its column 0 [rad]; column c looks at

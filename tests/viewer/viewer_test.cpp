@@ -13,6 +13,7 @@
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/laser_slam_status_t.hpp"
 #include "viewer_node.hpp"
 #include "viewer_render.hpp"
 
@@ -387,6 +388,54 @@ TEST(ViewerNode, OccupancyGridIsDrawnUnderTheTrajectory) {
   EXPECT_GT(CountColour(img, viewer::kGridOccupiedColour, layout.map), 200);
   EXPECT_GT(CountColour(img, ChannelColour("G_POSE_LASER_SLAM"), layout.map), 20);  // the track over the grid
   EXPECT_GT(CountColour(img, cv::Scalar(232, 232, 232), layout.map), 10000);       // free cells
+}
+
+// Laser SLAM's graph back end announces a correction on its status (`corrected`): the viewer does not
+// join its trail across the jump (the line from where the pose was to where it landed) and rings
+// where it landed. The same poses without the announcement draw that line.
+TEST(ViewerNode, ALaserSlamCorrectionBreaksItsTrailAtTheJump) {
+  const auto run = [](bool announce, int64_t* jumps) {
+    glue::Bus bus("memq://");
+    processes::ViewerNode node(bus, Config("J_"));
+    laser_slam_status_t early{};
+    early.utime = 500'000;
+    early.corrected = true;  // before any pose: no trail to break
+    early.correction_utime = 500'000;
+    bus.Publish("J_LASER_SLAM_STATUS", early);
+    HandleAll(bus);
+    for (int i = 0; i < 40; ++i) {
+      const int64_t t = 1'000'000 + i * 100'000;
+      const double y = i < 20 ? 0.0 : 2.0;  // the correction at scan 20 moves the pose 2 m across
+      bus.Publish("J_POSE_LASER_SLAM", glue::ToPoseMsg(t, "laser_slam", "map", {0.1 * i, y, 0}, Eigen::Matrix3d::Zero()));
+      laser_slam_status_t st{};
+      st.utime = t;
+      st.corrected = announce && i == 20;
+      st.correction_utime = announce && i >= 20 ? 1'000'000 + 20 * 100'000 : 0;
+      bus.Publish("J_LASER_SLAM_STATUS", st);
+      if (i == 21 && announce) {
+        st.corrected = true;  // the same correction again: one jump
+        bus.Publish("J_LASER_SLAM_STATUS", st);
+      }
+      HandleAll(bus);
+    }
+    *jumps = static_cast<int64_t>(node.Scene().tracks.at("J_POSE_LASER_SLAM").jumps.size());
+    return node.Render();
+  };
+  int64_t announced_jumps = -1, silent_jumps = -1;
+  const cv::Mat broken = run(true, &announced_jumps);
+  const cv::Mat joined = run(false, &silent_jumps);
+  EXPECT_EQ(announced_jumps, 1);
+  EXPECT_EQ(silent_jumps, 0);
+  const viewer::Layout layout = ComputeLayout(broken.size());
+  const cv::Scalar colour = ChannelColour("J_POSE_LASER_SLAM");
+  cv::Mat in_broken, in_joined;
+  cv::inRange(broken(layout.map), colour, colour, in_broken);
+  cv::inRange(joined(layout.map), colour, colour, in_joined);
+  const int only_joined = cv::countNonZero(in_joined & ~in_broken);  // the line across the jump
+  const int only_broken = cv::countNonZero(in_broken & ~in_joined);  // the ring where it landed
+  EXPECT_GT(only_joined, 100) << "the line across the 2 m jump is not drawn";
+  EXPECT_GT(only_broken, 10) << "a ring marks where the pose landed";
+  EXPECT_GT(cv::countNonZero(in_broken), 400) << "both stretches of the trail are drawn";
 }
 
 TEST(ViewerNode, BadFramesAreCountedAndTracksStayBounded) {

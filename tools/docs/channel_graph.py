@@ -32,6 +32,11 @@ def _always(_cfg):
     return True
 
 
+def _never(_cfg):
+    """A [channels] key that names a channel another key subscribes already (no edge of its own)."""
+    return False
+
+
 def _opt(section, key, *values):
     """Condition: [section] key is one of values (strings as written in the INI)."""
     return lambda cfg: cfg.get(section, key) in values
@@ -107,7 +112,8 @@ ROLES = {
         "point_map": (SUB, _always), "poses": (SUB, _always), "ground_truth": (SUB, _always),
         "panorama": (SUB, _always), "omni": (SUB, _always), "landmarks": (SUB, _always),
         "homing_vector": (SUB, _always), "place_cell_match": (SUB, _always), "scan": (SUB, _always),
-        "grid": (SUB, _always),
+        "grid": (SUB, _always), "laser_slam_status": (SUB, _always),
+        "laser_slam_pose": (SUB, _never),  # which trail a correction breaks: `poses` subscribes it
     },
     "omni-camera": {"frame": (PUB, _always)},
     "laser-hokuyo": {"scan": (PUB, _always)},
