@@ -12,6 +12,7 @@
 #include <optional>
 
 #include "slam_config.hpp"
+#include "slam_graph.hpp"
 #include "slam_log.hpp"
 #include "map_export.hpp"
 #include "snapnav/glue/app.hpp"
@@ -120,7 +121,8 @@ int Main(int argc, char** argv) {
                     "(MRPT's COccupancyGridMap2D) and NAME.simplemap (MRPT's keyframes: each scan at its pose), and\n"
                     "NAME.png with the trajectory in red, NAME_trajectory.csv (utime,x_m,y_m,theta_rad: each scan's\n"
                     "pose). The poses: the laser SLAM run over the log with --config\n"
-                    "(default: the shipped config/laser_slam.ini) and --set, or with --pose-channel the poses a live\n"
+                    "(default: the shipped config/laser_slam.ini) and --set, with its back end (backend = graph:\n"
+                    "every scan at its pose after the last loop closure), or with --pose-channel the poses a live\n"
                     "run recorded (e.g. POSE_LASER_SLAM), the nearest within --max-dt-s of each scan. The grid is\n"
                     "MRPT's: each beam clears the cells it crossed and marks its hit.\n"
                     "--live (no LOG): from a running laser-slam instead: asks for its grid (a map_request_t on\n"
@@ -181,16 +183,28 @@ int Main(int argc, char** argv) {
   if (pose_channel.empty()) {
     config.overrides = sets;
     const nav::LaserSlamOptions options = eval::LoadLaserSlamOptions(config);
+    const eval::SlamBackendChoice backend = eval::LoadSlamBackend(config);
     const eval::SlamLog log = eval::LoadSlamLog(log_path, true);
-    std::cerr << "map-export: laser SLAM over " << log.scans << " scans (" << config.path << ")\n";
-    const eval::SlamRun run = eval::RunSlam(log, options);
-    if (run.slam.size() != scans.size()) {
-      throw std::runtime_error("internal: " + std::to_string(run.slam.size()) + " SLAM poses for " +
+    std::vector<nav::Pose2> poses;
+    if (backend.graph) {
+      // The graph back end: each scan at its pose after the last optimization (the loops closed),
+      // not as it was published at the time.
+      std::cerr << "map-export: laser SLAM, graph back end, over " << log.scans << " scans (" << config.path << ")\n";
+      const eval::GraphSlamRun run = eval::RunGraphSlam(log, options, backend.options);
+      std::cerr << "map-export: " << run.keyframes << " keyframes, " << run.loop_accepted << " loop closures, "
+                << run.corrections << " corrections; the scans at their optimized poses\n";
+      poses = run.run.slam;
+    } else {
+      std::cerr << "map-export: laser SLAM over " << log.scans << " scans (" << config.path << ")\n";
+      poses = eval::RunSlam(log, options).slam;
+    }
+    if (poses.size() != scans.size()) {
+      throw std::runtime_error("internal: " + std::to_string(poses.size()) + " SLAM poses for " +
                                std::to_string(scans.size()) + " scans");
     }
     for (size_t i = 0; i < scans.size(); ++i) {
-      scans[i].robot_pose = run.slam[i];
-      trajectory.push_back(run.slam[i]);
+      scans[i].robot_pose = poses[i];
+      trajectory.push_back(poses[i]);
     }
     placed = std::move(scans);
   } else {
