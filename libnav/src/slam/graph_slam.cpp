@@ -369,7 +369,7 @@ int GraphSlam::ReusableKeyframe(const Pose2& pose) const {
     }
     near.push_back({d, k});
   }
-  if (near.empty() || near.size() < static_cast<size_t>(options_.keyframes_per_place)) return -1;
+  if (near.size() < static_cast<size_t>(options_.keyframes_per_place)) return -1;  // (keyframes_per_place >= 1)
   std::sort(near.begin(), near.end());
   // Only where the graph knows the keyframe's position relative to the last one (as a closure may
   // join alone: loop_confident_sigma_m); where it does not (drift since the last closure), a new
