@@ -13,6 +13,7 @@
 
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/glue/slam_options.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
 #include "snapnav/point_map_t.hpp"
@@ -34,6 +35,7 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
   c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
   c.map_channel = channel_prefix + ini.GetString("channels", "map");
   c.status_channel = channel_prefix + ini.GetString("channels", "status");
+  c.correction_channel = channel_prefix + ini.GetString("channels", "correction");
   c.options = glue::ReadLaserSlamOptions(ini, "laser_slam");
   c.map_every_n_scans = ini.GetInt("laser_slam", "map_every_n_scans");
   const std::string backend = ini.GetString("laser_slam", "backend");
@@ -54,7 +56,8 @@ LaserSlamConfig LaserSlamConfig::FromIni(const glue::IniFile& ini, const std::st
 
 void LaserSlamConfig::Print(std::ostream& out) const {
   out << "[channels]\nodometry = " << odometry_channel << "\nscan = " << scan_channel << "\npose = " << pose_channel
-      << "\nmap = " << map_channel << "\nstatus = " << status_channel << "\ngrid = " << grid.channel
+      << "\nmap = " << map_channel << "\nstatus = " << status_channel
+      << "\ncorrection = " << correction_channel << "\ngrid = " << grid.channel
       << "\ngrid_request = " << grid.request_channel << "\nlocalization_status = " << localize.status_channel
       << "\n[laser_slam]\n";
   glue::PrintLaserSlamOptions(out, options);
@@ -146,6 +149,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
       const nav::GraphSlamUpdate g = graph_->Update(points, msg.utime);
       update = g.front_end;
       if (g.corrected) last_correction_utime_ = msg.utime;
+      anchor_keyframe_ = g.anchor_keyframe;
       if (grid_) {
         // The live grid follows the graph: the keyframes' scans kept, the grid rebuilt from them at
         // the optimized poses after a correction (GridPublisher).
@@ -166,6 +170,13 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   bus_.Publish(config_.pose_channel, glue::ToPoseMsg(msg.utime, "laser_slam", "map", graph_ ? graph_->pose() : slam_->pose(),
                                                      graph_ ? graph_->covariance() : slam_->covariance()));
   ++poses_published_;
+  if (graph_) {
+    // What the published pose is relative to (its keyframe, and that keyframe's pose now), for the
+    // correction tables: the graph never changes a scan's pose relative to its keyframe.
+    const int k = anchor_keyframe_ < graph_->keyframes() ? anchor_keyframe_ : -1;
+    published_.Note(msg.utime, k, k >= 0 ? graph_->graph().pose(k) : nav::Pose2{});
+    if (last_correction_utime_ == msg.utime && graph_->corrections() > 0) PublishCorrection(msg.utime);
+  }
   PublishStatus(msg.utime, update ? &*update : nullptr);  // only what the inputs decide: a replay repeats it
   if (!points.empty() && config_.map_every_n_scans > 0 && updates_ % config_.map_every_n_scans == 0) {
     PublishMap(msg.utime);
@@ -249,6 +260,14 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
   bus_.Publish(config_.status_channel, s);
 }
 
+void LaserSlamNode::PublishCorrection(int64_t utime) {
+  const nav::PoseCorrectionTable table =
+      published_.Table([this](int k) { return graph_->graph().pose(k); });
+  bus_.Publish(config_.correction_channel,
+               glue::ToPoseCorrectionMsg(utime, config_.pose_channel, graph_->corrections(), table));
+  ++corrections_published_;
+}
+
 void LaserSlamNode::PublishMap(int64_t utime) {
   // The graph back end's map: the optimized keyframes' points (GraphSlam::Map).
   const std::vector<Eigen::Vector2d>& points = graph_ ? graph_->Map() : slam_->map().points();
@@ -268,7 +287,8 @@ void LaserSlamNode::Report(std::ostream& out) const {
     out << ", graph back end: " << graph_->keyframes() << " keyframes (" << graph_->keyframe_reuses()
         << " due but reused), loop closures " << graph_->loop_accepted()
         << " accepted / " << graph_->loop_rejected() << " rejected of " << graph_->loop_candidates()
-        << " candidates, " << graph_->corrections() << " corrections, map " << graph_->Map().size() << " points";
+        << " candidates, " << graph_->corrections() << " corrections (" << corrections_published_
+        << " tables of published poses, " << published_.ranges() << " ranges), map " << graph_->Map().size() << " points";
   }
   out << "\n";
   if (const nav::LaserSlam* s = slam(); s && s->odometry_calibration().observations() > 0) {

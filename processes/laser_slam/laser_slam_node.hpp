@@ -3,7 +3,8 @@
 // ODOMETRY increments predict, each LASER_SCAN updates; one pose_t per scan on POSE_LASER_SLAM
 // and one laser_slam_status_t on LASER_SLAM_STATUS (the match's outcome: accepted, gated,
 // ambiguous, no match; how sure it is), and every n-th updating scan the map as point_map_t on
-// POINT_MAP.
+// POINT_MAP. With backend = graph, after each correction of the graph a pose_correction_t on
+// LASER_SLAM_CORRECTION: how to move every pose published so far to where the graph now puts it.
 //
 // Order: messages are processed in arrival order, never reordered by utime. A log (and the
 // simulator) is time ordered, so an odometry increment that ends before a scan arrives before
@@ -30,6 +31,7 @@
 #include "graph_slam_config.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/slam/laser_slam.hpp"
+#include "snapnav/nav/slam/pose_corrections.hpp"
 #include "snapnav/odometry_t.hpp"
 
 namespace snapnav::processes {
@@ -40,6 +42,7 @@ struct LaserSlamConfig {
   std::string pose_channel;      // pose_t out
   std::string map_channel;       // point_map_t out
   std::string status_channel;    // laser_slam_status_t out
+  std::string correction_channel;  // pose_correction_t out (backend = graph): after each correction
   nav::LaserSlamOptions options;
   int map_every_n_scans = 10;  // publish the map after every n-th updating scan; 0: never
   GridConfig grid;             // the occupancy grid on the bus (grid.channel empty: none)
@@ -72,6 +75,9 @@ class LaserSlamNode {
   int64_t late_odometry() const { return late_odometry_; }  // older than the last scan, applied anyway
   int64_t poses_published() const { return poses_published_; }
   int64_t maps_published() const { return maps_published_; }
+  int64_t corrections_published() const { return corrections_published_; }
+  // The ranges of publication times the correction tables are kept for (backend = graph).
+  size_t correction_ranges() const { return published_.ranges(); }
   // The occupancy grid's publisher; nullptr without a grid channel.
   const GridPublisher* grid() const { return grid_ ? &*grid_ : nullptr; }
   // Scans and odometry messages skipped, by reason ("no ranges", "no valid points", ...).
@@ -99,6 +105,7 @@ class LaserSlamNode {
   }
   void PublishMap(int64_t utime);
   void PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u);
+  void PublishCorrection(int64_t utime);
 
   glue::Bus& bus_;
   LaserSlamConfig config_;
@@ -107,11 +114,13 @@ class LaserSlamNode {
   void Start(const nav::Pose2& pose);    // makes the one of the two the config asks for
   bool started() const { return slam_ || graph_; }
   int64_t last_correction_utime_ = 0;    // the scan of the graph's last correction
+  int anchor_keyframe_ = -1;             // the keyframe the published pose is relative to (backend = graph)
+  nav::PublishedPoses published_;        // ... per range of publication times: for the correction tables
   bool odometry_seen_ = false;
   int64_t last_scan_utime_ = 0;
   int64_t scans_ = 0, updates_ = 0, measured_ = 0, odometry_ = 0, late_odometry_ = 0;
   int64_t gated_ = 0, ambiguous_ = 0, no_match_ = 0, wall_measured_ = 0;
-  int64_t poses_published_ = 0, maps_published_ = 0;
+  int64_t poses_published_ = 0, maps_published_ = 0, corrections_published_ = 0;
   double update_ms_total_ = 0.0;
   glue::HandlerProblems problems_;
   std::optional<GridPublisher> grid_;

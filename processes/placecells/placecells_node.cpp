@@ -125,6 +125,7 @@ PlaceCellsConfig PlaceCellsConfig::FromIni(const glue::IniFile& ini, const std::
   c.panorama_channel = channel_prefix + ini.GetString("channels", "panorama");
   c.odometry_channel = channel_prefix + ini.GetString("channels", "odometry");
   c.explore_pose_channel = channel_prefix + ini.GetString("channels", "explore_pose");
+  c.explore_correction_channel = channel_prefix + ini.GetString("channels", "explore_correction");
   c.match_channel = channel_prefix + ini.GetString("channels", "match");
   c.pose_channel = channel_prefix + ini.GetString("channels", "pose");
 
@@ -162,7 +163,8 @@ void PlaceCellsConfig::Validate() const {
   check(std::isfinite(stats_interval_s) && stats_interval_s >= 0, "[placecells] stats_interval_s must be >= 0");
   const std::string input_key = raw_input ? "omni" : "panorama";
   const std::vector<std::pair<std::string, const std::string*>> inputs = {
-      {input_key, &input_channel()}, {"odometry", &odometry_channel}, {"explore_pose", &explore_pose_channel}};
+      {input_key, &input_channel()}, {"odometry", &odometry_channel}, {"explore_pose", &explore_pose_channel},
+      {"explore_correction", &explore_correction_channel}};
   for (const auto& [out_key, out] : {std::pair<std::string, const std::string*>{"match", &match_channel},
                                      std::pair<std::string, const std::string*>{"pose", &pose_channel}}) {
     for (const auto& [in_key, in] : inputs) {
@@ -181,6 +183,7 @@ void PlaceCellsConfig::Validate() const {
 void PlaceCellsConfig::Print(std::ostream& out) const {
   out << "[channels]\nomni = " << omni_channel << "\npanorama = " << panorama_channel
       << "\nodometry = " << odometry_channel << "\nexplore_pose = " << explore_pose_channel
+      << "\nexplore_correction = " << explore_correction_channel
       << "\nmatch = " << match_channel << "\npose = " << pose_channel << "\n"
       << "[placecells]\n";
   PlaceCellsTable().Print(out, *this);
@@ -196,7 +199,8 @@ PlaceCellsNode::PlaceCellsNode(glue::Bus& bus, const PlaceCellsConfig& config, s
       config_(config),
       log_(log),
       memory_(InitialMemory(config, log)),
-      frames_to_panoramas_(config.panorama, config.mirror) {
+      frames_to_panoramas_(config.panorama, config.mirror),
+      corrections_(config.explore_pose_channel) {
   frames_to_panoramas_.SetMask(config_.mask);
   if (config_.mode == PlaceCellsMode::kLocalize && memory_.size() == 0) {
     log_ << "placecells: warning: " << config_.memory_file << " holds no cells: nothing will be localized\n";
@@ -216,6 +220,7 @@ PlaceCellsNode::PlaceCellsNode(glue::Bus& bus, const PlaceCellsConfig& config, s
   bus_.Subscribe(config_.odometry_channel, &PlaceCellsNode::OnOdometry, this, glue::Bus::kOdometryQueueCapacity);
   if (config_.mode == PlaceCellsMode::kExplore) {
     bus_.Subscribe(config_.explore_pose_channel, &PlaceCellsNode::OnExplorePose, this);
+    bus_.Subscribe(config_.explore_correction_channel, &PlaceCellsNode::OnExploreCorrection, this);
   }
 }
 
@@ -231,10 +236,11 @@ void PlaceCellsNode::Reject(const std::string& reason, const std::string& detail
 }
 
 bool PlaceCellsNode::Save() {
-  if (config_.mode != PlaceCellsMode::kExplore || unsaved_cells_ == 0) return false;
+  if (config_.mode != PlaceCellsMode::kExplore || (unsaved_cells_ == 0 && !moved_since_save_)) return false;
   glue::SavePlaceMemory(memory_, config_.memory_file);
   ++saves_;
   unsaved_cells_ = 0;
+  moved_since_save_ = false;
   log_ << "placecells: saved " << memory_.size() << " cells to " << config_.memory_file << "\n";
   return true;
 }
@@ -268,13 +274,45 @@ void PlaceCellsNode::OnExplorePose(const pose_t& msg) {
   }
 }
 
-std::optional<nav::Pose2> PlaceCellsNode::ExplorePoseAt(int64_t utime) const {
+void PlaceCellsNode::OnExploreCorrection(const pose_correction_t& msg) {
+  // The pose source corrected its past (laser-slam's graph back end closed a loop): the cells this
+  // run placed move with the part of the trajectory they were placed on. Tables of another pose
+  // channel are another estimator's.
+  std::string problem;
+  const auto taken = corrections_.Take(msg, &problem);
+  if (taken == glue::PoseCorrections::Taken::kInvalid) {
+    Reject("bad pose correction", problem);
+    return;
+  }
+  if (taken != glue::PoseCorrections::Taken::kTaken) return;
+  int moved = 0;
+  double largest_m = 0;
+  for (const ExploredCell& e : explored_) {
+    const nav::Pose2 now = corrections_.Correct(e.received.utime, e.received.pose);
+    const nav::Pose2& was = memory_.cell(e.index).pose;
+    const double d = std::hypot(now.x_m - was.x_m, now.y_m - was.y_m);
+    if (d < 1e-9 && std::abs(nav::WrapAngle(now.theta_rad - was.theta_rad)) < 1e-9) continue;  // unchanged
+    memory_.SetPose(e.index, now);
+    ++moved;
+    largest_m = std::max(largest_m, d);
+  }
+  cells_moved_ += moved;
+  if (moved > 0) {
+    moved_since_save_ = true;
+    log_ << "placecells: correction " << msg.corrections << " of " << corrections_.pose_channel() << " moved "
+         << moved << " of " << explored_.size() << " cells (at most " << std::fixed << std::setprecision(3)
+         << largest_m << " m)\n";
+    log_.unsetf(std::ios::floatfield);
+  }
+}
+
+std::optional<PlaceCellsNode::StampedPose> PlaceCellsNode::ExplorePoseAt(int64_t utime) const {
   const StampedPose* best = nullptr;
   for (const auto& p : explore_poses_) {
     if (!best || std::llabs(p.utime - utime) < std::llabs(best->utime - utime)) best = &p;
   }
   if (!best || Seconds(std::llabs(best->utime - utime)) > config_.explore_pose_max_age_s) return std::nullopt;
-  return best->pose;
+  return *best;
 }
 
 bool PlaceCellsNode::RateAllows(int64_t utime) const {
@@ -307,7 +345,7 @@ void PlaceCellsNode::OnFrame(const omni_frame_t& frame) {
     ++skipped_["rate limit"];
     return;
   }
-  std::optional<nav::Pose2> pose;
+  std::optional<StampedPose> pose;
   if (config_.mode == PlaceCellsMode::kExplore) {
     pose = ExplorePoseAt(frame.utime);
     if (!pose) {
@@ -325,7 +363,7 @@ void PlaceCellsNode::OnFrame(const omni_frame_t& frame) {
   }
 }
 
-void PlaceCellsNode::Explore(const cv::Mat& panorama, int64_t utime, const nav::Pose2& pose) {
+void PlaceCellsNode::Explore(const cv::Mat& panorama, int64_t utime, const StampedPose& received) {
   // ExploreStep's rule (5.1.4), spelled out so the most similar cell can be published when the
   // view is not novel: novelty is the dissimilarity to the most similar cell (the measure's
   // "unseen" value when there is none), a view above the threshold (or the first) is a new cell.
@@ -340,7 +378,11 @@ void PlaceCellsNode::Explore(const cv::Mat& panorama, int64_t utime, const nav::
     if (before > 0) best = memory_.MostSimilar(view, config_.localizer);
     const double novelty =
         best ? best->dissimilarity : (measure.measure == nav::PlaceMeasure::kMatchCount ? 1.0 : M_PI);
-    if (before == 0 || novelty > config_.novelty_threshold) added = memory_.Add(pose, utime, std::move(view));
+    if (before == 0 || novelty > config_.novelty_threshold) {
+      // At the pose as the newest correction table of its source puts it (unchanged without one).
+      added = memory_.Add(corrections_.Correct(received.utime, received.pose), utime, std::move(view));
+      explored_.push_back({added, received});
+    }
     match = glue::NoPlaceCellMatchMsg(utime, measure.measure, before);
     match.distance = best ? static_cast<float>(best->distance) : 0.0f;
     match.score = static_cast<float>(novelty);
@@ -424,6 +466,10 @@ void PlaceCellsNode::Report(std::ostream& out) const {
   }
   if (config_.mode == PlaceCellsMode::kExplore) {
     out << ", new cells " << new_cells_ << ", saves " << saves_;
+    if (corrections_.tables() > 0) {
+      out << ", corrections of " << corrections_.pose_channel() << " taken " << corrections_.tables() << " (cells moved "
+          << cells_moved_ << ")";
+    }
   } else {
     out << ", localized " << localized_ << ", not localized " << not_localized_;
   }

@@ -19,11 +19,13 @@
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/frame_panoramas.hpp"
 #include "snapnav/glue/ini.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/nav/places/place_cells.hpp"
 #include "snapnav/nav/pose2.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/omni_frame_t.hpp"
+#include "snapnav/pose_correction_t.hpp"
 #include "snapnav/pose_t.hpp"
 
 namespace snapnav::processes {
@@ -36,6 +38,7 @@ struct PlaceCellsConfig {
   std::string panorama_channel;      // omni_frame_t in (input = panorama)
   std::string odometry_channel;      // odometry_t in: motion between localizations, travel
   std::string explore_pose_channel;  // pose_t in (explore): where each new cell is
+  std::string explore_correction_channel;  // pose_correction_t in (explore): corrections of those poses
   std::string match_channel;         // place_cell_match_t out
   std::string pose_channel;          // pose_t out (localize)
   bool raw_input = true;
@@ -88,6 +91,9 @@ class PlaceCellsNode {
   int64_t localized() const { return localized_; }  // localize: matches with a cell
   int64_t not_localized() const { return not_localized_; }
   int64_t saves() const { return saves_; }
+  // Explore: correction tables of the explore pose channel taken, and cell moves they made.
+  int64_t corrections() const { return corrections_.tables(); }
+  int64_t cells_moved() const { return cells_moved_; }
   // Frames not processed by choice, by reason ("rate limit", "no explore pose").
   const std::map<std::string, int64_t>& skipped() const { return skipped_; }
   // Malformed input (frames, odometry, poses) and processing errors, by reason.
@@ -104,11 +110,12 @@ class PlaceCellsNode {
   void OnFrame(const omni_frame_t& frame);
   void OnOdometry(const odometry_t& msg);
   void OnExplorePose(const pose_t& msg);
+  void OnExploreCorrection(const pose_correction_t& msg);
   void Reject(const std::string& reason, const std::string& detail);
   bool RateAllows(int64_t utime) const;
-  std::optional<nav::Pose2> ExplorePoseAt(int64_t utime) const;
+  std::optional<StampedPose> ExplorePoseAt(int64_t utime) const;
   std::optional<nav::Pose2> Prediction() const;
-  void Explore(const cv::Mat& panorama, int64_t utime, const nav::Pose2& pose);
+  void Explore(const cv::Mat& panorama, int64_t utime, const StampedPose& pose);
   void Localize(const cv::Mat& panorama, int64_t utime);
   void MaybePrintStats(int64_t utime);
   void PrintStats(std::ostream& out, int64_t utime) const;
@@ -125,7 +132,16 @@ class PlaceCellsNode {
   // Localize: the last fix and the odometry pose at that time.
   std::optional<nav::Pose2> fix_;
   std::optional<nav::Pose2> odometry_at_fix_;
-  std::deque<StampedPose> explore_poses_;  // explore: recent poses, oldest first
+  std::deque<StampedPose> explore_poses_;  // explore: recent poses as received, oldest first
+  // Explore: the cells this run added, each with its pose as received (the corrections apply to it).
+  struct ExploredCell {
+    int index;
+    StampedPose received;
+  };
+  std::vector<ExploredCell> explored_;
+  glue::PoseCorrections corrections_;      // the newest table of the explore pose channel
+  int64_t cells_moved_ = 0;
+  bool moved_since_save_ = false;
   std::optional<int64_t> stats_utime_;     // message time of the last stats line
   int64_t frames_ = 0, processed_ = 0, new_cells_ = 0, localized_ = 0, not_localized_ = 0, saves_ = 0;
   int64_t unsaved_cells_ = 0;

@@ -148,6 +148,25 @@ std::vector<Mutation<pose_t>> PoseMutations() {
   return v;
 }
 
+std::vector<Mutation<pose_correction_t>> PoseCorrectionMutations() {
+  std::vector<Mutation<pose_correction_t>> v;
+  Times(&v);
+  Real<pose_correction_t>(&v, "x_m", [](pose_correction_t& m) -> auto& { return m.x_m[1]; });
+  Real<pose_correction_t>(&v, "y_m", [](pose_correction_t& m) -> auto& { return m.y_m[0]; });
+  Real<pose_correction_t>(&v, "theta_rad", [](pose_correction_t& m) -> auto& { return m.theta_rad[1]; });
+  v.push_back({"ranges out of order", "from_utime", true, false, [](pose_correction_t& m) {
+                 std::swap(m.from_utime[0], m.from_utime[1]);
+               }});
+  v.push_back({"no ranges", "ranges", false, false, [](pose_correction_t& m) {
+                 m.ranges = 0;
+                 m.from_utime.clear();
+                 m.x_m.clear();
+                 m.y_m.clear();
+                 m.theta_rad.clear();
+               }});
+  return v;
+}
+
 std::vector<Mutation<homing_vector_t>> HomingVectorMutations() {
   std::vector<Mutation<homing_vector_t>> v;
   Times(&v);
@@ -605,6 +624,8 @@ TEST_F(FuzzPlaceCells, ExploreAndLocalize) {
                 {"x_m", "y_m", "theta_rad"});
     FuzzChannel(h, "placecells (explore)", config.explore_pose_channel, SamplePose(), PoseMutations(),
                 {"x_m", "y_m", "theta_rad"});
+    FuzzChannel(h, "placecells (explore)", config.explore_correction_channel, SamplePoseCorrection(),
+                PoseCorrectionMutations(), {"x_m", "y_m", "theta_rad", "from_utime"});
     ExpectStillWorks(h, "placecells (explore)", [&](int64_t t) {
       truth(t);
       h.Send(config.omni_channel, ValidFrame(t));

@@ -258,6 +258,19 @@ map_request_t SampleMapRequest() {
   return m;
 }
 
+pose_correction_t SamplePoseCorrection() {
+  pose_correction_t m{};
+  m.utime = 1700000000000000;
+  m.pose_channel = "POSE_EKF";  // the shipped placecells.ini's explore pose
+  m.corrections = 1;
+  m.ranges = 2;
+  m.from_utime = {1700000000000000 - 1000000, 1700000000000000 - 500000};
+  m.x_m = {0, 0.1};
+  m.y_m = {0, -0.05};
+  m.theta_rad = {0, 0.02};
+  return m;
+}
+
 pose_t SamplePose() {
   pose_t m{};
   m.utime = 1700000000000000;
@@ -317,7 +330,7 @@ std::vector<TypeCase> AllTypes() {
           Case(SampleOmniFrame()),    Case(SamplePlaceCellMatch()),  Case(SamplePointMap()),
           Case(SamplePose()),         Case(SampleRoute()),           Case(SampleExperienceMap()),
           Case(SampleFusedSlamStatus()), Case(SampleLaserSlamStatus()), Case(SampleOccupancyGrid()),
-          Case(SampleLocalizationStatus()), Case(SampleMapRequest())};
+          Case(SampleLocalizationStatus()), Case(SampleMapRequest()), Case(SamplePoseCorrection())};
 }
 
 // "" when the published payload decodes and holds only finite numbers; else what is wrong.

@@ -20,6 +20,7 @@
 #include "snapnav/place_cell_match_t.hpp"
 #include "snapnav/localization_status_t.hpp"
 #include "snapnav/map_request_t.hpp"
+#include "snapnav/pose_correction_t.hpp"
 #include "snapnav/occupancy_grid_t.hpp"
 #include "snapnav/point_map_t.hpp"
 #include "snapnav/pose_t.hpp"
@@ -42,6 +43,7 @@ point_map_t SamplePointMap();
 occupancy_grid_t SampleOccupancyGrid();
 localization_status_t SampleLocalizationStatus();
 map_request_t SampleMapRequest();
+pose_correction_t SamplePoseCorrection();  // for the shipped placecells.ini's explore pose channel
 pose_t SamplePose();
 waypoint_route_t SampleRoute();
 

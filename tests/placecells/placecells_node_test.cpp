@@ -13,6 +13,7 @@
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/place_cells.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/place_cell_match_t.hpp"
 #include "snapnav/pose_t.hpp"
 #include "test_lab.hpp"
@@ -332,6 +333,71 @@ TEST(PlaceCellsNode, ExploreWithoutAPoseSkipsTheFrame) {
   EXPECT_EQ(node.memory().size(), 0);
   EXPECT_FALSE(node.Save());
   EXPECT_FALSE(fs::exists(config.memory_file));
+}
+
+// Explore at a pose source that corrects its past (laser-slam's graph back end closing a loop): the
+// poses of the last cells came drifted; a correction table for the explore pose channel moves the
+// cells placed on them back, the next cell is placed corrected, the file is written again. A table
+// of another channel is another estimator's (ignored); a malformed one is counted, not applied.
+TEST(PlaceCellsNode, ExploredCellsMoveWithTheCorrectionsOfTheirPoseSource) {
+  auto config = Config("X2_", kEveryFrame);
+  config.mode = PlaceCellsMode::kExplore;
+  config.raw_input = false;
+  config.memory_file = MemoryPath("corrected");
+  glue::Bus bus("memq://");
+  std::ostringstream log;
+  PlaceCellsNode node(bus, config, log);
+  auto& lab = Indoor13::Get();
+  const nav::Pose2 drift{0.12, -0.08, 0.05};   // what the pose source got wrong from cell 4 on
+  const auto time_of = [](size_t i) { return kStart + static_cast<int64_t>(i) * kSecond; };
+  const auto explore = [&](size_t i, const nav::Pose2& published) {
+    bus.Publish(config.explore_pose_channel, TruthMsg(published, time_of(i) - 10000));
+    bus.Publish("X2_OMNI_PANORAMA", lab.PanoramaFrame(kCellPoses[i], time_of(i)));
+    HandleAll(bus);
+  };
+  for (size_t i = 0; i < 7; ++i) explore(i, i < 4 ? kCellPoses[i] : drift.Compose(kCellPoses[i]));
+  ASSERT_EQ(node.memory().size(), 7);
+  EXPECT_NEAR(node.memory().cell(5).pose.x_m, drift.Compose(kCellPoses[5]).x_m, 1e-12);
+  EXPECT_TRUE(node.Save());
+
+  // The table: from cell 4's pose on, the drift undone.
+  const nav::PoseCorrectionTable table = {{time_of(0) - 10000, {}}, {time_of(4) - 10000, drift.Inverse()}};
+  bus.Publish("X2_LASER_SLAM_CORRECTION", glue::ToPoseCorrectionMsg(time_of(7), "OTHER_POSE", 1, {{0, drift}}));
+  pose_correction_t broken = glue::ToPoseCorrectionMsg(time_of(7), config.explore_pose_channel, 1, table);
+  broken.theta_rad[1] = std::nan("");
+  bus.Publish("X2_LASER_SLAM_CORRECTION", broken);
+  HandleAll(bus);
+  EXPECT_EQ(node.corrections(), 0);
+  EXPECT_EQ(node.rejected().at("bad pose correction"), 1);
+  EXPECT_NEAR(node.memory().cell(5).pose.x_m, drift.Compose(kCellPoses[5]).x_m, 1e-12);
+
+  bus.Publish("X2_LASER_SLAM_CORRECTION", glue::ToPoseCorrectionMsg(time_of(7), config.explore_pose_channel, 1, table));
+  HandleAll(bus);
+  EXPECT_EQ(node.corrections(), 1);
+  EXPECT_EQ(node.cells_moved(), 3);  // cells 4, 5, 6
+  // The next pose still comes drifted (published before the source's correction reached it): placed corrected.
+  explore(7, drift.Compose(kCellPoses[7]));
+  ASSERT_EQ(node.memory().size(), 8);
+  for (int i = 0; i < 8; ++i) {
+    const nav::Pose2& p = node.memory().cell(i).pose;
+    EXPECT_NEAR(p.x_m, kCellPoses[i].x_m, 1e-9) << "cell " << i;
+    EXPECT_NEAR(p.y_m, kCellPoses[i].y_m, 1e-9) << "cell " << i;
+    EXPECT_NEAR(p.theta_rad, kCellPoses[i].theta_rad, 1e-9) << "cell " << i;
+  }
+  // The same table again moves nothing; the file holds the corrected cells.
+  bus.Publish("X2_LASER_SLAM_CORRECTION", glue::ToPoseCorrectionMsg(time_of(8), config.explore_pose_channel, 1, table));
+  HandleAll(bus);
+  EXPECT_EQ(node.cells_moved(), 3);
+  EXPECT_TRUE(node.Save());
+  const auto memory = glue::LoadPlaceMemory(config.memory_file);
+  ASSERT_EQ(memory.size(), 8);
+  EXPECT_NEAR(memory.cell(5).pose.x_m, kCellPoses[5].x_m, 1e-9);
+  EXPECT_NE(log.str().find("moved 3 of 7 cells"), std::string::npos) << log.str();
+  std::ostringstream report;
+  node.Report(report);
+  EXPECT_NE(report.str().find("corrections of " + config.explore_pose_channel + " taken 2 (cells moved 3)"),
+            std::string::npos)
+      << report.str();
 }
 
 TEST(PlaceCellsNode, LocalizeRefusesAMissingOrCorruptOrMismatchedMemory) {

@@ -2,7 +2,10 @@
 // assert on the decoded poses and maps; bad input is counted, never a crash.
 #include "laser_slam_node.hpp"
 #include "snapnav/glue/slam_options.hpp"
+#include "snapnav/glue/conversions.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
+#include "snapnav/pose_correction_t.hpp"
 
 #include <gtest/gtest.h>
 
@@ -50,7 +53,7 @@ const std::vector<std::pair<std::string, std::string>> kSlamKeys = SlamKeys();
 std::string IniText(const std::string& drop = "", const std::string& extra = "",
                     const std::pair<std::string, std::string>& replace = {}) {
   std::ostringstream s;
-  s << "[channels]\nodometry = ODOMETRY\nscan = LASER_SCAN\npose = POSE_LASER_SLAM\nmap = POINT_MAP\nstatus = LASER_SLAM_STATUS\n[laser_slam]\n";
+  s << "[channels]\nodometry = ODOMETRY\nscan = LASER_SCAN\npose = POSE_LASER_SLAM\nmap = POINT_MAP\nstatus = LASER_SLAM_STATUS\ncorrection = LASER_SLAM_CORRECTION\n[laser_slam]\n";
   for (const auto& [key, value] : kSlamKeys) {
     if (key == drop) continue;
     s << key << " = " << (key == replace.first ? replace.second : value) << "\n";
@@ -257,7 +260,9 @@ TEST(LaserSlamNode, TracksTheTruthInARayCastRoomWhereBiasedOdometryDrifts) {
 
 // The graph back end (backend = graph) in the same room: three times around the circle with the
 // biased odometry; keyframes join the graph, the loop is searched and closed, the pose stays on the
-// truth; the status says so (backend, keyframes, closures, corrections) and the map is the graph's.
+// truth; the status says so (backend, keyframes, closures, corrections) and the map is the graph's;
+// each correction's table (LASER_SLAM_CORRECTION) moves every pose published so far to where the
+// graph now puts it.
 TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
   glue::Bus bus("memq://");
   LaserSlamConfig config = TestConfig("LS9_");
@@ -271,6 +276,9 @@ TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
   bus.Subscribe<point_map_t>("LS9_POINT_MAP", [&](const point_map_t& m) { maps.push_back(m); });
   bus.Subscribe<laser_slam_status_t>("LS9_LASER_SLAM_STATUS",
                                      [&](const laser_slam_status_t& s) { statuses.push_back(s); });
+  std::vector<pose_correction_t> tables;
+  bus.Subscribe<pose_correction_t>("LS9_LASER_SLAM_CORRECTION", [&](const pose_correction_t& c) { tables.push_back(c); });
+  std::vector<nav::Pose2> truths;
   constexpr int kSteps = 560;
   constexpr double kRadius = 1.5, kStep = 0.05, kScale = 1.02, kHeadingBias = 0.003;
   const double turn = kStep / kRadius;
@@ -289,6 +297,7 @@ TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
     bus.Publish("LS9_LASER_SCAN", Scan(utime, CastRoom(truth, &rng)));
     Drain(bus);
     ASSERT_EQ(poses.size(), static_cast<size_t>(k + 1));
+    truths.push_back(truth);
     slam_max = std::max(slam_max, Distance(poses.back(), truth));
   }
   ASSERT_NE(node.graph(), nullptr);
@@ -325,6 +334,39 @@ TEST(LaserSlamNode, GraphBackendClosesTheLoopAndSaysSoInItsStatus) {
     corrections = s.corrections;
   }
   EXPECT_EQ(announced, graph.corrections());
+  // One correction table per correction, on the scan that announces it, for the pose channel.
+  ASSERT_EQ(static_cast<int64_t>(tables.size()), graph.corrections());
+  ASSERT_FALSE(tables.empty());
+  EXPECT_EQ(node.corrections_published(), graph.corrections());
+  for (size_t i = 0; i < tables.size(); ++i) {
+    EXPECT_EQ(tables[i].pose_channel, "LS9_POSE_LASER_SLAM");
+    EXPECT_EQ(tables[i].corrections, static_cast<int64_t>(i + 1));
+  }
+  std::string problem;
+  const auto table = glue::FromPoseCorrectionMsg(tables.back(), &problem);
+  ASSERT_TRUE(table) << problem;
+  EXPECT_GT(table->size(), 1u);  // a loop closure bends the past: not one rigid motion
+  // Each keyframe's scan, as published then and corrected by the last table, is the keyframe's pose
+  // in the optimized graph (to rounding); every pose so corrected is the graph's, on the truth.
+  for (int k = 0; k < graph.keyframes(); ++k) {
+    const pose_t& p = poses.at(static_cast<size_t>(graph.keyframe_scan(k) - 1));
+    const nav::Pose2 c = nav::CorrectPublishedPose(*table, p.utime, glue::FromPoseMsg(p));
+    const nav::Pose2 g = graph.graph().pose(k);
+    EXPECT_NEAR(c.x_m, g.x_m, 1e-9) << "keyframe " << k;
+    EXPECT_NEAR(c.y_m, g.y_m, 1e-9) << "keyframe " << k;
+    EXPECT_NEAR(c.theta_rad, g.theta_rad, 1e-9) << "keyframe " << k;
+  }
+  double published_rms = 0, corrected_rms = 0;
+  for (size_t i = 0; i < poses.size(); ++i) {
+    const nav::Pose2 c = nav::CorrectPublishedPose(*table, poses[i].utime, glue::FromPoseMsg(poses[i]));
+    published_rms += std::pow(Distance(poses[i], truths[i]), 2);
+    corrected_rms += std::pow(std::hypot(c.x_m - truths[i].x_m, c.y_m - truths[i].y_m), 2);
+  }
+  published_rms = std::sqrt(published_rms / poses.size());
+  corrected_rms = std::sqrt(corrected_rms / poses.size());
+  std::cout << "published poses " << published_rms << " m RMS from the truth, corrected by the last of "
+            << tables.size() << " tables (" << table->size() << " ranges) " << corrected_rms << " m\n";
+  EXPECT_LT(corrected_rms, 0.05);
   // The map: the optimized keyframes' points, on the walls.
   ASSERT_FALSE(maps.empty());
   const point_map_t& map = maps.back();

@@ -64,6 +64,8 @@ ROLES = {
         "map": (PUB, lambda cfg: cfg.flags.get("mode") != "localize"),
         "status": (PUB, lambda cfg: cfg.flags.get("mode") != "localize"),
         "grid": (PUB, _always), "grid_request": (SUB, _always),
+        "correction": (PUB, lambda cfg: cfg.flags.get("mode") != "localize"
+                       and cfg.get("laser_slam", "backend") == "graph"),
         "localization_status": (PUB, lambda cfg: cfg.flags.get("mode") == "localize"),
     },
     "fused-slam": {
@@ -92,6 +94,7 @@ ROLES = {
         "panorama": (SUB, _opt("placecells", "input", "panorama")),
         "odometry": (SUB, _always),
         "explore_pose": (SUB, _flag_or_opt("mode", "placecells", "mode", "explore")),
+        "explore_correction": (SUB, _flag_or_opt("mode", "placecells", "mode", "explore")),
         "match": (PUB, _always),
         "pose": (PUB, _flag_or_opt("mode", "placecells", "mode", "localize")),
     },

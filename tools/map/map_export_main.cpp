@@ -25,6 +25,8 @@
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/log_reader.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
+#include "snapnav/pose_correction_t.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/slam/occupancy_grid.hpp"
 #include "snapnav/pose_t.hpp"
@@ -33,12 +35,25 @@ namespace {
 
 using namespace snapnav;
 
-// The poses of `channel` in the log, by utime.
-std::map<int64_t, nav::Pose2> ReadPoses(const std::string& path, const std::string& channel, int* rejected) {
+// The poses of `channel` in the log, by utime, as the last correction table for them on
+// `correction_channel` puts them (laser-slam's graph back end moves its past poses when it closes a loop).
+std::map<int64_t, nav::Pose2> ReadPoses(const std::string& path, const std::string& channel,
+                                        const std::string& correction_channel, int* rejected) {
   glue::LogReader file(path);
   glue::LogEvent e;
   std::map<int64_t, nav::Pose2> poses;
+  glue::PoseCorrections corrections(channel);
+  int bad_corrections = 0;
   while (file.Next(&e)) {
+    if (!correction_channel.empty() && e.channel == correction_channel) {
+      std::string error;
+      const auto c = glue::Decode<pose_correction_t>(e.data.data(), e.data.size(), &error);
+      if (!c || corrections.Take(*c, &error) == glue::PoseCorrections::Taken::kInvalid) {
+        ++bad_corrections;
+        std::cerr << "map-export: " << path << ": a pose correction at byte " << e.offset << " refused: " << error << "\n";
+      }
+      continue;
+    }
     if (e.channel != channel) continue;
     std::string error;
     const auto p = glue::Decode<pose_t>(e.data.data(), e.data.size(), &error);
@@ -47,6 +62,12 @@ std::map<int64_t, nav::Pose2> ReadPoses(const std::string& path, const std::stri
       continue;
     }
     poses[p->utime] = {p->x_m, p->y_m, p->theta_rad};
+  }
+  if (corrections.tables() > 0) {
+    for (auto& [utime, pose] : poses) pose = corrections.Correct(utime, pose);
+    std::cerr << "map-export: the poses of " << channel << " as correction " << corrections.corrections() << " on "
+              << correction_channel << " puts them (" << corrections.tables() << " tables, the last of "
+              << corrections.ranges() << " ranges; " << bad_corrections << " refused)\n";
   }
   return poses;
 }
@@ -112,6 +133,7 @@ int Main(int argc, char** argv) {
   std::vector<std::string> sets;
   double max_dt_s = 0.05;
   bool live = false;
+  std::string correction_channel = channels::kLaserSlamCorrection;
   std::string live_channel = "LASER_SLAM_GRID", request_channel = "LASER_SLAM_GRID_REQUEST", lcm_url;
   double timeout_s = 30;
   glue::Flags flags("map-export",
@@ -123,7 +145,8 @@ int Main(int argc, char** argv) {
                     "pose). The poses: the laser SLAM run over the log with --config\n"
                     "(default: the shipped config/laser_slam.ini) and --set, with its back end (backend = graph:\n"
                     "every scan at its pose after the last loop closure), or with --pose-channel the poses a live\n"
-                    "run recorded (e.g. POSE_LASER_SLAM), the nearest within --max-dt-s of each scan. The grid is\n"
+                    "run recorded (e.g. POSE_LASER_SLAM), the nearest within --max-dt-s of each scan, corrected by\n"
+                    "the log's last table on --correction-channel for them (a live graph back end's loops). The grid is\n"
                     "MRPT's: each beam clears the cells it crossed and marks its hit.\n"
                     "--live (no LOG): from a running laser-slam instead: asks for its grid (a map_request_t on\n"
                     "--request-channel, every 2 s) and writes the next occupancy_grid_t on --channel as NAME.pgm,\n"
@@ -139,6 +162,8 @@ int Main(int argc, char** argv) {
   flags.AddDouble("resolution-m", &grid_options.resolution_m, "cell size [m]");
   flags.AddDouble("max-range-m", &grid_options.max_range_m, "beams beyond this insert free cells only up to it [m, 0: the laser's range]");
   flags.AddString("pose-channel", &pose_channel, "take the poses of this channel in the log instead of running the laser SLAM");
+  flags.AddString("correction-channel", &correction_channel,
+                  "with --pose-channel: pose_correction_t channel of the poses' corrections (empty: none)");
   flags.AddDouble("max-dt-s", &max_dt_s, "with --pose-channel: a scan's pose is the nearest within this [s]");
   flags.AddString("config", &config.path, "laser-slam config whose [laser_slam] options the laser SLAM runs");
   flags.AddStringList("set", &sets, "override of one [laser_slam] key of --config, KEY=VALUE");
@@ -209,7 +234,7 @@ int Main(int argc, char** argv) {
     placed = std::move(scans);
   } else {
     int rejected = 0;
-    const std::map<int64_t, nav::Pose2> poses = ReadPoses(log_path, pose_channel, &rejected);
+    const std::map<int64_t, nav::Pose2> poses = ReadPoses(log_path, pose_channel, correction_channel, &rejected);
     if (poses.empty()) throw std::runtime_error(log_path + " holds no pose_t messages on " + pose_channel);
     const auto max_dt = static_cast<int64_t>(max_dt_s * 1e6);
     int64_t unplaced = 0;

@@ -19,9 +19,11 @@
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/flags.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/glue/shutdown.hpp"
 #include "snapnav/glue/time.hpp"
 #include "snapnav/omni_frame_t.hpp"
+#include "snapnav/pose_correction_t.hpp"
 #include "snapnav/pose_t.hpp"
 
 namespace {
@@ -32,14 +34,15 @@ using namespace snapnav;
 struct Recorded {
   std::string file;
   int ix = 0, iy = 0;  // signed, relative to the origin node; shifted to 0.. when written
-  nav::Pose2 pose;
-  int64_t utime = 0;
+  nav::Pose2 pose;       // as received on --pose
+  int64_t pose_utime = 0;  // ... published then
+  int64_t utime = 0;       // the frame's
 };
 
 int Main(int argc, char** argv) {
   glue::CommonFlags common;
   std::string frames_channel = channels::kOmniFrame, pose_channel = channels::kPoseLaserSlam, out_dir, origin_text;
-  std::string ready_file;
+  std::string ready_file, correction_channel = channels::kLaserSlamCorrection;
   double spacing_m = 0.2, tolerance_m = 0.03, max_pose_age_s = 0.15, duration_s = 0;
   int max_images = 0;
   glue::Flags flags("record-grid",
@@ -51,10 +54,15 @@ int Main(int argc, char** argv) {
                     "indices from 0) and, for raw frames, OUT/camera.ini with the frames' [mirror] and [panorama]:\n"
                     "the format gridgen writes, read by eval homing --grid and eval localization --grid. Runs until\n"
                     "--max-images, --duration-s, SIGINT or the end of a log (--lcm-url file://LOG?speed=0).\n"
+                    "The poses are corrected by the newest table of --correction for --pose (laser SLAM's graph\n"
+                    "back end moves its past poses when it closes a loop): a node is chosen at the corrected pose,\n"
+                    "and positions.csv holds the images' poses as the last table puts them.\n"
                     "The channels get --channel-prefix.");
   flags.AddCommon(&common);
   flags.AddString("frames", &frames_channel, "omni frame channel (omni_frame_t)");
   flags.AddString("pose", &pose_channel, "pose channel (pose_t): POSE_LASER_SLAM, POSE_EKF, POSE_GROUND_TRUTH ...");
+  flags.AddString("correction", &correction_channel,
+                  "pose_correction_t channel of the --pose's corrections (laser-slam's graph back end; empty: none)");
   flags.AddString("out", &out_dir, "output folder (required; must not hold a positions.csv yet)");
   flags.AddDouble("spacing-m", &spacing_m, "grid spacing [m]");
   flags.AddDouble("tolerance-m", &tolerance_m, "largest distance from a node at which its image is taken [m]");
@@ -85,6 +93,7 @@ int Main(int argc, char** argv) {
   fs::create_directories(out / "images");
   frames_channel = common.channel_prefix + frames_channel;
   pose_channel = common.channel_prefix + pose_channel;
+  if (!correction_channel.empty()) correction_channel = common.channel_prefix + correction_channel;
 
   glue::InstallShutdownHandlers();
   glue::Bus bus(common.lcm_url);
@@ -93,6 +102,17 @@ int Main(int argc, char** argv) {
   std::vector<std::pair<int, int>> order;
   int64_t frames = 0, without_pose = 0, off_node = 0, taken_nodes = 0, undecodable = 0;
   bool raw = false, camera_written = false;
+  glue::PoseCorrections corrections(pose_channel);
+  int64_t bad_corrections = 0;
+  if (!correction_channel.empty()) {
+    bus.Subscribe<pose_correction_t>(correction_channel, [&](const pose_correction_t& m) {
+      std::string problem;
+      if (corrections.Take(m, &problem) == glue::PoseCorrections::Taken::kInvalid) {
+        ++bad_corrections;
+        std::cerr << "record-grid: a pose correction on " << correction_channel << " refused: " << problem << "\n";
+      }
+    });
+  }
   bus.Subscribe<pose_t>(pose_channel, [&](const pose_t& m) {
     poses.emplace_back(m.utime, glue::FromPoseMsg(m));
     while (poses.size() > 200) poses.pop_front();
@@ -107,7 +127,7 @@ int Main(int argc, char** argv) {
       ++without_pose;
       return;
     }
-    const nav::Pose2 pose = best->second;
+    const nav::Pose2 pose = corrections.Correct(best->first, best->second);
     if (!origin) origin = Eigen::Vector2d(pose.x_m, pose.y_m);
     const int ix = static_cast<int>(std::lround((pose.x_m - origin->x()) / spacing_m));
     const int iy = static_cast<int>(std::lround((pose.y_m - origin->y()) / spacing_m));
@@ -146,7 +166,7 @@ int Main(int argc, char** argv) {
     char name[32];
     std::snprintf(name, sizeof name, "images/%05d.png", static_cast<int>(recorded.size()));
     if (!cv::imwrite((out / name).string(), image)) throw std::runtime_error("cannot write " + (out / name).string());
-    recorded[{ix, iy}] = Recorded{name, ix, iy, pose, f.utime};
+    recorded[{ix, iy}] = Recorded{name, ix, iy, best->second, best->first, f.utime};
     order.push_back({ix, iy});
     std::cerr << "record-grid: " << recorded.size() << " images, the last at node (" << ix << ", " << iy << "), ("
               << std::fixed << std::setprecision(3) << pose.x_m << ", " << pose.y_m << ")\r" << std::flush;
@@ -168,12 +188,18 @@ int Main(int argc, char** argv) {
   csv << "file,ix,iy,x_m,y_m,heading_rad,utime\n" << std::setprecision(9);
   for (const auto& key : order) {
     const auto& r = recorded.at(key);
-    csv << r.file << "," << r.ix - min_ix << "," << r.iy - min_iy << "," << r.pose.x_m << "," << r.pose.y_m << ","
-        << r.pose.theta_rad << "," << r.utime << "\n";
+    const nav::Pose2 p = corrections.Correct(r.pose_utime, r.pose);  // as the last correction puts it
+    csv << r.file << "," << r.ix - min_ix << "," << r.iy - min_iy << "," << p.x_m << "," << p.y_m << ","
+        << p.theta_rad << "," << r.utime << "\n";
   }
   std::cerr << "\nrecord-grid: " << recorded.size() << " images written to " << out_dir << " (" << frames
             << " frames: " << without_pose << " without a pose within " << max_pose_age_s << " s, " << off_node
             << " off a node, " << taken_nodes << " at a node already taken, " << undecodable << " not decoded)\n";
+  if (corrections.tables() > 0 || bad_corrections > 0) {
+    std::cerr << "record-grid: " << corrections.tables() << " correction tables of " << pose_channel
+              << " taken (the last of correction " << corrections.corrections() << ", " << corrections.ranges()
+              << " ranges), " << bad_corrections << " refused\n";
+  }
   bus.ReportStats(std::cerr);
   return recorded.empty() ? 1 : 0;
 }

@@ -299,6 +299,13 @@ PlaceCellMemory::PlaceCellMemory(const PlaceViewOptions& view, const PanoramaMod
   panorama_.Validate();
 }
 
+void PlaceCellMemory::SetPose(int index, const Pose2& pose) {
+  if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad)) {
+    throw std::invalid_argument("place cells: a cell's pose must be finite");
+  }
+  cells_.at(static_cast<size_t>(index)).pose = pose;
+}
+
 int PlaceCellMemory::Add(const Pose2& pose, int64_t utime, PlaceView view) {
   if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad)) {
     throw std::invalid_argument("place cells: a cell's pose must be finite");

@@ -27,6 +27,7 @@ inline constexpr char kRoute[] = "ROUTE";                       // waypoint_rout
 inline constexpr char kNavigatorStatus[] = "NAVIGATOR_STATUS";
 inline constexpr char kPointMapFused[] = "POINT_MAP_FUSED";    // point_map_t of fused-slam
 inline constexpr char kLaserSlamStatus[] = "LASER_SLAM_STATUS"; // laser_slam_status_t
+inline constexpr char kLaserSlamCorrection[] = "LASER_SLAM_CORRECTION"; // pose_correction_t (graph back end)
 inline constexpr char kFusedSlamStatus[] = "FUSED_SLAM_STATUS"; // fused_slam_status_t
 inline constexpr char kBusCheck[] = "BUS_CHECK";                // omni_frame_t probes of bus-check
 inline constexpr char kBusPing[] = "BUS_PING";

@@ -214,6 +214,8 @@ class PlaceCellMemory {
 
   // Adds a cell (id assigned: the next free one) and returns its index.
   int Add(const Pose2& pose, int64_t utime, PlaceView view);
+  // Moves a cell (its pose source corrected its past, e.g. a loop closure); finite poses only.
+  void SetPose(int index, const Pose2& pose);
   int size() const { return static_cast<int>(cells_.size()); }
   const std::vector<PlaceCell>& cells() const { return cells_; }
   const PlaceCell& cell(int index) const { return cells_.at(index); }
