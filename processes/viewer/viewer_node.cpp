@@ -1,5 +1,6 @@
 #include "viewer_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <stdexcept>
@@ -84,6 +85,7 @@ ViewerConfig ViewerConfig::FromIni(const glue::IniFile& ini, const std::string& 
   c.grid_channel = channel_prefix + ini.GetString("channels", "grid");
   c.laser_slam_status_channel = channel_prefix + ini.GetString("channels", "laser_slam_status");
   c.laser_slam_pose_channel = channel_prefix + ini.GetString("channels", "laser_slam_pose");
+  c.laser_slam_correction_channel = channel_prefix + ini.GetString("channels", "laser_slam_correction");
 
   ViewerTable().ReadKeys(ini, "viewer", &c);
   for (auto& ch : c.render.robot_pose_channels) ch = channel_prefix + ch;
@@ -117,6 +119,7 @@ void ViewerConfig::Print(std::ostream& out) const {
       << "\nlandmarks = " << landmark_channels << "\nhoming_vector = " << homing_vector_channel
       << "\nplace_cell_match = " << place_cell_match_channel << "\nscan = " << scan_channel << "\ngrid = " << grid_channel
       << "\nlaser_slam_status = " << laser_slam_status_channel << "\nlaser_slam_pose = " << laser_slam_pose_channel
+      << "\nlaser_slam_correction = " << laser_slam_correction_channel
       << "\n[viewer]\n";
   ViewerTable().Print(out, *this);
   glue::PrintPanoramaConfig(out, panorama);
@@ -141,6 +144,27 @@ ViewerNode::ViewerNode(glue::Bus& bus, const ViewerConfig& config)
   bus_.Subscribe(config_.scan_channel, &ViewerNode::OnScan, this);
   bus_.Subscribe(config_.grid_channel, &ViewerNode::OnGrid, this);
   bus_.Subscribe(config_.laser_slam_status_channel, &ViewerNode::OnLaserSlamStatus, this);
+  bus_.Subscribe(config_.laser_slam_correction_channel, &ViewerNode::OnLaserSlamCorrection, this);
+}
+
+void ViewerNode::OnLaserSlamCorrection(const pose_correction_t& msg) {
+  SawUtime(msg.utime);
+  if (!corrections_) corrections_.emplace(config_.laser_slam_pose_channel);
+  std::string problem;
+  const auto taken = corrections_->Take(msg, &problem);
+  if (taken == glue::PoseCorrections::Taken::kInvalid) {
+    Reject("bad pose correction", problem);
+    return;
+  }
+  if (taken != glue::PoseCorrections::Taken::kTaken) return;
+  const auto track = scene_.tracks.find(config_.laser_slam_pose_channel);
+  if (track == scene_.tracks.end()) return;
+  // The trail redrawn where the estimator now puts it: the jumps up to this correction are joined.
+  for (viewer::PoseSample& s : track->second.poses) s.pose = corrections_->Correct(s.utime, s.published);
+  viewer::PoseSample& latest = track->second.latest;
+  latest.pose = corrections_->Correct(latest.utime, latest.published);
+  std::vector<int64_t>& jumps = track->second.jumps;
+  jumps.erase(std::remove_if(jumps.begin(), jumps.end(), [&](int64_t t) { return t <= msg.utime; }), jumps.end());
 }
 
 void ViewerNode::OnLaserSlamStatus(const laser_slam_status_t& msg) {
@@ -178,7 +202,9 @@ void ViewerNode::OnPose(const void* data, size_t size) {
   }
   SawUtime(msg->utime);
   viewer::Track& track = scene_.tracks[bus_.current().channel];
-  viewer::PoseSample sample{msg->utime, pose, glue::CovarianceOf(*msg)};
+  const bool corrected = corrections_ && bus_.current().channel == config_.laser_slam_pose_channel;
+  viewer::PoseSample sample{msg->utime, corrected ? corrections_->Correct(msg->utime, pose) : pose, pose,
+                            glue::CovarianceOf(*msg)};
   if (!sample.covariance.allFinite()) sample.covariance.setZero();
   // Time going back by more than a second: a new run on the same channel starts a new track.
   if (track.received > 0 && msg->utime < track.latest.utime - 1'000'000) {

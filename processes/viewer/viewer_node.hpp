@@ -20,7 +20,9 @@
 #include "snapnav/homing_vector_t.hpp"
 #include "snapnav/landmark_set_t.hpp"
 #include "snapnav/laser_scan_t.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
+#include "snapnav/pose_correction_t.hpp"
 #include "snapnav/nav/homing/omni_geometry.hpp"
 #include "snapnav/omni_frame_t.hpp"
 #include "snapnav/place_cell_match_t.hpp"
@@ -36,8 +38,9 @@ struct ViewerConfig {
   std::string channel_prefix;  // the counts panel lists only the channels with this prefix
   std::string point_map_channel, pose_channels, truth_channel, panorama_channel, omni_channel, landmark_channels,
       homing_vector_channel, place_cell_match_channel, scan_channel, grid_channel;
-  // laser_slam_status_t: a correction (`corrected`) is a jump of laser_slam_pose_channel's trail.
-  std::string laser_slam_status_channel, laser_slam_pose_channel;
+  // laser_slam_status_t: a correction (`corrected`) is a jump of laser_slam_pose_channel's trail;
+  // pose_correction_t: the correction of that trail's past (the trail redrawn, joined again).
+  std::string laser_slam_status_channel, laser_slam_pose_channel, laser_slam_correction_channel;
   double refresh_hz = 4;              // window refresh [Hz, wall clock]
   double png_interval_s = 5;          // --png: a snapshot per this much message time [s]; 0: at exit only
   // Trajectory thinning: a pose is kept when it is this far from the last kept one, turned this
@@ -93,6 +96,7 @@ class ViewerNode {
   void OnPlaceCellMatch(const place_cell_match_t& msg);
   void OnScan(const laser_scan_t& msg);
   void OnLaserSlamStatus(const laser_slam_status_t& msg);
+  void OnLaserSlamCorrection(const pose_correction_t& msg);
   void Reject(const std::string& reason, const std::string& detail);
   void UpdatePanorama();
 
@@ -104,6 +108,7 @@ class ViewerNode {
   bool have_panorama_channel_ = false;         // OMNI_PANORAMA seen: raw frames are not shown
   std::map<std::string, int64_t> rejected_;
   int64_t jumps_ = 0;  // laser SLAM corrections marked on its trail
+  std::optional<glue::PoseCorrections> corrections_;  // the newest table of laser_slam_pose_channel
 };
 
 }  // namespace snapnav::processes

@@ -20,7 +20,8 @@ namespace snapnav::viewer {
 
 struct PoseSample {
   int64_t utime = 0;
-  nav::Pose2 pose;
+  nav::Pose2 pose;       // drawn: as published, or as the estimator's newest correction puts it
+  nav::Pose2 published;  // as published
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // (x, y, theta); zero: unknown
 };
 

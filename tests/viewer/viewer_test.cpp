@@ -13,6 +13,7 @@
 #include "snapnav/glue/bus.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
 #include "viewer_node.hpp"
 #include "viewer_render.hpp"
@@ -436,6 +437,48 @@ TEST(ViewerNode, ALaserSlamCorrectionBreaksItsTrailAtTheJump) {
   EXPECT_GT(only_joined, 100) << "the line across the 2 m jump is not drawn";
   EXPECT_GT(only_broken, 10) << "a ring marks where the pose landed";
   EXPECT_GT(cv::countNonZero(in_broken), 400) << "both stretches of the trail are drawn";
+}
+
+// The correction's table (pose_correction_t) redraws the trail where the graph now puts it: the
+// poses before the correction move 2 m across onto the line of the later ones, the jump is joined;
+// the trail's poses as published are kept (a later table applies to them again). A table of
+// another pose channel changes nothing; a malformed one is refused and counted.
+TEST(ViewerNode, ALaserSlamCorrectionTableRedrawsItsTrail) {
+  glue::Bus bus("memq://");
+  processes::ViewerNode node(bus, Config("K_"));
+  for (int i = 0; i < 40; ++i) {
+    const int64_t t = 1'000'000 + i * 100'000;
+    const double y = i < 20 ? 0.0 : 2.0;
+    bus.Publish("K_POSE_LASER_SLAM", glue::ToPoseMsg(t, "laser_slam", "map", {0.1 * i, y, 0}, Eigen::Matrix3d::Zero()));
+    laser_slam_status_t st{};
+    st.utime = t;
+    st.corrected = i == 20;
+    st.correction_utime = i >= 20 ? 3'000'000 : 0;
+    bus.Publish("K_LASER_SLAM_STATUS", st);
+    HandleAll(bus);
+  }
+  const viewer::Track& track = node.Scene().tracks.at("K_POSE_LASER_SLAM");
+  ASSERT_EQ(track.jumps.size(), 1u);
+  const nav::PoseCorrectionTable table = {{1'000'000, {0, 2, 0}}, {3'000'000, {}}};
+  bus.Publish("K_LASER_SLAM_CORRECTION", glue::ToPoseCorrectionMsg(3'000'000, "OTHER_POSE", 1, {{0, {5, 5, 1}}}));
+  pose_correction_t broken = glue::ToPoseCorrectionMsg(3'000'000, "K_POSE_LASER_SLAM", 1, table);
+  broken.from_utime = {3'000'000, 1'000'000};  // out of order
+  bus.Publish("K_LASER_SLAM_CORRECTION", broken);
+  HandleAll(bus);
+  EXPECT_EQ(track.poses.front().pose.y_m, 0.0);
+  EXPECT_EQ(node.rejected_total(), 1);
+  bus.Publish("K_LASER_SLAM_CORRECTION", glue::ToPoseCorrectionMsg(3'000'000, "K_POSE_LASER_SLAM", 1, table));
+  HandleAll(bus);
+  EXPECT_TRUE(track.jumps.empty());
+  for (const viewer::PoseSample& p : track.poses) {
+    EXPECT_NEAR(p.pose.y_m, 2.0, 1e-12) << p.utime;
+    EXPECT_EQ(p.published.y_m, p.utime < 3'000'000 ? 0.0 : 2.0) << p.utime;
+  }
+  EXPECT_NEAR(track.latest.pose.y_m, 2.0, 1e-12);
+  // A pose published after the table: drawn as the table puts it (the current range: unchanged).
+  bus.Publish("K_POSE_LASER_SLAM", glue::ToPoseMsg(5'100'000, "laser_slam", "map", {4.1, 2.0, 0}, Eigen::Matrix3d::Zero()));
+  HandleAll(bus);
+  EXPECT_NEAR(node.Scene().tracks.at("K_POSE_LASER_SLAM").latest.pose.y_m, 2.0, 1e-12);
 }
 
 TEST(ViewerNode, BadFramesAreCountedAndTracksStayBounded) {

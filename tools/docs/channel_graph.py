@@ -117,6 +117,7 @@ ROLES = {
         "homing_vector": (SUB, _always), "place_cell_match": (SUB, _always), "scan": (SUB, _always),
         "grid": (SUB, _always), "laser_slam_status": (SUB, _always),
         "laser_slam_pose": (SUB, _never),  # which trail a correction breaks: `poses` subscribes it
+        "laser_slam_correction": (SUB, _always),
     },
     "omni-camera": {"frame": (PUB, _always)},
     "laser-hokuyo": {"scan": (PUB, _always)},
