@@ -18,6 +18,7 @@
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/log_writer.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/pose_t.hpp"
@@ -124,6 +125,40 @@ TEST_F(LogTools, LogReportOnAnIntactLogExitsZero) {
   EXPECT_NE(json.find("\"rejected_POSE_DEAD_RECKONING\": 1"), std::string::npos) << json;  // the NaN pose
   EXPECT_NE(json.find("pose_dead_reckoning_ate_rmse_m"), std::string::npos) << json;
   EXPECT_TRUE(fs::exists(out / "trajectories.png"));
+}
+
+// A pose channel corrected afterwards (laser-slam's graph back end: pose_correction_t): reported as
+// published and, beside it, as the log's last table puts it; an invalid table is counted on its channel.
+TEST_F(LogTools, LogReportAddsTheCorrectedTrajectoryOfACorrectedPoseChannel) {
+  const fs::path path = dir_ / "corrected.lcmlog";
+  glue::LogWriter w(path.string());
+  const nav::Pose2 off{0.3, -0.2, 0.1};  // what the second half was published off by
+  const int64_t t0 = 1700000000000000, half = t0 + 30 * 100000;
+  for (int i = 0; i < 60; ++i) {
+    const int64_t t = t0 + i * 100000;
+    const nav::Pose2 truth{0.1 * i, 0.02 * i * i * 0.1, 0.01 * i};
+    w.Write("POSE_GROUND_TRUTH", glue::ToPoseMsg(t, "ground_truth", "map", truth, Eigen::Matrix3d::Zero()));
+    w.Write("POSE_LASER_SLAM", glue::ToPoseMsg(t, "laser_slam", "map", t < half ? truth : off.Compose(truth),
+                                               Eigen::Matrix3d::Zero()));
+  }
+  pose_correction_t bad = glue::ToPoseCorrectionMsg(t0 + 6000000, "POSE_LASER_SLAM", 1, {{t0, {}}, {half, {}}});
+  bad.from_utime = {half, t0};  // out of order
+  w.Write("LASER_SLAM_CORRECTION", bad);
+  w.Write("LASER_SLAM_CORRECTION", glue::ToPoseCorrectionMsg(t0 + 6000000, "POSE_LASER_SLAM", 2,
+                                                             {{t0, {}}, {half, off.Inverse()}}));
+  w.Close();
+  const fs::path out = dir_ / "report";
+  EXPECT_EQ(Run("log-report " + path.string() + " --out " + out.string(), dir_ / "err.txt"), 0)
+      << ReadFile(dir_ / "err.txt");
+  const std::string json = ReadFile(out / "summary.json");
+  EXPECT_NE(json.find("\"rejected_LASER_SLAM_CORRECTION\": 1"), std::string::npos) << json;
+  const auto number = [&](const std::string& key) {
+    const size_t at = json.find("\"" + key + "\": ");
+    return at == std::string::npos ? -1.0 : std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+  };
+  EXPECT_NEAR(number("pose_laser_slam_corrected_ate_rmse_m"), 0.0, 1e-4) << json;
+  EXPECT_GT(number("pose_laser_slam_ate_rmse_m"), 0.2) << json;  // as published: the second half off
+  EXPECT_NE(ReadFile(out / "report.md").find("| POSE_LASER_SLAM (corrected) | 60 |"), std::string::npos);
 }
 
 TEST_F(LogTools, LogReportOnADamagedLogReportsTheOffsetsAndTheIntactEvents) {

@@ -28,6 +28,8 @@
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/omni_frame_t.hpp"
+#include "snapnav/glue/pose_corrections.hpp"
+#include "snapnav/pose_correction_t.hpp"
 #include "snapnav/pose_t.hpp"
 #include "process_logs.hpp"
 #include "results.hpp"
@@ -58,7 +60,9 @@ int Main(int argc, char** argv) {
   double ate_window_s = 0;
   glue::Flags flags("log-report LOG",
                     "Summarises an LCM log: messages per channel, and for every pose_t channel its trajectory\n"
-                    "error (ATE) against the ground truth; writes report.md, summary.json and PNG plots.\n"
+                    "error (ATE) against the ground truth; writes report.md, summary.json and PNG plots. A pose\n"
+                    "channel that laser-slam's graph back end corrected (pose_correction_t in the log) is also\n"
+                    "reported as the log's last correction puts it (\"CHANNEL (corrected)\").\n"
                     "A damaged log (truncated, corrupt) is reported with the byte offset of each damaged place\n"
                     "and summarised from its intact events; the exit status is then 3.");
   flags.AddString("out", &out_dir, "output folder (default: beside the log)");
@@ -123,6 +127,8 @@ int Main(int argc, char** argv) {
   std::map<std::string, std::vector<homing_vector_t>> homing;        // by channel
   std::map<std::string, std::vector<place_cell_match_t>> matches;    // by channel
   std::map<std::string, std::vector<navigator_status_t>> statuses;   // by channel
+  // The newest correction table of each pose channel (laser-slam's graph back end: pose_correction_t).
+  std::map<std::string, glue::PoseCorrections> corrections;
   glue::LogEvent ev;
   while (log.Next(&ev)) {
     if (ev.channel.rfind(prefix, 0) != 0) continue;  // another robot's
@@ -169,6 +175,12 @@ int Main(int argc, char** argv) {
       } else {
         ++ci.rejected;
       }
+    } else if (*fp == static_cast<uint64_t>(pose_correction_t::getHash())) {
+      const auto c = glue::Decode<pose_correction_t>(ev.data.data(), ev.data.size(), &error);
+      if (!c || corrections.try_emplace(c->pose_channel, c->pose_channel).first->second.Take(*c, &error) ==
+                    glue::PoseCorrections::Taken::kInvalid) {
+        ++ci.rejected;
+      }
     } else if (*fp == static_cast<uint64_t>(navigator_status_t::getHash())) {
       if (auto st = glue::Decode<navigator_status_t>(ev.data.data(), ev.data.size(), &error)) {
         statuses[ev.channel].push_back(std::move(*st));
@@ -176,6 +188,17 @@ int Main(int argc, char** argv) {
         ++ci.rejected;
       }
     }
+  }
+  // A pose channel its estimator corrected afterwards (a loop closure moves the past): beside the
+  // poses as published, the trajectory as the log's last correction puts them.
+  for (const auto& [ch, c] : corrections) {
+    const auto it = poses.find(ch);
+    if (it == poses.end() || c.tables() == 0) continue;
+    std::vector<nav::StampedPose> corrected = it->second;
+    for (nav::StampedPose& p : corrected) p.pose = c.Correct(p.utime, p.pose);
+    poses[ch + " (corrected)"] = std::move(corrected);
+    std::cerr << "log-report: " << ch << " also as correction " << c.corrections() << " puts it (" << c.tables()
+              << " correction tables in the log)\n";
   }
   const bool damaged = log.damaged();
   const auto good_bytes = static_cast<int64_t>(log.file_size() - log.damaged_bytes());
@@ -214,8 +237,15 @@ int Main(int argc, char** argv) {
       const nav::AteResult aligned = nav::ComputeAte(pairs, nav::AlignSE2(pairs));
       ate_table << "| " << ch << " | " << pairs.size() << " | " << std::setprecision(3) << raw.rmse_m << " | "
                 << aligned.rmse_m << " | " << raw.final_m << " |\n";
-      std::string key = ch;
-      for (auto& c : key) c = static_cast<char>(std::tolower(c));
+      std::string key;  // the channel, lower case; " (corrected)" as "_corrected"
+      for (const char c : ch) {
+        if (std::isalnum(static_cast<unsigned char>(c)) || c == '_') {
+          key += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        } else if (!key.empty() && key.back() != '_') {
+          key += '_';
+        }
+      }
+      while (!key.empty() && key.back() == '_') key.pop_back();
       json[key + "_ate_rmse_m"] = results::Rounded(raw.rmse_m, 4);
       json[key + "_aligned_ate_rmse_m"] = results::Rounded(aligned.rmse_m, 4);
       json[key + "_final_error_m"] = results::Rounded(raw.final_m, 4);
