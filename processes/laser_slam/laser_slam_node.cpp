@@ -149,7 +149,6 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
       const nav::GraphSlamUpdate g = graph_->Update(points, msg.utime);
       update = g.front_end;
       if (g.corrected) last_correction_utime_ = msg.utime;
-      anchor_keyframe_ = g.anchor_keyframe;
       if (grid_) {
         // The live grid follows the graph: the keyframes' scans kept, the grid rebuilt from them at
         // the optimized poses after a correction (GridPublisher).
@@ -173,7 +172,7 @@ void LaserSlamNode::HandleScan(const laser_scan_t& msg) {
   if (graph_) {
     // What the published pose is relative to (its keyframe, and that keyframe's pose now), for the
     // correction tables: the graph never changes a scan's pose relative to its keyframe.
-    const int k = anchor_keyframe_ < graph_->keyframes() ? anchor_keyframe_ : -1;
+    const int k = graph_->anchor_keyframe();
     published_.Note(msg.utime, k, k >= 0 ? graph_->graph().pose(k) : nav::Pose2{});
     if (last_correction_utime_ == msg.utime && graph_->corrections() > 0) PublishCorrection(msg.utime);
   }

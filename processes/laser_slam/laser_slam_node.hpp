@@ -114,7 +114,6 @@ class LaserSlamNode {
   void Start(const nav::Pose2& pose);    // makes the one of the two the config asks for
   bool started() const { return slam_ || graph_; }
   int64_t last_correction_utime_ = 0;    // the scan of the graph's last correction
-  int anchor_keyframe_ = -1;             // the keyframe the published pose is relative to (backend = graph)
   nav::PublishedPoses published_;        // ... per range of publication times: for the correction tables
   bool odometry_seen_ = false;
   int64_t last_scan_utime_ = 0;

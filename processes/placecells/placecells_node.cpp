@@ -285,17 +285,19 @@ void PlaceCellsNode::OnExploreCorrection(const pose_correction_t& msg) {
     return;
   }
   if (taken != glue::PoseCorrections::Taken::kTaken) return;
-  int moved = 0;
+  // Every cell's new pose first (finite, the table's transforms being bounded), then all moved.
+  std::vector<std::pair<int, nav::Pose2>> moves;
   double largest_m = 0;
   for (const ExploredCell& e : explored_) {
     const nav::Pose2 now = corrections_.Correct(e.received.utime, e.received.pose);
     const nav::Pose2& was = memory_.cell(e.index).pose;
     const double d = std::hypot(now.x_m - was.x_m, now.y_m - was.y_m);
     if (d < 1e-9 && std::abs(nav::WrapAngle(now.theta_rad - was.theta_rad)) < 1e-9) continue;  // unchanged
-    memory_.SetPose(e.index, now);
-    ++moved;
+    moves.emplace_back(e.index, now);
     largest_m = std::max(largest_m, d);
   }
+  for (const auto& [index, pose] : moves) memory_.SetPose(index, pose);
+  const int moved = static_cast<int>(moves.size());
   cells_moved_ += moved;
   if (moved > 0) {
     moved_since_save_ = true;

@@ -157,6 +157,7 @@ void ViewerNode::OnLaserSlamCorrection(const pose_correction_t& msg) {
     return;
   }
   if (taken != glue::PoseCorrections::Taken::kTaken) return;
+  corrected_through_utime_ = std::max(corrected_through_utime_, msg.utime);
   const auto track = scene_.tracks.find(config_.laser_slam_pose_channel);
   if (track == scene_.tracks.end()) return;
   // The trail redrawn where the estimator now puts it: the jumps up to this correction are joined.
@@ -173,6 +174,8 @@ void ViewerNode::OnLaserSlamStatus(const laser_slam_status_t& msg) {
   // The pose of the correction's scan was published just before this status: the trail is broken
   // from the pose before it.
   const int64_t at = msg.correction_utime > 0 ? msg.correction_utime : msg.utime;
+  // laser-slam publishes a correction's table before its status: a table already taken joined it.
+  if (at <= corrected_through_utime_) return;
   const auto track = scene_.tracks.find(config_.laser_slam_pose_channel);
   if (track == scene_.tracks.end()) return;  // no trail yet to break
   std::vector<int64_t>& jumps = track->second.jumps;
@@ -210,6 +213,10 @@ void ViewerNode::OnPose(const void* data, size_t size) {
   if (track.received > 0 && msg->utime < track.latest.utime - 1'000'000) {
     track.poses.clear();
     track.jumps.clear();
+    if (bus_.current().channel == config_.laser_slam_pose_channel) {
+      corrections_.reset();  // a new run: the old run's tables are not its
+      corrected_through_utime_ = 0;
+    }
   }
   track.estimator = msg->estimator;
   track.frame = msg->frame;

@@ -109,6 +109,7 @@ class ViewerNode {
   std::map<std::string, int64_t> rejected_;
   int64_t jumps_ = 0;  // laser SLAM corrections marked on its trail
   std::optional<glue::PoseCorrections> corrections_;  // the newest table of laser_slam_pose_channel
+  int64_t corrected_through_utime_ = 0;  // ... and its scan: a correction announced up to it is joined
 };
 
 }  // namespace snapnav::processes

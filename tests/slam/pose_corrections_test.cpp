@@ -59,22 +59,31 @@ TEST(PoseCorrections, ACorrectionStartsANewRangeOnTheSameKeyframe) {
   ExpectPose(CorrectPublishedPose(table, 250, after), k0.Compose({0.6, 0, 0}), "published after it");
 }
 
-// Time going back (a log played again) starts the record again; two poses at one time keep the
-// later's keyframe.
-TEST(PoseCorrections, TimeGoingBackStartsAgain) {
+// Two poses at one time keep the later's keyframe; a pose stamped before the last one (a scan out
+// of order) starts no range and takes the range that holds its time; the record is kept.
+TEST(PoseCorrections, APoseStampedBeforeTheLastStartsNoRange) {
+  std::map<int, Pose2> k = {{0, {}}, {1, {1, 0, 0}}, {2, {2, 0, 0}}, {3, {3, 0, 0}}};
   PublishedPoses record;
-  record.Note(100, 0, {});
-  record.Note(200, 1, {1, 0, 0});
-  record.Note(200, 2, {2, 0, 0});
+  record.Note(100, 0, k[0]);
+  record.Note(200, 1, k[1]);
+  record.Note(200, 2, k[2]);
   EXPECT_EQ(record.ranges(), 2u);
-  record.Note(50, 0, {});
-  EXPECT_EQ(record.ranges(), 1u);
+  record.Note(150, 3, k[3]);  // out of order
+  EXPECT_EQ(record.ranges(), 2u);
+  record.Note(300, 3, k[3]);
+  EXPECT_EQ(record.ranges(), 3u);
+  k[0] = {0, 0.5, 0};  // a correction moves keyframe 0 only
+  const PoseCorrectionTable table = record.Table([&](int i) { return k.at(i); });
+  ExpectPose(CorrectPublishedPose(table, 150, {0.2, 0, 0}), {0.2, 0.5, 0}, "published at 150, on keyframe 0");
+  ExpectPose(CorrectPublishedPose(table, 250, {2.2, 0, 0}), {2.2, 0, 0}, "published at 250, on keyframe 2");
 }
 
 TEST(PoseCorrections, ATableOutOfOrderOrNotFiniteIsNamed) {
   EXPECT_EQ(PoseCorrectionTableProblem({{1, {}}, {2, {}}}), "");
   EXPECT_NE(PoseCorrectionTableProblem({{2, {}}, {2, {}}}).find("range 1 starts at utime 2"), std::string::npos);
   EXPECT_NE(PoseCorrectionTableProblem({{1, {0, std::nan(""), 0}}}).find("range 0 has a non-finite"), std::string::npos);
+  EXPECT_NE(PoseCorrectionTableProblem({{1, {}}, {2, {1e300, 0, 0}}}).find("range 1 has an absurd transform"),
+            std::string::npos);
 }
 
 }  // namespace

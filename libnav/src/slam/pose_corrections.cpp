@@ -28,6 +28,12 @@ std::string PoseCorrectionTableProblem(const PoseCorrectionTable& table) {
     if (!std::isfinite(t.x_m) || !std::isfinite(t.y_m) || !std::isfinite(t.theta_rad)) {
       return "range " + std::to_string(i) + " has a non-finite transform";
     }
+    if (std::abs(t.x_m) > kMaxCorrectionM || std::abs(t.y_m) > kMaxCorrectionM ||
+        std::abs(t.theta_rad) > kMaxCorrectionRad) {
+      return "range " + std::to_string(i) + " has an absurd transform (beyond " +
+             std::to_string(static_cast<int64_t>(kMaxCorrectionM)) + " m or " +
+             std::to_string(static_cast<int64_t>(kMaxCorrectionRad)) + " rad)";
+    }
     if (i > 0 && table[i].from_utime <= table[i - 1].from_utime) {
       return "range " + std::to_string(i) + " starts at utime " + std::to_string(table[i].from_utime) +
              ", not after range " + std::to_string(i - 1) + "'s " + std::to_string(table[i - 1].from_utime);
@@ -37,7 +43,9 @@ std::string PoseCorrectionTableProblem(const PoseCorrectionTable& table) {
 }
 
 void PublishedPoses::Note(int64_t utime, int anchor, const Pose2& anchor_pose) {
-  if (!ranges_.empty() && utime < last_utime_) ranges_.clear();
+  // A pose stamped before the last one (a scan out of order) starts no range: the ranges stay in
+  // increasing time, and that pose takes the range that holds its time.
+  if (!ranges_.empty() && utime < last_utime_) return;
   last_utime_ = utime;
   if (!ranges_.empty() && ranges_.back().anchor == anchor &&
       (anchor < 0 || Same(ranges_.back().anchor_pose, anchor_pose, 0.0))) {

@@ -207,6 +207,8 @@ class GraphSlam {
   const LaserSlam& front_end() const { return front_; }
   const PoseGraph& graph() const { return graph_; }
   int keyframes() const { return graph_.nodes(); }
+  // The keyframe pose() and scan_pose() are kept relative to (-1: none yet, the start's frame).
+  int anchor_keyframe() const { return last_keyframe_; }
   int64_t keyframe_reuses() const { return keyframe_reuses_; }  // keyframes due but reused (keyframe_reuse_m)
   int64_t keyframe_scan(int keyframe) const { return keyframes_.at(static_cast<size_t>(keyframe))->scan; }
   // The map from the optimized keyframes: their points, one per cell of cell_m.

@@ -32,8 +32,11 @@ using PoseCorrectionTable = std::vector<PoseCorrection>;
 // range (or with an empty table), unchanged.
 Pose2 CorrectPublishedPose(const PoseCorrectionTable& table, int64_t utime, const Pose2& published);
 
-// "" when the table can be applied (ranges in strictly increasing from_utime, finite transforms),
-// else what is wrong with it (naming the range).
+// A transform beyond these is garbage (no map is 1000 km across).
+inline constexpr double kMaxCorrectionM = 1e6;
+inline constexpr double kMaxCorrectionRad = 1e3;
+// "" when the table can be applied (ranges in strictly increasing from_utime, finite transforms
+// within the bounds above), else what is wrong with it (naming the range).
 std::string PoseCorrectionTableProblem(const PoseCorrectionTable& table);
 
 // The publisher's record: per range of publication times, the keyframe its poses were relative to
@@ -42,7 +45,8 @@ std::string PoseCorrectionTableProblem(const PoseCorrectionTable& table);
 class PublishedPoses {
  public:
   // A pose published at `utime`, relative to keyframe `anchor`, whose pose was `anchor_pose` then.
-  // A utime before the last one starts the record again (a log played anew).
+  // A utime before the last one's is not recorded (the ranges stay in time order; it takes the
+  // range that holds its time).
   void Note(int64_t utime, int anchor, const Pose2& anchor_pose);
   // The table now, with `anchor_now(k)` keyframe k's current pose; consecutive ranges whose
   // transforms agree within 1e-9 m and rad merged.
