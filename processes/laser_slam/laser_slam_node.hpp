@@ -76,8 +76,6 @@ class LaserSlamNode {
   int64_t poses_published() const { return poses_published_; }
   int64_t maps_published() const { return maps_published_; }
   int64_t corrections_published() const { return corrections_published_; }
-  // The ranges of publication times the correction tables are kept for (backend = graph).
-  size_t correction_ranges() const { return published_.ranges(); }
   // The occupancy grid's publisher; nullptr without a grid channel.
   const GridPublisher* grid() const { return grid_ ? &*grid_ : nullptr; }
   // Scans and odometry messages skipped, by reason ("no ranges", "no valid points", ...).

@@ -54,13 +54,20 @@ const std::vector<nav::Pose2> kCellPoses = {
     {2.5, 2.0, 0.0}, {3.5, 2.0, 0.7}, {4.5, 2.0, -1.2}, {2.5, 3.2, 2.5}, {3.5, 3.2, -2.8}, {4.5, 3.2, 1.6},
     {2.5, 4.1, -0.4}, {3.5, 4.1, 1.9}, {4.5, 4.1, 3.0}};
 
-// Explores kCellPoses (one frame a second, each after its ground-truth pose) into `memory_file`.
-std::vector<place_cell_match_t> Explore(const std::string& prefix, const std::string& memory_file,
-                                        std::initializer_list<Override> overrides, int64_t* saves = nullptr) {
+// The shipped config exploring panoramas into `memory_file`, with `overrides`.
+PlaceCellsConfig ExploreConfig(const std::string& prefix, std::initializer_list<Override> overrides,
+                               const std::string& memory_file) {
   auto config = Config(prefix, overrides);
   config.mode = PlaceCellsMode::kExplore;
   config.raw_input = false;
   config.memory_file = memory_file;
+  return config;
+}
+
+// Explores kCellPoses (one frame a second, each after its ground-truth pose) into `memory_file`.
+std::vector<place_cell_match_t> Explore(const std::string& prefix, const std::string& memory_file,
+                                        std::initializer_list<Override> overrides, int64_t* saves = nullptr) {
+  const auto config = ExploreConfig(prefix, overrides, memory_file);
   glue::Bus bus("memq://");
   std::ostringstream log;
   PlaceCellsNode node(bus, config, log);
@@ -112,10 +119,7 @@ TEST(PlaceCellsNode, ExploreRecordsNovelViewsAtTheirPosesAndSavesTheFile) {
 TEST(PlaceCellsNode, ExploreKnownPlaceAddsNoCellAndExtendsTheFile) {
   const std::string file = MemoryPath("extend");
   Explore("E2_", file, kEveryFrame);
-  auto config = Config("E2b_", kEveryFrame);
-  config.mode = PlaceCellsMode::kExplore;
-  config.raw_input = false;
-  config.memory_file = file;
+  const auto config = ExploreConfig("E2b_", kEveryFrame, file);
   glue::Bus bus("memq://");
   std::ostringstream log;
   PlaceCellsNode node(bus, config, log);
@@ -317,10 +321,7 @@ TEST(PlaceCellsNode, MalformedInputIsCountedNotFatal) {
 }
 
 TEST(PlaceCellsNode, ExploreWithoutAPoseSkipsTheFrame) {
-  auto config = Config("X1_", kEveryFrame);
-  config.mode = PlaceCellsMode::kExplore;
-  config.raw_input = false;
-  config.memory_file = MemoryPath("nopose");
+  const auto config = ExploreConfig("X1_", kEveryFrame, MemoryPath("nopose"));
   glue::Bus bus("memq://");
   std::ostringstream log;
   PlaceCellsNode node(bus, config, log);
@@ -340,10 +341,7 @@ TEST(PlaceCellsNode, ExploreWithoutAPoseSkipsTheFrame) {
 // cells placed on them back, the next cell is placed corrected, the file is written again. A table
 // of another channel is another estimator's (ignored); a malformed one is counted, not applied.
 TEST(PlaceCellsNode, ExploredCellsMoveWithTheCorrectionsOfTheirPoseSource) {
-  auto config = Config("X2_", kEveryFrame);
-  config.mode = PlaceCellsMode::kExplore;
-  config.raw_input = false;
-  config.memory_file = MemoryPath("corrected");
+  const auto config = ExploreConfig("X2_", kEveryFrame, MemoryPath("corrected"));
   glue::Bus bus("memq://");
   std::ostringstream log;
   PlaceCellsNode node(bus, config, log);
