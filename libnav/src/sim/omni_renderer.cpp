@@ -11,18 +11,29 @@
 namespace snapnav::nav::sim {
 namespace {
 
-// Bilinear sample of a texture level with wrap-around, scaled by `shade`.
-inline cv::Vec3b Sample(const cv::Mat& img, double x, double y, double shade) {
-  const int w = img.cols, h = img.rows;
+// A texture level's column pair around x (wrapped around) and the weight of the second.
+struct TexelColumns {
+  int x0, x1;
+  double fx;
+};
+inline TexelColumns Columns(const cv::Mat& img, double x) {
+  const int w = img.cols;
   x -= std::floor(x / w) * w;
+  const int x0 = std::min(static_cast<int>(x), w - 1);
+  return {x0, x0 + 1 < w ? x0 + 1 : 0, x - x0};
+}
+
+// Bilinear sample of a texture level at columns `cols` and row y (wrapped around), scaled by `shade`.
+inline cv::Vec3b Sample(const cv::Mat& img, const TexelColumns& cols, double y, double shade) {
+  const int h = img.rows;
   y -= std::floor(y / h) * h;
-  const int x0 = std::min(static_cast<int>(x), w - 1), y0 = std::min(static_cast<int>(y), h - 1);
-  const int x1 = x0 + 1 < w ? x0 + 1 : 0, y1 = y0 + 1 < h ? y0 + 1 : 0;
-  const double fx = x - x0, fy = y - y0;
-  const cv::Vec3b& a = img.at<cv::Vec3b>(y0, x0);
-  const cv::Vec3b& b = img.at<cv::Vec3b>(y0, x1);
-  const cv::Vec3b& c = img.at<cv::Vec3b>(y1, x0);
-  const cv::Vec3b& d = img.at<cv::Vec3b>(y1, x1);
+  const int y0 = std::min(static_cast<int>(y), h - 1);
+  const int y1 = y0 + 1 < h ? y0 + 1 : 0;
+  const double fx = cols.fx, fy = y - y0;
+  const cv::Vec3b& a = img.at<cv::Vec3b>(y0, cols.x0);
+  const cv::Vec3b& b = img.at<cv::Vec3b>(y0, cols.x1);
+  const cv::Vec3b& c = img.at<cv::Vec3b>(y1, cols.x0);
+  const cv::Vec3b& d = img.at<cv::Vec3b>(y1, cols.x1);
   cv::Vec3b out;
   for (int k = 0; k < 3; ++k) {
     const double top = a[k] + fx * (b[k] - a[k]);
@@ -39,28 +50,6 @@ inline const cv::Mat& Level(const Texture& t, double meters_per_pixel, double* s
   level = std::min(level, static_cast<int>(t.levels.size()) - 1);
   *scale = std::ldexp(1.0, -level);
   return t.levels[level];
-}
-
-// z_m is measured from the bottom of the surface; the texture's top row is at height_m.
-inline cv::Vec3b SampleSurface(const Texture& t, double u_m, double z_m, double meters_per_pixel, double shade) {
-  double scale;
-  const cv::Mat& img = Level(t, meters_per_pixel, &scale);
-  const double x = u_m / t.width_m * t.levels[0].cols * scale;
-  const double y = (1.0 - z_m / t.height_m) * t.levels[0].rows * scale;
-  return Sample(img, x, y, shade);
-}
-
-inline cv::Vec3b SamplePlane(const Scene& scene, int texture, const cv::Vec3b& plain, const Eigen::Vector2d& p,
-                             double meters_per_pixel, double shade) {
-  if (texture < 0) {
-    return cv::Vec3b(cv::saturate_cast<uint8_t>(plain[0] * shade), cv::saturate_cast<uint8_t>(plain[1] * shade),
-                     cv::saturate_cast<uint8_t>(plain[2] * shade));
-  }
-  const Texture& t = scene.textures[texture];
-  double scale;
-  const cv::Mat& img = Level(t, meters_per_pixel, &scale);
-  return Sample(img, p.x() / t.width_m * t.levels[0].cols * scale, p.y() / t.height_m * t.levels[0].rows * scale,
-                shade);
 }
 
 }  // namespace
@@ -482,25 +471,78 @@ void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const 
   const double ceiling = scene_.ceiling_height_m;
   const double col_angle = 2 * M_PI / model.width_px;
   const double row_angle = std::abs(model.elevation_top_rad - model.elevation_bottom_rad) / (model.height_px - 1);
-  std::vector<double> tan_e(model.height_px);
-  for (int r = 0; r < model.height_px; ++r) tan_e[r] = std::tan(model.ElevationOfRow(r));
+  // What does not depend on the column, once per row: the elevation's tangent, the distances to the
+  // floor and the ceiling, and the mip level their footprint picks (the same arithmetic as per pixel,
+  // so the image is the same to the bit; about half of the time went to choosing levels per pixel).
+  struct RowPlan {
+    double te, floor_d, ceil_d;
+    const cv::Mat* floor_level = nullptr;
+    double floor_scale = 1;
+    const cv::Mat* ceil_level = nullptr;
+    double ceil_scale = 1;
+  };
+  std::vector<RowPlan> plan(static_cast<size_t>(row_end));
+  for (int r = 0; r < row_end; ++r) {
+    RowPlan& rp = plan[static_cast<size_t>(r)];
+    const double te = std::tan(model.ElevationOfRow(r));
+    rp.te = te;
+    rp.floor_d = te < 0 ? cam_z / -te : INFINITY;
+    rp.ceil_d = (te > 0 && ceiling > 0) ? (ceiling - cam_z) / te : INFINITY;
+    if (rp.floor_d < rp.ceil_d && std::isfinite(rp.floor_d)) {
+      if (scene_.floor_texture >= 0) {
+        const double footprint = rp.floor_d * row_angle / std::max(0.05, -te / std::sqrt(1 + te * te));
+        rp.floor_level = &Level(scene_.textures[scene_.floor_texture], footprint, &rp.floor_scale);
+      }
+    } else if (std::isfinite(rp.ceil_d) && scene_.ceiling_texture >= 0) {
+      rp.ceil_level = &Level(scene_.textures[scene_.ceiling_texture], rp.ceil_d * row_angle * 4, &rp.ceil_scale);
+    }
+  }
+  // A plane's texel at world point p, at the level chosen for its row.
+  auto plane = [](const Texture& t, const cv::Mat& level, double scale, const Eigen::Vector2d& p, double shade) {
+    return Sample(level, Columns(level, p.x() / t.width_m * t.levels[0].cols * scale),
+                  p.y() / t.height_m * t.levels[0].rows * scale, shade);
+  };
+  auto plain = [](const cv::Vec3b& bgr, double shade) {
+    return cv::Vec3b(cv::saturate_cast<uint8_t>(bgr[0] * shade), cv::saturate_cast<uint8_t>(bgr[1] * shade),
+                     cv::saturate_cast<uint8_t>(bgr[2] * shade));
+  };
+  // Per surface a column's ray crosses: its texture level (the footprint is the same on every row)
+  // and its horizontal texture coordinate; z is measured from the surface's bottom, the texture's top
+  // row at its height.
+  struct HitPlan {
+    const Texture* texture;
+    const cv::Mat* level;
+    double scale;
+    TexelColumns columns;
+  };
   std::vector<RayHit> hits;
+  std::vector<HitPlan> hit_plans;
   for (int c = 0; c < model.width_px; ++c) {
     const double world_bearing = robot.theta_rad + model.BearingOfColumn(c);
     const Eigen::Vector2d dir(std::cos(world_bearing), std::sin(world_bearing));
     CastRay(scene_, people, eye, dir, -1.0, &hits);
     if (depth && !hits.empty()) (*depth)[c] = static_cast<float>(hits.front().distance_m);
+    hit_plans.clear();
+    for (const RayHit& h : hits) {
+      HitPlan hp;
+      hp.texture = &scene_.textures[h.texture];
+      hp.level = &Level(*hp.texture, h.distance_m * col_angle, &hp.scale);
+      hp.columns = Columns(*hp.level, h.u_m / hp.texture->width_m * hp.texture->levels[0].cols * hp.scale);
+      hit_plans.push_back(hp);
+    }
     for (int r = 0; r < row_end; ++r) {
-      const double te = tan_e[r];
-      const double floor_d = te < 0 ? cam_z / -te : INFINITY;
-      const double ceil_d = (te > 0 && ceiling > 0) ? (ceiling - cam_z) / te : INFINITY;
+      const RowPlan& rp = plan[static_cast<size_t>(r)];
+      const double te = rp.te, floor_d = rp.floor_d, ceil_d = rp.ceil_d;
       cv::Vec3b px;
       bool done = false;
-      for (const RayHit& h : hits) {
+      for (size_t i = 0; i < hits.size(); ++i) {
+        const RayHit& h = hits[i];
         if (h.distance_m >= floor_d || h.distance_m >= ceil_d) break;
         const double z = cam_z + h.distance_m * te;
         if (z >= h.bottom_m && z <= h.height_m) {
-          px = SampleSurface(scene_.textures[h.texture], h.u_m, z - h.bottom_m, h.distance_m * col_angle, h.shade);
+          const HitPlan& hp = hit_plans[i];
+          const double y = (1.0 - (z - h.bottom_m) / hp.texture->height_m) * hp.texture->levels[0].rows * hp.scale;
+          px = Sample(*hp.level, hp.columns, y, h.shade);
           done = true;
           break;
         }
@@ -508,11 +550,12 @@ void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const 
       if (!done) {
         if (floor_d < ceil_d && std::isfinite(floor_d)) {
           const Eigen::Vector2d p = eye + floor_d * dir;
-          const double footprint = floor_d * row_angle / std::max(0.05, -te / std::sqrt(1 + te * te));
-          px = SamplePlane(scene_, scene_.floor_texture, scene_.floor_bgr, p, footprint, 0.9);
+          px = rp.floor_level ? plane(scene_.textures[scene_.floor_texture], *rp.floor_level, rp.floor_scale, p, 0.9)
+                              : plain(scene_.floor_bgr, 0.9);
         } else if (std::isfinite(ceil_d)) {
           const Eigen::Vector2d p = eye + ceil_d * dir;
-          px = SamplePlane(scene_, scene_.ceiling_texture, scene_.ceiling_bgr, p, ceil_d * row_angle * 4, 1.0);
+          px = rp.ceil_level ? plane(scene_.textures[scene_.ceiling_texture], *rp.ceil_level, rp.ceil_scale, p, 1.0)
+                             : plain(scene_.ceiling_bgr, 1.0);
         } else {
           // Open sky: brighter towards the zenith.
           const double f = std::clamp(0.8 + 0.4 * te, 0.0, 1.2);
