@@ -1,5 +1,6 @@
 #include "grid_publisher.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ostream>
@@ -123,8 +124,13 @@ void GridPublisher::OnRequest(const map_request_t& msg) {
 void GridPublisher::Publish(int64_t utime) {
   if (config_.channel.empty()) return;
   if (!fixed_ && rebuild_due_) Rebuild();
+  const auto t0 = std::chrono::steady_clock::now();
   const nav::OccupancyCells cells = fixed_ ? *fixed_ : builder_.Cells();
   bus_.Publish(config_.channel, glue::ToOccupancyGridMsg(cells, utime, "map", source_));
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  publish_ms_ += ms;
+  max_publish_ms_ = std::max(max_publish_ms_, ms);
+  last_cells_ = static_cast<int64_t>(cells.cells.size());
   ++published_;
   last_published_utime_ = utime;
   pending_request_ = false;
@@ -132,7 +138,12 @@ void GridPublisher::Publish(int64_t utime) {
 
 void GridPublisher::Report(std::ostream& out) const {
   out << source_.substr(0, source_.find(':')) << " grid: " << published_ << " published on " << config_.channel << " ("
-      << requests_ << " requests), " << added_ << " scans inserted (mean " << mean_insert_ms() << " ms)";
+      << requests_ << " requests";
+  if (published_ > 0) {
+    out << "; the last of " << last_cells_ << " cells; converted and sent in mean " << mean_publish_ms() << " ms, max "
+        << max_publish_ms_ << " ms";
+  }
+  out << "), " << added_ << " scans inserted (mean " << mean_insert_ms() << " ms)";
   if (rebuilds_ > 0 || !keyframe_scans_.empty()) {
     out << ", rebuilt from " << keyframe_scans_.size() << " keyframe scans after corrections " << rebuilds_
         << " times (last " << last_rebuild_ms_ << " ms)";

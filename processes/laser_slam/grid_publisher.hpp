@@ -67,6 +67,9 @@ class GridPublisher {
   int64_t published() const { return published_; }
   int64_t requests() const { return requests_; }
   int64_t inserted() const { return added_; }  // scans AddScan inserted
+  // Time of a publication (the grid's cells, the message, the send; a rebuild not included).
+  double mean_publish_ms() const { return published_ > 0 ? publish_ms_ / static_cast<double>(published_) : 0.0; }
+  double max_publish_ms() const { return max_publish_ms_; }
   double mean_insert_ms() const { return inserted() > 0 ? insert_ms_ / static_cast<double>(inserted()) : 0.0; }
   void Report(std::ostream& out) const;
 
@@ -86,7 +89,8 @@ class GridPublisher {
   int64_t first_utime_ = 0, last_utime_ = 0, last_published_utime_ = 0;
   bool pending_request_ = false;
   int64_t published_ = 0, requests_ = 0;
-  double insert_ms_ = 0;
+  double insert_ms_ = 0, publish_ms_ = 0, max_publish_ms_ = 0;
+  int64_t last_cells_ = 0;
   int64_t added_ = 0;
   std::function<std::vector<nav::Pose2>()> keyframe_poses_;
   std::map<int, nav::GridScan> keyframe_scans_;  // robot_pose unset: taken from keyframe_poses_ when rebuilt

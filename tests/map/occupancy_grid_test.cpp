@@ -2,11 +2,13 @@
 // and the map files (tools/map): walls occupied, the room free, the outside unknown; a beam's hit
 // where the laser's geometry puts it; the files read back.
 #include <gtest/gtest.h>
+#include <mrpt/maps/COccupancyGridMap2D.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -142,6 +144,47 @@ TEST(OccupancyGrid, ScanWithFewReturnsIsInserted) {
   const auto c = nav::ToOccupancyCells(nav::BuildOccupancyGrid({s, s}, options), options);
   EXPECT_GE(Near(c, 4.0, 0.0), 65);
   EXPECT_EQ(c.occupied, 1);
+}
+
+// The cells and counts of MRPT's grid, as each cell's probability of being free says (getCell): every
+// log-odds value the grid can hold, at cells scattered over a grid that is not square.
+TEST(OccupancyGrid, CellsAndCountsAreWhatEachCellsProbabilitySays) {
+  using Grid = mrpt::maps::COccupancyGridMap2D;
+  struct Writable : Grid {  // MRPT keeps its raw cell setter protected
+    using Grid::Grid;
+    using Grid::setRawCell;
+  };
+  Writable grid(-3.0f, 4.0f, -1.0f, 1.5f, 0.05f);
+  const int w = static_cast<int>(grid.getSizeX()), h = static_cast<int>(grid.getSizeY());
+  const int lo = std::numeric_limits<Grid::cellType>::min(), hi = std::numeric_limits<Grid::cellType>::max();
+  for (int i = 0, l = lo; i < w * h; ++i, l = l == hi ? lo : l + 1) {
+    grid.setRawCell(static_cast<unsigned>((i * 7919) % (w * h)), static_cast<Grid::cellType>(i % 3 == 0 ? 0 : l));
+  }
+  nav::OccupancyGridOptions o;
+  o.occupied_threshold = 0.6;
+  o.free_threshold = 0.3;
+  const nav::OccupancyCells c = nav::ToOccupancyCells(grid, o);
+  ASSERT_EQ(c.width, w);
+  ASSERT_EQ(c.height, h);
+  int unknown = 0, occupied = 0, free = 0;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float free_p = grid.getCell(x, y);
+      const double occ = 1.0 - free_p;
+      const int expected = free_p == 0.5f ? -1 : static_cast<int>(std::lround(100.0 * occ));
+      ASSERT_EQ(c.at(x, y), expected) << "cell " << x << ", " << y;
+      if (free_p == 0.5f) ++unknown;
+      else if (occ >= o.occupied_threshold) ++occupied;
+      else if (occ <= o.free_threshold) ++free;
+    }
+  }
+  EXPECT_EQ(c.unknown, unknown);
+  EXPECT_EQ(c.occupied, occupied);
+  EXPECT_EQ(c.free, free);
+  EXPECT_GT(unknown, 0);
+  EXPECT_GT(occupied, 0);
+  EXPECT_GT(free, 0);
+  EXPECT_LT(unknown + occupied + free, w * h);  // some cells between the thresholds
 }
 
 TEST(OccupancyGrid, BadOptionsAndScansAreRefused) {
