@@ -473,7 +473,7 @@ void OmniRenderer::Render(const PanoramaModel& model, const Pose2& robot, const 
   const double row_angle = std::abs(model.elevation_top_rad - model.elevation_bottom_rad) / (model.height_px - 1);
   // What does not depend on the column, once per row: the elevation's tangent, the distances to the
   // floor and the ceiling, and the mip level their footprint picks (the same arithmetic as per pixel,
-  // so the image is the same to the bit; about half of the time went to choosing levels per pixel).
+  // so the image is the same to the bit; choosing levels per pixel took about a third of a frame).
   struct RowPlan {
     double te, floor_d, ceil_d;
     const cv::Mat* floor_level = nullptr;
