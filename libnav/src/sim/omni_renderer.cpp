@@ -205,6 +205,8 @@ OmniRenderer::OmniRenderer(const Scene& scene, const OmniCameraOptions& options)
     }
   }
   if (options_.optics.enabled) BuildOptics();
+  // The maps in OpenCV's fixed-point form once (remap converts float maps to it on every call).
+  cv::convertMaps(map_x_, map_y_, remap_xy_, remap_frac_, CV_16SC2);
 }
 
 void OmniRenderer::BuildOptics() {
@@ -449,7 +451,7 @@ void OmniRenderer::RenderOmni(const Pose2& robot, const std::vector<Cylinder>& p
     ApplyMotionBlur(motion, &body);
   }
   fine_image_.col(0).copyTo(fine_image_.col(fine_.width_px));
-  cv::remap(fine_image_, *out, map_x_, map_y_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(16, 16, 16));
+  cv::remap(fine_image_, *out, remap_xy_, remap_frac_, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(16, 16, 16));
   if (!o.enabled) return;
   ApplyOptics(out);
   if (o.jpeg_quality > 0) {

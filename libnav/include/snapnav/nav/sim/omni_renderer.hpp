@@ -147,6 +147,7 @@ class OmniRenderer {
   OmniCameraOptions options_;
   PanoramaModel fine_;     // the panorama the raw image is remapped from
   cv::Mat map_x_, map_y_;  // raw pixel -> fine panorama pixel
+  cv::Mat remap_xy_, remap_frac_;  // ... in cv::remap's fixed-point form (cv::convertMaps)
   cv::Mat fine_image_;
   // Optics, per raw pixel and channel: out = (content * gain + offset) / 256 + noise (fixed point).
   std::vector<uint16_t> optics_gain_;
