@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <ostream>
 
 #include "snapnav/glue/grid_scan_msg.hpp"
@@ -125,7 +126,9 @@ void GridPublisher::Publish(int64_t utime) {
   if (config_.channel.empty()) return;
   if (!fixed_ && rebuild_due_) Rebuild();
   const auto t0 = std::chrono::steady_clock::now();
-  const nav::OccupancyCells cells = fixed_ ? *fixed_ : builder_.Cells();
+  std::optional<nav::OccupancyCells> built;  // a saved map is sent as it is, not copied
+  if (!fixed_) built = builder_.Cells();
+  const nav::OccupancyCells& cells = fixed_ ? *fixed_ : *built;
   bus_.Publish(config_.channel, glue::ToOccupancyGridMsg(cells, utime, "map", source_));
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   publish_ms_ += ms;

@@ -181,8 +181,9 @@ OmniRenderer::OmniRenderer(const Scene& scene, const OmniCameraOptions& options)
   fine_.bearing_col0_rad = M_PI;
   fine_.elevation_top_rad = std::max(m.elevation_inner_rad, m.elevation_outer_rad);
   fine_.elevation_bottom_rad = std::min(m.elevation_inner_rad, m.elevation_outer_rad);
-  map_x_.create(options_.omni_height_px, options_.omni_width_px, CV_32FC1);
-  map_y_.create(options_.omni_height_px, options_.omni_width_px, CV_32FC1);
+  // Raw pixel -> fine panorama pixel (float), kept in cv::remap's fixed-point form below.
+  cv::Mat map_x(options_.omni_height_px, options_.omni_width_px, CV_32FC1);
+  cv::Mat map_y(options_.omni_height_px, options_.omni_width_px, CV_32FC1);
   // With optics the rim is blended over a few pixels: the content continues just outside it.
   const double beyond = options_.optics.enabled ? options_.optics.rim_softness_px + 1.5 : 0.0;
   for (int v = 0; v < options_.omni_height_px; ++v) {
@@ -196,20 +197,20 @@ OmniRenderer::OmniRenderer(const Scene& scene, const OmniCameraOptions& options)
         }
       }
       if (!dir) {
-        map_x_.at<float>(v, u) = -1;  // outside the ring: border colour
-        map_y_.at<float>(v, u) = -1;
+        map_x.at<float>(v, u) = -1;  // outside the ring: border colour
+        map_y.at<float>(v, u) = -1;
         continue;
       }
-      map_x_.at<float>(v, u) = static_cast<float>(fine_.ColumnOfBearing((*dir)[0]));
-      map_y_.at<float>(v, u) = static_cast<float>(fine_.RowOfElevation((*dir)[1]));
+      map_x.at<float>(v, u) = static_cast<float>(fine_.ColumnOfBearing((*dir)[0]));
+      map_y.at<float>(v, u) = static_cast<float>(fine_.RowOfElevation((*dir)[1]));
     }
   }
-  if (options_.optics.enabled) BuildOptics();
+  if (options_.optics.enabled) BuildOptics(map_y);
   // The maps in OpenCV's fixed-point form once (remap converts float maps to it on every call).
-  cv::convertMaps(map_x_, map_y_, remap_xy_, remap_frac_, CV_16SC2);
+  cv::convertMaps(map_x, map_y, remap_xy_, remap_frac_, CV_16SC2);
 }
 
-void OmniRenderer::BuildOptics() {
+void OmniRenderer::BuildOptics(const cv::Mat& map_y) {
   const CameraOptics& o = options_.optics;
   const MirrorModel& m = options_.mirror;
   const int W = options_.omni_width_px, H = options_.omni_height_px;
@@ -271,7 +272,7 @@ void OmniRenderer::BuildOptics() {
   for (int y = 0; y < H; ++y) {
     for (int x = 0; x < W; ++x) {
       const double r = std::hypot(x - m.center_x_px, y - m.center_y_px);
-      if (std::clamp(Rl - r + 0.5, 0.0, 1.0) < 1.0) lowest_row = std::max(lowest_row, map_y_.at<float>(y, x));
+      if (std::clamp(Rl - r + 0.5, 0.0, 1.0) < 1.0) lowest_row = std::max(lowest_row, map_y.at<float>(y, x));
     }
   }
   render_rows_ = std::min(fine_.height_px, static_cast<int>(std::ceil(lowest_row)) + 3);

@@ -169,7 +169,7 @@ OccupancyCells ToOccupancyCells(const mrpt::maps::COccupancyGridMap2D& grid, con
   if (raw.size() != n) throw std::logic_error("occupancy grid: MRPT's cell buffer does not match its size");
   // A cell's value depends only on its log-odds: the value of every log-odds once (what getCell
   // gives, as a probability of the cell being free; 0.5 exactly: never observed), then one table
-  // lookup per cell (a map of 10 million cells took about 50 ms cell by cell, on the scan thread).
+  // lookup per cell (10 million cells: 15 ms, against 25-80 ms with getCell per cell; on the scan thread).
   std::vector<int8_t> value(static_cast<size_t>(kMax - kMin + 1));
   std::vector<uint8_t> kind(value.size());  // 0 unknown, 1 occupied, 2 free, 3 neither (by the thresholds)
   for (int l = kMin; l <= kMax; ++l) {

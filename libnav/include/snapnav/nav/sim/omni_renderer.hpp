@@ -139,15 +139,14 @@ class OmniRenderer {
               int rows = -1, std::vector<float>* depth = nullptr) const;
   void MeterExposure(const cv::Mat& fine);
   void ApplyMotionBlur(const CameraMotion& motion, cv::Mat* fine);
-  void BuildOptics();
+  void BuildOptics(const cv::Mat& map_y);  // map_y: each raw pixel's fine panorama row
   void ApplyWindow(const Pose2& robot, cv::Mat* fine) const;
   void ApplyOptics(cv::Mat* image);
 
   const Scene& scene_;
   OmniCameraOptions options_;
   PanoramaModel fine_;     // the panorama the raw image is remapped from
-  cv::Mat map_x_, map_y_;  // raw pixel -> fine panorama pixel
-  cv::Mat remap_xy_, remap_frac_;  // ... in cv::remap's fixed-point form (cv::convertMaps)
+  cv::Mat remap_xy_, remap_frac_;  // raw pixel -> fine panorama pixel, in cv::remap's fixed-point form
   cv::Mat fine_image_;
   // Optics, per raw pixel and channel: out = (content * gain + offset) / 256 + noise (fixed point).
   std::vector<uint16_t> optics_gain_;
