@@ -11,6 +11,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "snapnav/glue/slam_options.hpp"
+#include "snapnav/nav/covariance.hpp"
 #include "snapnav/fused_slam_status_t.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
@@ -329,8 +330,7 @@ void FusedSlamNode::PublishStatus(int64_t utime) {
     s.x_m = f.pose().x_m;
     s.y_m = f.pose().y_m;
     s.theta_rad = f.pose().theta_rad;
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(f.covariance().topLeftCorner<2, 2>());
-    s.position_sigma_m = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+    s.position_sigma_m = nav::PositionSigmaM(f.covariance());
   }
   bus_.Publish(config_.status_channel, s);
   ++statuses_published_;

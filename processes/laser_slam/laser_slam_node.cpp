@@ -9,7 +9,7 @@
 #include <optional>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
+#include "snapnav/nav/covariance.hpp"
 
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
@@ -247,8 +247,7 @@ void LaserSlamNode::PublishStatus(int64_t utime, const nav::LaserSlamUpdate* u) 
     s.backend = laser_slam_status_t::BACKEND_EKF;
   }
   const Eigen::Matrix3d& p = slam()->covariance();
-  s.position_sigma_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(p.topLeftCorner<2, 2>())
-                                                   .eigenvalues()(1)));
+  s.position_sigma_m = nav::PositionSigmaM(p);
   s.heading_sigma_deg = std::sqrt(std::max(0.0, p(2, 2))) * kDegPerRad;
   s.scans = scans_;
   s.accepted = measured_;

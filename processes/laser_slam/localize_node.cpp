@@ -4,7 +4,7 @@
 #include <cmath>
 #include <ostream>
 
-#include <Eigen/Eigenvalues>
+#include "snapnav/nav/covariance.hpp"
 
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
@@ -95,7 +95,7 @@ void LocalizeNode::HandleScan(const laser_scan_t& msg) {
   s.global_ms = last_search_ms_;
   s.bad_scans = u.bad_scans;
   const Eigen::Matrix3d& p = localizer_.covariance();
-  s.position_sigma_m = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(p.topLeftCorner<2, 2>()).eigenvalues()(1)));
+  s.position_sigma_m = nav::PositionSigmaM(p);
   s.heading_sigma_deg = std::sqrt(std::max(0.0, p(2, 2))) * kDegPerRad;
   s.scans = scans_;
   s.global_searches = localizer_.global_searches();

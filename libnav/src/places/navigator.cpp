@@ -1,5 +1,7 @@
 #include "snapnav/nav/places/navigator.hpp"
 
+#include "snapnav/nav/covariance.hpp"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -87,9 +89,7 @@ void PoseTracker::Initialize(int64_t utime, const Pose2& pose, const Eigen::Matr
 }
 
 double PoseTracker::position_sigma_m() const {
-  const Eigen::Matrix2d p = covariance_.topLeftCorner<2, 2>();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(p);
-  return std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+  return PositionSigmaM(covariance_);
 }
 
 void PoseTracker::AddOdometry(int64_t utime, const Pose2& delta) {

@@ -1,5 +1,7 @@
 #include "snapnav/nav/slam/fused_slam.hpp"
 
+#include "snapnav/nav/covariance.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -275,8 +277,7 @@ std::vector<bool> FusedSlam::DynamicPoints(const Pose2& m, const std::vector<Eig
   // Only from a prediction certain to d (one std. dev. of its position): just relocalised (a wide
   // covariance) the walls themselves would stand "in front of" the map.
   {
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(laser_.covariance().topLeftCorner<2, 2>());
-    if (std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff())) > d) return dynamic;
+    if (PositionSigmaM(laser_.covariance()) > d) return dynamic;
   }
   for (size_t i = 0; i < points.size(); ++i) {
     const double range = points[i].norm();
@@ -393,15 +394,15 @@ void FusedSlam::UpdateLaserCovariance(const LaserSlamUpdate& u) {
   if (u.measured && u.matches > 0) {
     // The scan's information, without its weak position directions.
     const Eigen::Matrix3d info = Symmetric(u.measurement_covariance.inverse());
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(info.topLeftCorner<2, 2>());
+    const SymmetricEigen2 eig = EigenOfSymmetric(info.topLeftCorner<2, 2>());
     const double per_point = options_.laser.point_sigma_m * options_.laser.point_sigma_m / u.matches;
     Eigen::Matrix<double, 3, Eigen::Dynamic> kept(3, 1);
     kept.col(0) = Eigen::Vector3d::UnitZ();
-    weakest_constraint_ = std::max(0.0, eig.eigenvalues()(0)) * per_point;  // ascending: (0) is the weakest
+    weakest_constraint_ = std::max(0.0, eig.values(0)) * per_point;  // ascending: (0) is the weakest
     for (int i = 0; i < 2; ++i) {
-      if (eig.eigenvalues()(i) * per_point < options_.laser_min_constraint) continue;
+      if (eig.values(i) * per_point < options_.laser_min_constraint) continue;
       kept.conservativeResize(3, kept.cols() + 1);
-      kept.col(kept.cols() - 1) << eig.eigenvectors()(0, i), eig.eigenvectors()(1, i), 0.0;
+      kept.col(kept.cols() - 1) << eig.vectors(0, i), eig.vectors(1, i), 0.0;
     }
     degenerate_ = kept.cols() < 3;
     if (degenerate_) ++degenerate_scans_;

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <unordered_set>
 
-#include <Eigen/Eigenvalues>
+#include "snapnav/nav/covariance.hpp"
 
 #include "snapnav/nav/slam/map_matcher.hpp"
 
@@ -75,8 +75,8 @@ std::vector<Eigen::Vector2d> CellNormals(const OccupancyCells& map, double occup
               const Eigen::Vector2d d = Eigen::Vector2d(dx, dy) - mean;
               c += d * d.transpose();
             }
-        const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(c);
-        if (es.eigenvalues()(0) < 0.2 * es.eigenvalues()(1)) normal = es.eigenvectors().col(0).normalized();
+        const SymmetricEigen2 es = EigenOfSymmetric(c);
+        if (es.values(0) < 0.2 * es.values(1)) normal = es.vectors.col(0).normalized();
       }
       normals.push_back(normal);
     }
