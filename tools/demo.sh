@@ -40,12 +40,13 @@ SOAK=0
 ATE_WINDOW=""
 MAX_GROWTH_MB=20
 LINK_GOAL_MS=3
+EXPLORE_ONLY=0
 usage() {
   cat <<'EOF'
 usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROCESS]] [--fault-at-s T]
                       [--explored DIR] [--no-bus-health] [--drop-log] [--two-host] [--raw-frames]
                       [--link-mtu B] [--link-goal-ms MS] [--clock-offset-s S] [--laps N] [--soak]
-                      [--ate-window-s S]
+                      [--ate-window-s S] [--explore-only]
   --out DIR         output folder (default logs/demo-<UTC time>)
   --duration-s S    seconds of the simulated lab in real time (default 60)
   --scene NAME      config/scenes/NAME.scene (default indoor13; its grid must have a 6_6 position)
@@ -54,6 +55,8 @@ usage: ./snapnav demo [--out DIR] [--duration-s S] [--scene NAME] [--fault [PROC
   --fault-at-s T    when to kill it, seconds after sim started (default: half the duration)
   --explored DIR    reuse the place-cell memory and grid of an earlier demo's folder DIR (same
                     scene): skips step 2
+  --explore-only    stop after step 2: OUT holds the place-cell memory, the grid and the camera's
+                    mask for --explored of later runs (exit status: whether they are there)
   --no-bus-health   skip step 1
   --drop-log        delete run.lcmlog after the report
   --two-host        two hosts on this machine: sim in a "robot" network namespace, the recorder,
@@ -91,10 +94,14 @@ while [ $# -gt 0 ]; do
     --laps) LAPS="$2"; shift 2 ;;
     --soak) SOAK=1; LAPS=0; BUS_HEALTH=0; shift ;;
     --ate-window-s) ATE_WINDOW="$2"; shift 2 ;;
+    --explore-only) EXPLORE_ONLY=1; shift ;;
     -h | --help) usage; exit 0 ;;
     *) echo "demo: unknown argument $1" >&2; usage >&2; exit 2 ;;
   esac
 done
+if [ "$EXPLORE_ONLY" = 1 ] && [ -n "$EXPLORED" ]; then
+  echo "demo: --explore-only explores, --explored reuses an exploration: give one of them" >&2; exit 2
+fi
 [ -n "$FAULT_AT" ] || FAULT_AT=$(awk -v d="$DURATION" 'BEGIN { print d / 2 }')
 [ -n "$ATE_WINDOW" ] || { [ "$SOAK" = 0 ] || ATE_WINDOW=$(awk -v d="$DURATION" 'BEGIN { print d / 12 }'); }
 if [ -n "$FAULT" ]; then
@@ -181,6 +188,10 @@ else
   [ -s "$OUT/placecells.mem" ] && [ -s "$OUT/camera_mask.png" ] || explore_rc=1
 fi
 t_explore=$((SECONDS - t_bus))
+if [ "$EXPLORE_ONLY" = 1 ]; then
+  step "done (--explore-only): the memory, grid and mask in $OUT ($(verdict $explore_rc), ${t_explore} s)"
+  exit "$explore_rc"
+fi
 HOME_XY=$(awk -F, '$1=="images/6_6.png" { printf "%s,%s", $4, $5 }' "$EXPLORE_OUT/grid/positions.csv" 2>/dev/null || true)
 
 step "3/$STEPS the simulated lab '$SCENE' for $DURATION s in real time: launch $(basename "$DEPLOY") --group lab${FAULT:+, fault: kill -9 $FAULT at ${FAULT_AT} s}"

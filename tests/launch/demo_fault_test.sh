@@ -2,13 +2,16 @@
 # Run inside the private bus (./snapnav bus --): the demo deployment, short (30 s of the lab), with
 # the fault: homing is killed with SIGKILL 15 s in. The launcher must restart it, the other
 # processes must keep running (one run each), the recorder must have every message sim published,
-# the restarted homing must publish again, and the demo's report must say so.
+# the restarted homing must publish again, and the demo's report must say so. EXPLORED (optional): a
+# folder of the demo's explore step (tools/demo.sh --explore-only; ctest's demo_explored_memory) reused
+# with --explored; without it the demo explores first.
 set -euo pipefail
-BIN="$1"; OUT="$2"
+BIN="$1"; OUT="$2"; EXPLORED="${3:-}"
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 rm -rf "$OUT"
 rc=0
-"$ROOT/tools/demo.sh" "$BIN" --out "$OUT" --duration-s 30 --fault homing --fault-at-s 15 --no-bus-health --drop-log || rc=$?
+"$ROOT/tools/demo.sh" "$BIN" --out "$OUT" --duration-s 30 --fault homing --fault-at-s 15 --no-bus-health --drop-log \
+  ${EXPLORED:+--explored "$EXPLORED"} || rc=$?
 fail() { echo "FAIL: $*" >&2; exit 1; }
 [ -f "$OUT/summary.json" ] || fail "no report"
 python3 - "$OUT/summary.json" "$OUT/processes/homing.log" <<'PY'
