@@ -126,8 +126,12 @@ TEST(Masks, TheImagesBorderIsMaskedWhereTheRimRunsPastIt) {
       const bool in = px->x() >= -e && px->x() <= c.width - 1 + e && px->y() >= -e && px->y() <= c.height - 1 + e;
       const bool well_in = px->x() >= 1 && px->x() <= c.width - 2 && px->y() >= 1 && px->y() <= c.height - 2;
       outside += !in;
-      if (!in) EXPECT_EQ(mask.at<uint8_t>(row, col), 0) << "row " << row << " col " << col;
-      if (well_in) EXPECT_NE(mask.at<uint8_t>(row, col), 0) << "row " << row << " col " << col;
+      if (!in) {
+        EXPECT_EQ(mask.at<uint8_t>(row, col), 0) << "row " << row << " col " << col;
+      }
+      if (well_in) {
+        EXPECT_NE(mask.at<uint8_t>(row, col), 0) << "row " << row << " col " << col;
+      }
     }
   }
   EXPECT_GT(outside, 0);

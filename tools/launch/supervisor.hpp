@@ -5,7 +5,7 @@
 //    filtered by echo, and keep all of it in each one's log_file;
 //  - restart a process that ended by policy (never / on-failure / always), with a back-off that
 //    doubles up to restart_delay_max_s, at most restart_limit times;
-//  - report every process's state every status_every_s, on RequestStatus() (SIGUSR1) and at the end;
+//  - report every process's state every status_every_s, on SIGUSR1 and at the end;
 //  - stop all on RequestStop() (SIGINT/SIGTERM), when a required process fails for good, when an
 //    exit_stops_all process ends, or after stop_after_s: in reverse start order, each with its stop
 //    signal, then SIGKILL after its grace time. A second stop request kills what is left at once.
@@ -94,7 +94,6 @@ class Supervisor {
   int Run();
 
   void RequestStop(const std::string& why);
-  void RequestStatus() { status_requested_ = true; }
 
   std::vector<ProcessStatus> Status() const;
   ProcessStatus Status(const std::string& name) const;

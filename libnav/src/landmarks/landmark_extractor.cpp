@@ -60,15 +60,4 @@ LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorCon
   return masked ? DropMaskedLandmarks(set, mask, config) : set;
 }
 
-MatchOptions DefaultMatchOptions(LandmarkMethod method) {
-  MatchOptions o;
-  if (method == LandmarkMethod::kVline) {
-    o.ratio = 1.0;
-    o.mutual = true;
-    o.relaxed_second_best = true;
-    o.max_x_displacement_px = 60;
-  }
-  return o;
-}
-
 }  // namespace snapnav::nav

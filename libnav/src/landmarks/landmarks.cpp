@@ -228,12 +228,6 @@ const char* AlvVariantName(AlvVariant variant) {
   return "?";
 }
 
-std::optional<MatchWeight> ParseMatchWeight(const std::string& name) {
-  if (name == "distance") return MatchWeight::kDistance;
-  if (name == "score") return MatchWeight::kScore;
-  return std::nullopt;
-}
-
 const char* MatchWeightName(MatchWeight weight) {
   return weight == MatchWeight::kDistance ? "distance" : "score";
 }
@@ -419,12 +413,6 @@ std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const L
 }
 
 // ------------------------------------------------------------------------------------ homer
-std::optional<RotationSource> ParseRotationSource(const std::string& name) {
-  if (name == "matches") return RotationSource::kMatches;
-  if (name == "none") return RotationSource::kNone;
-  return std::nullopt;
-}
-
 void LandmarkHomingConfig::Validate() const {
   match.Validate();
   alv.Validate();

@@ -284,15 +284,6 @@ void RouteFollower::SetRoute(const Route& route, int first) {
   waypoint_since_.reset();
 }
 
-void RouteFollower::ClearRoute() {
-  route_ = Route{};
-  waypoint_ = -1;
-  state_ = FollowState::kIdle;
-  homing_.reset();
-  approach_since_.reset();
-  waypoint_since_.reset();
-}
-
 void RouteFollower::SetHoming(const HomingInput& homing) {
   Require(std::isfinite(homing.direction_rad), "follower: homing direction is not finite");
   // A homing result computed before the current waypoint was taken on belongs to the previous one.

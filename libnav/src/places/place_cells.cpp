@@ -96,18 +96,8 @@ std::optional<PlaceMeasure> ParsePlaceMeasure(const std::string& name) {
   if (name == "vline") return PlaceMeasure::kVlineTemplate;
   return std::nullopt;
 }
-std::optional<MatchRefinement> ParseMatchRefinement(const std::string& name) {
-  if (name == "smallest") return MatchRefinement::kSmallestDistance;
-  if (name == "ransac") return MatchRefinement::kRansac;
-  return std::nullopt;
-}
 const char* MatchRefinementName(MatchRefinement refinement) {
   return refinement == MatchRefinement::kRansac ? "ransac" : "smallest";
-}
-std::optional<PlaceEstimate> ParsePlaceEstimate(const std::string& name) {
-  if (name == "nearest") return PlaceEstimate::kNearestCell;
-  if (name == "interpolated") return PlaceEstimate::kInterpolated;
-  return std::nullopt;
 }
 const char* PlaceEstimateName(PlaceEstimate estimate) {
   return estimate == PlaceEstimate::kInterpolated ? "interpolated" : "nearest";

@@ -741,14 +741,6 @@ bool LaserSlam::ApplyWalls(double offset_rad, Pose2* pose, Eigen::Matrix3d* cova
 
 // ---- For filters built on this one (nav::FusedSlam).
 
-void LaserSlam::UpdatePose(const Pose2& z, const Eigen::Matrix3d& r) {
-  if (!std::isfinite(z.x_m) || !std::isfinite(z.y_m) || !std::isfinite(z.theta_rad) || !r.allFinite()) {
-    throw std::invalid_argument("laser slam: pose measurement or its covariance is not finite");
-  }
-  pose_ = EkfPoseUpdate(pose_, &covariance_, z, r);
-  Reanchor();
-}
-
 void LaserSlam::ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance) {
   if (!std::isfinite(pose.x_m) || !std::isfinite(pose.y_m) || !std::isfinite(pose.theta_rad) ||
       !covariance.allFinite()) {

@@ -20,12 +20,6 @@ std::optional<IcpMetric> ParseIcpMetric(const std::string& name) {
 
 const char* ScanMatcherName(ScanMatcher m) { return m == ScanMatcher::kHeading ? "heading" : "correlative"; }
 
-std::optional<ScanMatcher> ParseScanMatcher(const std::string& name) {
-  if (name == "heading") return ScanMatcher::kHeading;
-  if (name == "correlative") return ScanMatcher::kCorrelative;
-  return std::nullopt;
-}
-
 namespace {
 
 // Sums of points' offsets from a scan point, and their products (the point itself counted as one

@@ -55,33 +55,4 @@ void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& optio
   while (std::getline(lines, line)) out << indent << line << "\n";
 }
 
-std::vector<std::string> LaserSlamOptionDifferences(const nav::LaserSlamOptions& a, const nav::LaserSlamOptions& b) {
-  // Compare the printed keys: every option the config has, in its units.
-  const auto parse = [](const nav::LaserSlamOptions& o) {
-    std::ostringstream s;
-    s.precision(17);
-    glue::PrintLaserSlamOptions(s, o);
-    std::vector<std::pair<std::string, std::string>> kv;
-    std::istringstream lines(s.str());
-    std::string line;
-    while (std::getline(lines, line)) {
-      const size_t eq = line.find(" = ");
-      if (eq != std::string::npos) kv.emplace_back(line.substr(0, eq), line.substr(eq + 3));
-    }
-    return kv;
-  };
-  const auto ka = parse(a), kb = parse(b);
-  std::vector<std::string> diff;
-  for (size_t i = 0; i < ka.size() && i < kb.size(); ++i) {
-    if (ka[i].second == kb[i].second) continue;
-    char* end_a = nullptr;
-    char* end_b = nullptr;
-    const double va = std::strtod(ka[i].second.c_str(), &end_a), vb = std::strtod(kb[i].second.c_str(), &end_b);
-    const bool numbers = *end_a == '\0' && *end_b == '\0';
-    if (numbers && std::abs(va - vb) <= 1e-9 * std::max({1.0, std::abs(va), std::abs(vb)})) continue;
-    diff.push_back(ka[i].first + ": " + ka[i].second + " vs " + kb[i].second);
-  }
-  return diff;
-}
-
 }  // namespace snapnav::eval

@@ -39,8 +39,5 @@ void AddOverride(LaserSlamConfigChoice* choice, const std::string& key, const st
 // `indent`).
 void PrintLaserSlamOptions(std::ostream& out, const nav::LaserSlamOptions& options, const std::string& indent = "  ");
 
-// Keys of [laser_slam] whose values in `a` and `b` differ (relative tolerance 1e-9), "key: a vs b"
-// each; empty when the options are the same.
-std::vector<std::string> LaserSlamOptionDifferences(const nav::LaserSlamOptions& a, const nav::LaserSlamOptions& b);
 
 }  // namespace snapnav::eval

@@ -5,6 +5,5 @@ namespace snapnav::glue {
 
 void InstallShutdownHandlers();
 bool ShutdownRequested();
-void RequestShutdown();
 
 }  // namespace snapnav::glue

@@ -33,9 +33,5 @@ LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorCon
 // The masking step alone, for the extractors called directly (vertical lines of the place views).
 LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, const LandmarkExtractorConfig& config);
 
-// The matching each method is used with: vertical lines the thesis' rules (mutual with the
-// second-best relaxation, no ratio test, a 60 px displacement limit); SIFT and SURF Lowe's
-// ratio test with the mutual check.
-MatchOptions DefaultMatchOptions(LandmarkMethod method);
 
 }  // namespace snapnav::nav

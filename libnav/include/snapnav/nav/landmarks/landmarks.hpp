@@ -80,7 +80,6 @@ enum class MatchWeight {
   kDistance,  // Q = exp(-d / mean d over the used matches): the descriptor distance (4.2.2)
   kScore,     // Q = 1 - best / second-best distance: the matching score (4.3.2)
 };
-std::optional<MatchWeight> ParseMatchWeight(const std::string& name);
 const char* MatchWeightName(MatchWeight weight);
 
 struct LandmarkAlvOptions {
@@ -112,7 +111,6 @@ std::optional<HomingEstimate> LandmarkAlvHoming(const LandmarkSet& home, const L
                                                 bool refine_rotation = false, std::vector<int>* used = nullptr);
 
 enum class RotationSource { kMatches, kNone };  // kNone: views share a heading (aligned database)
-std::optional<RotationSource> ParseRotationSource(const std::string& name);
 
 // Homing from landmark sets against one home set.
 struct LandmarkHomingConfig {

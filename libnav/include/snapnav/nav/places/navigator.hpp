@@ -194,7 +194,6 @@ class RouteFollower {
   // Follows `route` from waypoint `first` (e.g. 1 when the robot starts at waypoint 0). Resets
   // laps and state. Throws std::invalid_argument on an invalid route or first.
   void SetRoute(const Route& route, int first = 0);
-  void ClearRoute();
   bool has_route() const { return !route_.waypoints.empty(); }
 
   // The latest homing towards the current waypoint's snapshot; forgotten when the waypoint

@@ -50,7 +50,6 @@ enum class MatchRefinement {
   kRansac,            // the rotation with the largest consensus (from its inliers); every match counts,
                       // an outlier at the residual cap (or the RANSAC threshold without one): MSAC
 };
-std::optional<MatchRefinement> ParseMatchRefinement(const std::string& name);
 const char* MatchRefinementName(MatchRefinement refinement);  // "smallest", "ransac"
 
 // Where the position estimate comes from.
@@ -59,7 +58,6 @@ enum class PlaceEstimate {
   kInterpolated,  // the mean of the interpolate_k most alike cells within interpolate_radius_m of the
                   // chosen one, weighted by their image similarity
 };
-std::optional<PlaceEstimate> ParsePlaceEstimate(const std::string& name);
 const char* PlaceEstimateName(PlaceEstimate estimate);  // "nearest", "interpolated"
 
 // What a view keeps of a panorama.

@@ -349,10 +349,8 @@ class LaserSlam {
   std::optional<Pose2> stale_since_;   // the pose at the last scan before odometry went stale
   Pose2 odometry_since_stale_;         // odometry's motion since then
 
-  // ---- For filters built on this one (nav::FusedSlam: a visual pose measurement in the same EKF).
+  // ---- For filters built on this one (nav::FusedSlam).
  public:
-  // EKF update with a direct pose measurement z of covariance r (EkfPoseUpdate).
-  void UpdatePose(const Pose2& z, const Eigen::Matrix3d& r);
   // Replaces the pose and its covariance (relocalisation); the map stays as it is.
   void ResetPose(const Pose2& pose, const Eigen::Matrix3d& covariance);
   // Map protection: with add_points false no scan point joins the map; with min_fit > 0 a scan

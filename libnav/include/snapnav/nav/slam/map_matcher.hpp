@@ -32,7 +32,6 @@ enum class ScanMatcher {
   kCorrelative,  // a correlative search of poses (x, y and heading) around the prediction, then ICP
 };
 const char* ScanMatcherName(ScanMatcher m);
-std::optional<ScanMatcher> ParseScanMatcher(const std::string& name);
 
 // Unit surface normals of scan points from their neighbours in scan order: a line fitted
 // (principal axes) through the point and up to `neighbours` points on each side that lie
