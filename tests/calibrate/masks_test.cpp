@@ -206,6 +206,31 @@ TEST(Masks, PlaceViewsIgnoreMaskedPixels) {
   EXPECT_THROW(nav::MakePlaceView(v.home, o, cv::Mat(5, 5, CV_8UC1, cv::Scalar(0))), std::invalid_argument);
 }
 
+// A caller with a fixed mask gives its clearance once: the same view as computing it per call; a
+// clearance of another mask's size is refused, not read out of bounds.
+TEST(Masks, AGivenClearanceGivesTheSameViewAndAWrongOneIsRefused) {
+  const Views& v = Rendered();
+  nav::PlaceViewOptions o;
+  const cv::Mat clearance = nav::MaskClearance(v.mask);
+  const auto computed = nav::MakePlaceView(v.home, o, v.mask);
+  const auto given = nav::MakePlaceView(v.home, o, v.mask, clearance);
+  ASSERT_GT(computed.landmarks.size(), 0);
+  ASSERT_EQ(given.landmarks.size(), computed.landmarks.size());
+  ASSERT_EQ(given.vlines.size(), computed.vlines.size());
+  for (int i = 0; i < computed.landmarks.size(); ++i) {
+    EXPECT_EQ(given.landmarks.landmarks[i].x_px, computed.landmarks.landmarks[i].x_px);
+  }
+  EXPECT_EQ(cv::norm(given.landmarks.descriptors, computed.landmarks.descriptors, cv::NORM_INF), 0);
+  // Landmarks near the parts are dropped the same way: a clearance of all zeros drops every one.
+  const cv::Mat none_clear(v.mask.size(), CV_32F, cv::Scalar(0));
+  EXPECT_EQ(nav::MakePlaceView(v.home, o, v.mask, none_clear).landmarks.size(), 0);
+  const cv::Mat small(v.mask.rows / 2, v.mask.cols, CV_32F, cv::Scalar(100));
+  EXPECT_THROW(nav::MakePlaceView(v.home, o, v.mask, small), std::invalid_argument);
+  nav::LandmarkExtractorConfig c;
+  c.method = nav::LandmarkMethod::kSift;
+  EXPECT_THROW(nav::ExtractLandmarks(v.home, c, v.mask, small), std::invalid_argument);
+}
+
 TEST(Masks, HogHomingIgnoresMaskedPixels) {
   const Views& v = Rendered();
   nav::HogHomingConfig c;

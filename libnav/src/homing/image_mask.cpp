@@ -110,6 +110,9 @@ LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, dou
                                 std::to_string(mask.rows) + ", the landmarks' panorama " +
                                 std::to_string(set.width_px) + "x" + std::to_string(set.height_px));
   }
+  if (!clearance_in.empty() && (clearance_in.size() != mask.size() || clearance_in.type() != CV_32F)) {
+    throw std::invalid_argument("landmark mask: the clearance given is not MaskClearance of a mask of this size");
+  }
   const cv::Mat clearance = clearance_in.empty() ? MaskClearance(mask) : clearance_in;
   LandmarkSet out;
   out.method = set.method;

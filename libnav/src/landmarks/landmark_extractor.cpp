@@ -20,13 +20,15 @@ void LandmarkExtractorConfig::Validate() const {
   if (!(mask_margin_px >= 0)) throw std::invalid_argument("landmarks: mask_margin_px must be >= 0");
 }
 
-LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, const LandmarkExtractorConfig& config) {
+LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, const LandmarkExtractorConfig& config,
+                                const cv::Mat& clearance) {
   // Keypoints (SIFT, SURF) carry their neighbourhood's size; a vertical line's scale is its
   // descriptor window, not its extent.
-  return DropMaskedLandmarks(set, mask, config.mask_margin_px, set.method != LandmarkMethod::kVline);
+  return DropMaskedLandmarks(set, mask, config.mask_margin_px, set.method != LandmarkMethod::kVline, clearance);
 }
 
-LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorConfig& config, const cv::Mat& mask) {
+LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorConfig& config, const cv::Mat& mask,
+                             const cv::Mat& clearance) {
   config.Validate();
   if (panorama.empty()) throw std::invalid_argument("landmarks: empty panorama");
   CheckMask(mask, panorama.size(), "landmarks");
@@ -57,7 +59,7 @@ LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorCon
       break;
     case LandmarkMethod::kHog: throw std::invalid_argument("landmarks: no extractor for this method");
   }
-  return masked ? DropMaskedLandmarks(set, mask, config) : set;
+  return masked ? DropMaskedLandmarks(set, mask, config, clearance) : set;
 }
 
 }  // namespace snapnav::nav

@@ -209,7 +209,8 @@ double WindowNcc(const cv::Mat& a, int ra, const cv::Mat& b, int rb) {
 }
 }  // namespace
 
-PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options, const cv::Mat& mask) {
+PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options, const cv::Mat& mask,
+                        const cv::Mat& clearance_in) {
   options.Validate();
   if (panorama.empty()) throw std::invalid_argument("place cells: empty panorama");
   cv::Mat gray;
@@ -226,12 +227,14 @@ PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options
     gray = gray.clone();
     FillMasked(mask, &gray);
   }
+  // The landmarks' and the lines' masking share one distance transform.
+  const cv::Mat clearance = masked && clearance_in.empty() ? MaskClearance(mask) : clearance_in;
   PlaceView view;
-  view.landmarks = ExtractLandmarks(gray, options.features, masked ? mask : cv::Mat());
+  view.landmarks = ExtractLandmarks(gray, options.features, masked ? mask : cv::Mat(), clearance);
   view.windows = MakeWindows(gray, view.landmarks, options);
   if (options.keep_vlines) {
     view.vlines = DetectVlineLandmarks(gray, options.vline);
-    if (masked) view.vlines = DropMaskedLandmarks(view.vlines, mask, options.features);
+    if (masked) view.vlines = DropMaskedLandmarks(view.vlines, mask, options.features, clearance);
   }
   const cv::Size signature(options.signature_width_px, options.signature_height_px);
   if (!masked) {

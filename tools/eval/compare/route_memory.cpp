@@ -11,6 +11,7 @@
 #include "homing_eval.hpp"
 #include "slam_compare.hpp"
 #include "timing.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/slam/fused_slam.hpp"
 
 namespace snapnav::eval {
@@ -116,14 +117,14 @@ RouteMemory ExploreRouteMemory(const nav::sim::Scene& scene, const CompareOption
   ViewRenderer renderer(scene, options.camera, options.explore_seed);
   out.raw_mask = RawMask(options.mask, renderer, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
                          sim.seed);
-  const cv::Mat mask = UseRawMask(out.raw_mask, renderer);
+  const cv::Mat mask = UseRawMask(out.raw_mask, renderer), clearance = nav::MaskClearance(mask);
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
   const auto t_views = Clock::now();
   for (const auto& [s, estimate] : samples) {
     const cv::Mat panorama = renderer.ToPanorama(renderer.Sensor(s.truth, pipeline.input, s.people), pipeline);
-    out.memory->Add(estimate, s.utime, nav::MakePlaceView(panorama, options.view, mask));
+    out.memory->Add(estimate, s.utime, nav::MakePlaceView(panorama, options.view, mask, clearance));
     out.cell_poses.push_back(s.truth);
     out.cell_estimates.push_back(estimate);
     const double e = std::hypot(estimate.x_m - s.truth.x_m, estimate.y_m - s.truth.y_m);

@@ -21,6 +21,7 @@
 #include "stats.hpp"
 #include "timing.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/trajectory.hpp"
 #include "snapnav/plot/plot.hpp"
 #include "snapnav/nav/ratslam/ratslam.hpp"
@@ -159,6 +160,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
 
   ViewRenderer renderer(scene, options.camera, sim.seed ^ 0x5eedULL);
   const cv::Mat mask = UseRawMask(memory.raw_mask, renderer);  // the camera's calibration, made with the memory
+  const cv::Mat clearance = nav::MaskClearance(mask);
   CameraPipeline pipeline;
   pipeline.input = CameraPipeline::Input::kRaw;
   pipeline.effects = options.effects;
@@ -249,7 +251,7 @@ CompareRun RunComparison(const nav::sim::Scene& scene, const RouteMemory& memory
     if (visual_due) {
       next_visual_us += visual_period_us;
       t0 = Clock::now();
-      const nav::PlaceView view = nav::MakePlaceView(panorama, options.view, mask);
+      const nav::PlaceView view = nav::MakePlaceView(panorama, options.view, mask, clearance);
       view_ms += MsSince(t0);
       t0 = Clock::now();
       std::optional<nav::Pose2> prediction;

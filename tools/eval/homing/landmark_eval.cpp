@@ -13,9 +13,10 @@ LandmarkCache ExtractAll(const std::vector<cv::Mat>& panoramas, const nav::Landm
   LandmarkCache cache;
   cache.sets.reserve(panoramas.size());
   double total = 0;
+  const cv::Mat clearance = nav::MaskClearance(mask);
   for (size_t i = 0; i < panoramas.size(); ++i) {
     const auto t0 = Clock::now();
-    cache.sets.push_back(nav::ExtractLandmarks(panoramas[i], config, mask));
+    cache.sets.push_back(nav::ExtractLandmarks(panoramas[i], config, mask, clearance));
     cache.seconds += std::chrono::duration<double>(Clock::now() - t0).count();
     cache.index[panoramas[i].data] = static_cast<int>(i);
     total += cache.sets.back().size();
@@ -42,7 +43,7 @@ const nav::LandmarkSet& LandmarkMethod::Landmarks(const cv::Mat& panorama) {
     if (it != cache_->index.end()) return cache_->sets[it->second];
   }
   const auto t0 = Clock::now();
-  scratch_ = nav::ExtractLandmarks(panorama, extractor_, mask_);
+  scratch_ = nav::ExtractLandmarks(panorama, extractor_, mask_, clearance_);
   extract_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
   ++extracted_;
   return scratch_;
@@ -64,7 +65,7 @@ nav::LandmarkSet LandmarkMethod::Fused(const std::vector<cv::Mat>& frames) {
   if (frames.size() == 1) return Landmarks(frames.front());
   if (fusion_.mode == nav::ViewFusion::kMedian) {
     const auto t0 = Clock::now();
-    nav::LandmarkSet set = nav::ExtractLandmarks(nav::MedianImage(frames), extractor_, mask_);
+    nav::LandmarkSet set = nav::ExtractLandmarks(nav::MedianImage(frames), extractor_, mask_, clearance_);
     extract_seconds_ += std::chrono::duration<double>(Clock::now() - t0).count();
     ++extracted_;
     return set;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "homing_eval.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/landmarks/landmark_extractor.hpp"
 #include "snapnav/nav/landmarks/landmarks.hpp"
 #include "snapnav/nav/landmarks/view_fusion.hpp"
@@ -45,7 +46,10 @@ class LandmarkMethod : public HomingMethod {
   void SetHomeFrames(const std::vector<cv::Mat>& frames) override;
   std::optional<nav::HomingEstimate> HomeFrames(const std::vector<cv::Mat>& frames) override;
   // Landmarks it extracts itself drop the masked ones (a cache's sets are as ExtractAll made them).
-  void SetMask(const cv::Mat& panorama_mask) override { mask_ = panorama_mask; }
+  void SetMask(const cv::Mat& panorama_mask) override {
+    mask_ = panorama_mask;
+    clearance_ = nav::MaskClearance(mask_);
+  }
   // The landmark set several frames fuse into.
   nav::LandmarkSet Fused(const std::vector<cv::Mat>& frames);
   // Extraction time of panoramas not found in the cache.
@@ -63,6 +67,7 @@ class LandmarkMethod : public HomingMethod {
   const LandmarkCache* cache_;
   nav::LandmarkSet scratch_;
   cv::Mat mask_;
+  cv::Mat clearance_;  // nav::MaskClearance(mask_), computed once
   double extract_seconds_ = 0;
   int extracted_ = 0;
   int64_t matches_ = 0, estimates_ = 0;

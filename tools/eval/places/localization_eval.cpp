@@ -17,6 +17,7 @@
 
 #include "report_text.hpp"
 #include "results.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
@@ -40,6 +41,7 @@ class ViewMaker {
     pipeline_.effects = options.effects;
     mask_ = UseMask(options.mask, renderer_, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
                     options.seed);
+    clearance_ = nav::MaskClearance(mask_);
   }
   nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people,
                       const std::string& save_png = "") {
@@ -48,7 +50,7 @@ class ViewMaker {
     render_s_ += Seconds(t0);
     if (!save_png.empty()) plot::SavePng(panorama, save_png);
     t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_);
+    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_, clearance_);
     extract_s_ += Seconds(t0);
     landmarks_ += v.landmarks.size();
     ++views_;
@@ -63,7 +65,8 @@ class ViewMaker {
   ViewRenderer renderer_;
   CameraPipeline pipeline_;
   nav::PlaceViewOptions view_;
-  cv::Mat mask_;  // the panoramas' mask (empty: none)
+  cv::Mat mask_;       // the panoramas' mask (empty: none)
+  cv::Mat clearance_;  // its nav::MaskClearance, computed once
   int views_ = 0;
   int64_t landmarks_ = 0;
   double render_s_ = 0, extract_s_ = 0;
@@ -449,9 +452,10 @@ LocalizationEvalResult RunGridFolderLocalization(const std::string& name, const 
   m.memory = std::make_unique<nav::PlaceCellMemory>(options.view, options.camera.panorama, options.vocabulary);
   double extract_s = 0;
   int64_t landmarks = 0;
+  const cv::Mat clearance = nav::MaskClearance(panorama_mask);
   for (size_t i = 0; i < poses.size(); ++i) {
     const auto t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panoramas[i], options.view, panorama_mask);
+    nav::PlaceView v = nav::MakePlaceView(panoramas[i], options.view, panorama_mask, clearance);
     extract_s += Seconds(t0);
     landmarks += v.landmarks.size();
     m.memory->Add(poses[i], static_cast<int64_t>(i) * 2'000'000, std::move(v));

@@ -16,6 +16,7 @@
 #include "report_text.hpp"
 #include "results.hpp"
 #include "timing.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/plot/plot.hpp"
 
 namespace snapnav::eval {
@@ -36,6 +37,7 @@ class ViewMaker {
       : renderer_(scene, o.camera, o.seed), view_(o.view) {
     pipeline_.input = CameraPipeline::Input::kRaw;
     mask_ = UseMask(o.mask, renderer_, cv::Size(o.camera.omni_width_px, o.camera.omni_height_px), o.seed);
+    clearance_ = nav::MaskClearance(mask_);
   }
   nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people, double* render_ms,
                       double* view_ms) {
@@ -44,7 +46,7 @@ class ViewMaker {
         renderer_.ToPanorama(renderer_.Sensor(pose, CameraPipeline::Input::kRaw, people), pipeline_);
     if (render_ms) *render_ms += MsSince(t0);
     t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_);
+    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_, clearance_);
     if (view_ms) *view_ms += MsSince(t0);
     return v;
   }
@@ -54,7 +56,8 @@ class ViewMaker {
   ViewRenderer renderer_;
   CameraPipeline pipeline_;
   nav::PlaceViewOptions view_;
-  cv::Mat mask_;  // the panoramas' mask (empty: none)
+  cv::Mat mask_;       // the panoramas' mask (empty: none)
+  cv::Mat clearance_;  // its nav::MaskClearance, computed once
 };
 
 double RouteLength(const std::vector<Eigen::Vector2d>& w) {

@@ -28,10 +28,13 @@ struct LandmarkExtractorConfig {
 // Landmarks of a panorama (8-bit grey or BGR). Throws std::invalid_argument on an empty image.
 // `mask` (image_mask.hpp; empty: none): the robot's own parts are filled before detection and no
 // landmark lies on or next to them (DropMaskedLandmarks); a mask of another size throws.
+// `clearance`, when given, is MaskClearance(mask) (image_mask.hpp): a caller with a fixed mask
+// computes it once instead of on every call (a distance transform of the panorama).
 LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorConfig& config,
-                             const cv::Mat& mask = cv::Mat());
+                             const cv::Mat& mask = cv::Mat(), const cv::Mat& clearance = cv::Mat());
 // The masking step alone, for the extractors called directly (vertical lines of the place views).
-LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, const LandmarkExtractorConfig& config);
+LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, const LandmarkExtractorConfig& config,
+                                const cv::Mat& clearance = cv::Mat());
 
 
 }  // namespace snapnav::nav

@@ -83,8 +83,10 @@ struct PlaceView {
 // The view of a panorama (8-bit grey or BGR, the model's size). Throws std::invalid_argument on an
 // empty image. `mask` (image_mask.hpp; empty: none): masked pixels are filled before anything is
 // extracted, no landmark or line lies on them (ExtractLandmarks), and the signature averages the
-// usable pixels only.
-PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options, const cv::Mat& mask = cv::Mat());
+// usable pixels only. `clearance`, when given, is MaskClearance(mask): computed once by a caller
+// whose mask does not change (here once per view otherwise).
+PlaceView MakePlaceView(const cv::Mat& panorama, const PlaceViewOptions& options, const cv::Mat& mask = cv::Mat(),
+                        const cv::Mat& clearance = cv::Mat());
 
 // Rotational image difference (Franz et al. 1998) of two signatures: the smallest RMS grey-level
 // difference over the column shifts of `b`; `shift_cols` gets the best shift of b relative to a
