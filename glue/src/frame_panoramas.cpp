@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "snapnav/glue/image_msg.hpp"
+#include "snapnav/nav/homing/image_mask.hpp"
 #include "snapnav/nav/pose2.hpp"
 
 namespace snapnav::glue {
@@ -32,12 +33,14 @@ void FramePanoramas::SetMask(const cv::Mat& raw_mask) {
   raw_mask_ = raw_mask;
   unwrapper_.reset();  // rebuilt with the mask
   mask_.release();
+  mask_clearance_.release();
 }
 
 std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
   reason_.clear();
   detail_.clear();
   mask_.release();
+  mask_clearance_.release();
   if (f.kind != omni_frame_t::RAW_OMNI && f.kind != omni_frame_t::PANORAMA) {
     Fail("unknown kind", "kind " + std::to_string(f.kind) + " (RAW_OMNI 0 or PANORAMA 1)");
     return std::nullopt;
@@ -101,6 +104,7 @@ std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
     try {
       unwrapper_ = nav::Unwrapper(mirror, p, size);
       if (!raw_mask_.empty()) unwrapper_->SetMask(raw_mask_);
+      unwrapper_clearance_ = nav::MaskClearance(unwrapper_->panorama_mask());
       unwrapper_size_ = size;
       ++unwrapper_builds_;
     } catch (const std::exception& e) {
@@ -113,6 +117,7 @@ std::optional<cv::Mat> FramePanoramas::Convert(const omni_frame_t& f) {
   cv::Mat panorama;
   unwrapper_->Unwrap(image, &panorama);  // masked pixels filled
   mask_ = unwrapper_->panorama_mask();
+  mask_clearance_ = unwrapper_clearance_;
   return panorama;
 }
 

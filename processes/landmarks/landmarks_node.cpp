@@ -93,7 +93,8 @@ void LandmarksNode::OnFrame(const omni_frame_t& frame) {
   const auto t0 = std::chrono::steady_clock::now();
   nav::LandmarkSet set;
   try {
-    set = nav::ExtractLandmarks(*panorama, config_.extractor, frames_to_panoramas_.mask());
+    set = nav::ExtractLandmarks(*panorama, config_.extractor, frames_to_panoramas_.mask(),
+                                 frames_to_panoramas_.mask_clearance());
   } catch (const std::exception& e) {
     ++rejected_["extraction error"];
     throw std::runtime_error(std::string("landmarks: ") + e.what());  // the bus counts it as a handler error

@@ -306,10 +306,15 @@ TEST(Masks, FramePanoramasCarryTheMask) {
   u.Unwrap(v.home_raw, &expected);
   EXPECT_EQ(cv::norm(*pano, expected, cv::NORM_INF), 0);
   EXPECT_EQ(cv::norm(frames.mask(), u.panorama_mask(), cv::NORM_INF), 0);
+  // The mask's clearance, computed with the unwrap map, is the mask's (and goes with a refused frame).
+  ASSERT_FALSE(frames.mask_clearance().empty());
+  EXPECT_EQ(cv::norm(frames.mask_clearance(), nav::MaskClearance(frames.mask()), cv::NORM_INF), 0);
   // A raw frame of another size than the mask is refused, by name.
   omni_frame_t small = glue::ImageToFrame(cv::Mat(240, 320, CV_8UC3, cv::Scalar(50, 50, 50)), omni_frame_t::RGB8);
   EXPECT_FALSE(frames.Convert(small).has_value());
   EXPECT_EQ(frames.reason(), "wrong mask size");
+  EXPECT_TRUE(frames.mask().empty());
+  EXPECT_TRUE(frames.mask_clearance().empty());
 }
 
 TEST(ImageMask, FillClearanceAndGrow) {

@@ -31,6 +31,9 @@ class FramePanoramas {
   void SetMask(const cv::Mat& raw_mask);
   // The mask of the panorama the last Convert returned (empty: none): what the extractors ignore.
   const cv::Mat& mask() const { return mask_; }
+  // Its nav::MaskClearance (empty with no mask), computed once per unwrap map: what
+  // ExtractLandmarks and MakePlaceView take so as not to compute it per frame.
+  const cv::Mat& mask_clearance() const { return mask_clearance_; }
   const std::string& reason() const { return reason_; }
   const std::string& detail() const { return detail_; }
   int64_t unwrapper_builds() const { return unwrapper_builds_; }
@@ -42,7 +45,8 @@ class FramePanoramas {
   }
   nav::PanoramaModel panorama_;
   nav::MirrorModel default_mirror_;
-  cv::Mat raw_mask_, mask_;
+  cv::Mat raw_mask_, mask_, mask_clearance_;
+  cv::Mat unwrapper_clearance_;  // MaskClearance of unwrapper_'s panorama mask
   std::optional<nav::Unwrapper> unwrapper_;  // for the last raw calibration and size seen
   cv::Size unwrapper_size_;
   // The last calibration the Unwrapper refused, so it is not rebuilt per frame.
