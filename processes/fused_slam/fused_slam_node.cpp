@@ -11,11 +11,11 @@
 #include <Eigen/Eigenvalues>
 
 #include "snapnav/glue/slam_options.hpp"
-#include "snapnav/nav/covariance.hpp"
 #include "snapnav/fused_slam_status_t.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
 #include "snapnav/glue/message_clock.hpp"
+#include "snapnav/nav/covariance.hpp"
 #include "snapnav/point_map_t.hpp"
 
 namespace snapnav::processes {

@@ -94,7 +94,7 @@ void LandmarksNode::OnFrame(const omni_frame_t& frame) {
   nav::LandmarkSet set;
   try {
     set = nav::ExtractLandmarks(*panorama, config_.extractor, frames_to_panoramas_.mask(),
-                                 frames_to_panoramas_.mask_clearance());
+                                frames_to_panoramas_.mask_clearance());
   } catch (const std::exception& e) {
     ++rejected_["extraction error"];
     throw std::runtime_error(std::string("landmarks: ") + e.what());  // the bus counts it as a handler error

@@ -9,13 +9,12 @@
 #include <optional>
 #include <vector>
 
-#include "snapnav/nav/covariance.hpp"
-
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
 #include "snapnav/glue/pose_corrections.hpp"
 #include "snapnav/glue/slam_options.hpp"
 #include "snapnav/laser_slam_status_t.hpp"
+#include "snapnav/nav/covariance.hpp"
 #include "snapnav/point_map_t.hpp"
 
 namespace snapnav::processes {

@@ -4,11 +4,10 @@
 #include <cmath>
 #include <ostream>
 
-#include "snapnav/nav/covariance.hpp"
-
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/laser_scan_checks.hpp"
 #include "snapnav/localization_status_t.hpp"
+#include "snapnav/nav/covariance.hpp"
 
 namespace snapnav::processes {
 

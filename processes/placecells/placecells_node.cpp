@@ -374,8 +374,8 @@ void PlaceCellsNode::Explore(const cv::Mat& panorama, int64_t utime, const Stamp
   place_cell_match_t match{};
   int added = -1;
   try {
-    nav::PlaceView view = nav::MakePlaceView(panorama, config_.view, frames_to_panoramas_.mask(),
-                                                   frames_to_panoramas_.mask_clearance());
+    nav::PlaceView view =
+        nav::MakePlaceView(panorama, config_.view, frames_to_panoramas_.mask(), frames_to_panoramas_.mask_clearance());
     const int before = memory_.size();
     std::optional<nav::CellComparison> best;
     if (before > 0) best = memory_.MostSimilar(view, config_.localizer);
@@ -415,8 +415,8 @@ void PlaceCellsNode::Localize(const cv::Mat& panorama, int64_t utime) {
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<nav::Localization> loc;
   try {
-    const nav::PlaceView view = nav::MakePlaceView(panorama, config_.view, frames_to_panoramas_.mask(),
-                                                   frames_to_panoramas_.mask_clearance());
+    const nav::PlaceView view =
+        nav::MakePlaceView(panorama, config_.view, frames_to_panoramas_.mask(), frames_to_panoramas_.mask_clearance());
     loc = memory_.Localize(view, Prediction(), config_.localizer);
   } catch (const std::exception& e) {
     ++rejected_["place cell error"];

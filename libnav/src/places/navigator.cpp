@@ -1,11 +1,11 @@
 #include "snapnav/nav/places/navigator.hpp"
 
-#include "snapnav/nav/covariance.hpp"
-
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include "snapnav/nav/covariance.hpp"
 
 namespace snapnav::nav {
 namespace {
@@ -88,9 +88,7 @@ void PoseTracker::Initialize(int64_t utime, const Pose2& pose, const Eigen::Matr
   have_time_ = true;
 }
 
-double PoseTracker::position_sigma_m() const {
-  return PositionSigmaM(covariance_);
-}
+double PoseTracker::position_sigma_m() const { return PositionSigmaM(covariance_); }
 
 void PoseTracker::AddOdometry(int64_t utime, const Pose2& delta) {
   Require(Finite(delta), "tracker: odometry increment is not finite");

@@ -1,7 +1,5 @@
 #include "snapnav/nav/slam/fused_slam.hpp"
 
-#include "snapnav/nav/covariance.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -9,6 +7,8 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>
+
+#include "snapnav/nav/covariance.hpp"
 
 namespace snapnav::nav {
 namespace {

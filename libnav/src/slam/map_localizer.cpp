@@ -6,7 +6,6 @@
 #include <unordered_set>
 
 #include "snapnav/nav/covariance.hpp"
-
 #include "snapnav/nav/slam/map_matcher.hpp"
 
 namespace snapnav::nav {

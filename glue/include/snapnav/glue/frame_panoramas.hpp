@@ -46,7 +46,7 @@ class FramePanoramas {
   nav::PanoramaModel panorama_;
   nav::MirrorModel default_mirror_;
   cv::Mat raw_mask_, mask_, mask_clearance_;
-  cv::Mat unwrapper_clearance_;  // MaskClearance of unwrapper_'s panorama mask
+  cv::Mat unwrapper_clearance_;              // MaskClearance of unwrapper_'s panorama mask
   std::optional<nav::Unwrapper> unwrapper_;  // for the last raw calibration and size seen
   cv::Size unwrapper_size_;
   // The last calibration the Unwrapper refused, so it is not rebuilt per frame.

@@ -36,5 +36,4 @@ LandmarkSet ExtractLandmarks(const cv::Mat& panorama, const LandmarkExtractorCon
 LandmarkSet DropMaskedLandmarks(const LandmarkSet& set, const cv::Mat& mask, const LandmarkExtractorConfig& config,
                                 const cv::Mat& clearance = cv::Mat());
 
-
 }  // namespace snapnav::nav
