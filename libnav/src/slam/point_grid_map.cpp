@@ -1,6 +1,7 @@
 #include "snapnav/nav/slam/point_grid_map.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -8,6 +9,10 @@
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__SSE2__) && defined(__GNUC__) && defined(__x86_64__)
+#define SNAPNAV_X86_AVX2 1  // an AVX2 kernel, chosen at run time where the CPU has AVX2
+#include <immintrin.h>
 #endif
 
 namespace snapnav::nav {
@@ -21,6 +26,34 @@ int64_t FloorToInt(double v) {
 }
 
 }  // namespace
+
+namespace {
+
+PointGridMap::Simd BestSimd() {
+#if defined(SNAPNAV_X86_AVX2)
+  if (__builtin_cpu_supports("avx2")) return PointGridMap::Simd::kAvx2;
+#endif
+#if defined(__SSE2__)
+  return PointGridMap::Simd::kSse2;
+#else
+  return PointGridMap::Simd::kScalar;
+#endif
+}
+
+std::atomic<PointGridMap::Simd>& SimdLevel() {
+  static std::atomic<PointGridMap::Simd> level{BestSimd()};
+  return level;
+}
+
+}  // namespace
+
+PointGridMap::Simd PointGridMap::simd() { return SimdLevel().load(); }
+
+PointGridMap::Simd PointGridMap::SetSimd(Simd wanted) {
+  const Simd level = std::min(wanted, BestSimd());
+  SimdLevel().store(level);
+  return level;
+}
 
 PointGridMap::PointGridMap(double resolution_m, double bucket_m, double lookup_radius_m, double lookup_cell_m,
                            double likelihood_sigma_m)
@@ -285,6 +318,97 @@ inline void AccumulateShiftsStep2Any(const uint8_t* base, int row_stride, int sh
       AccumulateShiftsStep2<0>(base, row_stride, shifts, w00, w10, w01, w11, acc);
   }
 }
+
+// A point's place on the raster, moved by the rotation (c, s) and then t: the node (i, j) below
+// and left of it, and its bilinear weights (1-fx)(1-fy), fx(1-fy), (1-fx)fy, fx fy as floats, in
+// SSE2 (FloorToInt by truncation to 32 bits: points within 50,000 km). The moved point
+// (c x - s y + tx, s x + c y + ty) is taken as (c x + (-s) y, c y + s x) + t: the same bits.
+class PointWeights {
+ public:
+  PointWeights(double inv_node, double c, double s, const Eigen::Vector2d& t)
+      : inv_(_mm_set1_pd(inv_node)), c_(_mm_set1_pd(c)), s_(_mm_set_pd(s, -s)), t_(_mm_loadu_pd(t.data())) {}
+  __m128 operator()(const Eigen::Vector2d& q, int64_t* i, int64_t* j) const {
+    const __m128d half = _mm_set1_pd(0.5), one = _mm_set1_pd(1.0);
+    const __m128d xy = _mm_loadu_pd(q.data());
+    const __m128d p = _mm_add_pd(_mm_add_pd(_mm_mul_pd(xy, c_), _mm_mul_pd(_mm_shuffle_pd(xy, xy, 1), s_)), t_);
+    const __m128d uv = _mm_sub_pd(_mm_mul_pd(p, inv_), half);  // (u, v)
+    const __m128i truncated = _mm_cvttpd_epi32(uv);
+    const __m128d tf = _mm_cvtepi32_pd(truncated);
+    const __m128d above = _mm_cmpgt_pd(tf, uv);  // truncated up: the floor is one less
+    const __m128d fl = _mm_sub_pd(tf, _mm_and_pd(above, one));
+    const int down = _mm_movemask_pd(above);
+    *i = _mm_cvtsi128_si32(truncated) - (down & 1);
+    *j = _mm_cvtsi128_si32(_mm_shuffle_epi32(truncated, 1)) - (down >> 1);
+    const __m128 f = _mm_cvtpd_ps(_mm_sub_pd(uv, fl));
+    const __m128 pairs = _mm_unpacklo_ps(_mm_sub_ps(_mm_set1_ps(1.0f), f), f);  // (1-fx, fx, 1-fy, fy)
+    return _mm_mul_ps(_mm_movelh_ps(pairs, pairs), _mm_shuffle_ps(pairs, pairs, _MM_SHUFFLE(3, 3, 2, 2)));
+  }
+
+ private:
+  __m128d inv_, c_, s_, t_;
+};
+
+#if defined(SNAPNAV_X86_AVX2)
+// AccumulateShiftsStep2 with 8 x-shifts at a time (AVX2, no FMA): acc[(b * groups + g) * 8 + l]
+// holds a = 8 g + l. Each shift's sum takes the same float operations in the same order: the same
+// bits. Reads 16 nodes per group and row (up to 16 * groups past the block's start).
+template <int SHIFTS>
+__attribute__((target("avx2"))) inline void AccumulateShiftsStep2Avx2(const uint8_t* base, int row_stride, int shifts,
+                                                                      __m256 w00, __m256 w10, __m256 w01, __m256 w11,
+                                                                      float* acc) {
+  const int count = SHIFTS > 0 ? SHIFTS : shifts;
+  const int groups = (count + 7) / 8;
+  const __m256i low = _mm256_set1_epi32(0xffff);
+  for (int b = 0; b < count; ++b) {
+    const uint8_t* row0 = base + 2 * b * row_stride;
+    const uint8_t* row1 = row0 + row_stride;
+    for (int g = 0; g < groups; ++g) {
+      const __m256i v0 = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row0 + 16 * g)));
+      const __m256i v1 = _mm256_cvtepu8_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(row1 + 16 * g)));
+      const __m256 e0 = _mm256_cvtepi32_ps(_mm256_and_si256(v0, low)),
+                   o0 = _mm256_cvtepi32_ps(_mm256_srli_epi32(v0, 16));
+      const __m256 e1 = _mm256_cvtepi32_ps(_mm256_and_si256(v1, low)),
+                   o1 = _mm256_cvtepi32_ps(_mm256_srli_epi32(v1, 16));
+      const __m256 v = _mm256_add_ps(
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(w00, e0), _mm256_mul_ps(w10, o0)), _mm256_mul_ps(w01, e1)),
+          _mm256_mul_ps(w11, o1));
+      float* out = acc + 8 * (b * groups + g);
+      _mm256_storeu_ps(out, _mm256_add_ps(_mm256_loadu_ps(out), v));
+    }
+  }
+}
+
+// Every point's block (nodes_of(tile x, tile y): a raster tile's nodes or nullptr) accumulated with
+// AccumulateShiftsStep2Avx2 into acc (8 * groups * shifts floats, zeroed).
+template <class NodesOf>
+__attribute__((target("avx2"))) void AccumulatePointsAvx2(const std::vector<Eigen::Vector2d>& moving,
+                                                          const PointWeights& weights_of, int64_t back, int shifts,
+                                                          int node_bits, int raster_row, NodesOf& nodes_of,
+                                                          float* acc) {
+  const int64_t mask = (int64_t{1} << node_bits) - 1;
+  for (const Eigen::Vector2d& q : moving) {
+    int64_t i = 0, j = 0;
+    const __m128 weights = weights_of(q, &i, &j);
+    const uint8_t* nodes = nodes_of((i - back) >> node_bits, (j - back) >> node_bits);
+    if (!nodes) continue;  // no map point within reach of any shift
+    const uint8_t* base = nodes + ((j - back) & mask) * raster_row + ((i - back) & mask);
+    const __m256 w00 = _mm256_broadcastss_ps(weights);
+    const __m256 w10 = _mm256_broadcastss_ps(_mm_shuffle_ps(weights, weights, 0x55));
+    const __m256 w01 = _mm256_broadcastss_ps(_mm_shuffle_ps(weights, weights, 0xAA));
+    const __m256 w11 = _mm256_broadcastss_ps(_mm_shuffle_ps(weights, weights, 0xFF));
+    switch (shifts) {
+      case 5:
+        AccumulateShiftsStep2Avx2<5>(base, raster_row, shifts, w00, w10, w01, w11, acc);
+        break;
+      case 13:
+        AccumulateShiftsStep2Avx2<13>(base, raster_row, shifts, w00, w10, w01, w11, acc);
+        break;
+      default:
+        AccumulateShiftsStep2Avx2<0>(base, raster_row, shifts, w00, w10, w01, w11, acc);
+    }
+  }
+}
+#endif
 #endif
 
 }  // namespace
@@ -298,6 +422,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
                                          const Eigen::Vector2d& t, int n, int step_nodes, double* sums) const {
   if (!has_likelihood()) throw std::logic_error("point map: no likelihood raster");
   const int shifts = 2 * n + 1;
+  const Simd level = SimdLevel().load(std::memory_order_relaxed);
   // The nodes any shift of a point interpolates between: a block of w x w from (i - n s, j - n s).
   const int w = 2 * n * step_nodes + 2;
   const int64_t mask = kNodes - 1;
@@ -325,7 +450,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
   thread_local std::vector<float> acc;  // per shift, in units of 1/255
   acc.assign(static_cast<size_t>(cells), 0.0f);
 #if defined(__SSE2__)
-  const bool simd = step_nodes == 2;
+  const bool simd = step_nodes == 2 && level != Simd::kScalar;
   const int groups = (shifts + 3) / 4;
   thread_local std::vector<Lanes> acc4;
   acc4.assign(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
@@ -338,32 +463,34 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
   if (!in_place) block.assign(static_cast<size_t>(bw) * w + kRasterPadding, 0);
 #if defined(__SSE2__)
   const bool fast = simd && in_place;
+  const int64_t back = static_cast<int64_t>(n) * step_nodes;
+  const PointWeights weights_of(inv_node, c, s, t);
+#if defined(SNAPNAV_X86_AVX2)
+  // AVX2 where the CPU has it (8 x-shifts at a time): the same sums, bit for bit.
+  const int groups8 = (shifts + 7) / 8;
+  if (fast && level == Simd::kAvx2 && 16 * groups8 <= kRasterApron) {
+    thread_local std::vector<float> acc8;
+    acc8.assign(static_cast<size_t>(8 * groups8 * shifts), 0.0f);
+    AccumulatePointsAvx2(moving, weights_of, back, shifts, kNodeBits, kRasterRow, nodes_of, acc8.data());
+    for (int b = 0; b < shifts; ++b) {
+      for (int g = 0; g < groups8; ++g) {
+        const float* lanes = acc8.data() + 8 * static_cast<size_t>(b * groups8 + g);
+        for (int l = 0; l < 8 && 8 * g + l < shifts; ++l) acc[static_cast<size_t>((8 * g + l) * shifts + b)] = lanes[l];
+      }
+    }
+    for (int k = 0; k < cells; ++k) sums[k] += acc[static_cast<size_t>(k)] / 255.0;
+    return;
+  }
+#endif
   if (fast) {
     // The common case, each point's interpolation set up with SSE2: the same operations as the
-    // loop below (FloorToInt by truncation to 32 bits: points within 50,000 km).
-    const __m128d inv2 = _mm_set1_pd(inv_node), half2 = _mm_set1_pd(0.5), one2 = _mm_set1_pd(1.0);
-    const __m128 one4 = _mm_set1_ps(1.0f);
-    const int64_t back = static_cast<int64_t>(n) * step_nodes;
-    // The moved point (c x - s y + tx, s x + c y + ty) as (c x + (-s) y, c y + s x) + t: the same bits.
-    const __m128d cc = _mm_set1_pd(c), ms = _mm_set_pd(s, -s), tt = _mm_loadu_pd(t.data());
+    // loop below.
     for (const Eigen::Vector2d& q : moving) {
-      const __m128d xy = _mm_loadu_pd(q.data());
-      const __m128d p = _mm_add_pd(_mm_add_pd(_mm_mul_pd(xy, cc), _mm_mul_pd(_mm_shuffle_pd(xy, xy, 1), ms)), tt);
-      const __m128d uv = _mm_sub_pd(_mm_mul_pd(p, inv2), half2);  // (u, v)
-      const __m128i truncated = _mm_cvttpd_epi32(uv);
-      const __m128d tf = _mm_cvtepi32_pd(truncated);
-      const __m128d above = _mm_cmpgt_pd(tf, uv);  // truncated up: the floor is one less
-      const __m128d fl = _mm_sub_pd(tf, _mm_and_pd(above, one2));
-      const int down = _mm_movemask_pd(above);
-      const int64_t i = _mm_cvtsi128_si32(truncated) - (down & 1);
-      const int64_t j = _mm_cvtsi128_si32(_mm_shuffle_epi32(truncated, 1)) - (down >> 1);
+      int64_t i = 0, j = 0;
+      const __m128 weights = weights_of(q, &i, &j);
       const uint8_t* nodes = nodes_of((i - back) >> kNodeBits, (j - back) >> kNodeBits);
       if (!nodes) continue;  // no map point within reach of any shift
       const uint8_t* base = nodes + ((j - back) & mask) * kRasterRow + ((i - back) & mask);
-      // (fx, fy) and the bilinear weights (1-fx)(1-fy), fx(1-fy), (1-fx)fy, fx fy in floats.
-      const __m128 f = _mm_cvtpd_ps(_mm_sub_pd(uv, fl));
-      const __m128 pairs = _mm_unpacklo_ps(_mm_sub_ps(one4, f), f);  // (1-fx, fx, 1-fy, fy)
-      const __m128 weights = _mm_mul_ps(_mm_movelh_ps(pairs, pairs), _mm_shuffle_ps(pairs, pairs, _MM_SHUFFLE(3, 3, 2, 2)));
       const __m128 v00 = _mm_shuffle_ps(weights, weights, 0x00), v10 = _mm_shuffle_ps(weights, weights, 0x55);
       const __m128 v01 = _mm_shuffle_ps(weights, weights, 0xAA), v11 = _mm_shuffle_ps(weights, weights, 0xFF);
       AccumulateShiftsStep2Any(base, kRasterRow, shifts, v00, v10, v01, v11, acc4.data());

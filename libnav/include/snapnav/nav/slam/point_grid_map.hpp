@@ -68,6 +68,12 @@ class PointGridMap {
   // s x + c y + t.y, as the search rotates them), without a copy of the moved points.
   void AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& moving, double c, double s, const Eigen::Vector2d& t,
                              int n, int step_nodes, double* sums) const;
+  // The instruction sets AddShiftedLikelihoods uses (with each, the same sums bit for bit): the
+  // best this CPU has (AVX2 where it has it, SSE2 on every x86-64), unless lowered for all maps by
+  // SetSimd, which returns the level in effect (at most the CPU's).
+  enum class Simd { kScalar, kSse2, kAvx2 };
+  static Simd simd();
+  static Simd SetSimd(Simd wanted);
 
  private:
   static constexpr int kTileBits = 5, kTile = 1 << kTileBits;  // 32 x 32 lookup cells per tile
