@@ -15,6 +15,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "place_view_maker.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
 #include "snapnav/nav/homing/image_mask.hpp"
@@ -31,46 +32,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
 
 Eigen::Vector2d Xy(const nav::Pose2& p) { return {p.x_m, p.y_m}; }
-
-// Renders a pose (raw omni image, unwrapped) and makes its view, timing both.
-class ViewMaker {
- public:
-  ViewMaker(const nav::sim::Scene& scene, const LocalizationEvalOptions& options)
-      : renderer_(scene, options.camera, options.seed), view_(options.view) {
-    pipeline_.input = CameraPipeline::Input::kRaw;
-    pipeline_.effects = options.effects;
-    mask_ = UseMask(options.mask, renderer_, cv::Size(options.camera.omni_width_px, options.camera.omni_height_px),
-                    options.seed);
-    clearance_ = nav::MaskClearance(mask_);
-  }
-  nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people,
-                      const std::string& save_png = "") {
-    auto t0 = Clock::now();
-    const cv::Mat panorama = renderer_.ToPanorama(renderer_.Sensor(pose, CameraPipeline::Input::kRaw, people), pipeline_);
-    render_s_ += Seconds(t0);
-    if (!save_png.empty()) plot::SavePng(panorama, save_png);
-    t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_, clearance_);
-    extract_s_ += Seconds(t0);
-    landmarks_ += v.landmarks.size();
-    ++views_;
-    return v;
-  }
-  int views() const { return views_; }
-  double render_ms() const { return views_ ? 1000 * render_s_ / views_ : 0; }
-  double extract_ms() const { return views_ ? 1000 * extract_s_ / views_ : 0; }
-  double mean_landmarks() const { return views_ ? static_cast<double>(landmarks_) / views_ : 0; }
-
- private:
-  ViewRenderer renderer_;
-  CameraPipeline pipeline_;
-  nav::PlaceViewOptions view_;
-  cv::Mat mask_;       // the panoramas' mask (empty: none)
-  cv::Mat clearance_;  // its nav::MaskClearance, computed once
-  int views_ = 0;
-  int64_t landmarks_ = 0;
-  double render_s_ = 0, extract_s_ = 0;
-};
 
 std::string EstimateName(nav::PlaceEstimate e) { return nav::PlaceEstimateName(e); }
 
@@ -224,7 +185,7 @@ LocalizationEvalResult RunLocalizationEval(const nav::sim::Scene& scene, const L
   result.scene = scene.name;
   result.area = GridArea(scene.grid);
   const Area& area = result.area;
-  ViewMaker maker(scene, options);
+  PlaceViewMaker maker(scene, options.camera, options.effects, options.mask, options.view, options.seed);
   const nav::PanoramaModel& pm = options.camera.panorama;
   auto new_memory = [&]() { return std::make_unique<nav::PlaceCellMemory>(options.view, pm, options.vocabulary); };
 

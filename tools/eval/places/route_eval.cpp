@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "homing_eval.hpp"
+#include "place_view_maker.hpp"
 #include "report_text.hpp"
 #include "results.hpp"
 #include "timing.hpp"
@@ -30,36 +31,6 @@ void Say(const std::function<void(const std::string&, bool)>& progress, const st
   if (progress) progress(text, replace);
 }
 
-// Renders views the way the robot's pipeline makes them: raw omni image, unwrapped, PlaceView.
-class ViewMaker {
- public:
-  ViewMaker(const nav::sim::Scene& scene, const RouteEvalOptions& o)
-      : renderer_(scene, o.camera, o.seed), view_(o.view) {
-    pipeline_.input = CameraPipeline::Input::kRaw;
-    mask_ = UseMask(o.mask, renderer_, cv::Size(o.camera.omni_width_px, o.camera.omni_height_px), o.seed);
-    clearance_ = nav::MaskClearance(mask_);
-  }
-  nav::PlaceView Make(const nav::Pose2& pose, const std::vector<nav::sim::Cylinder>& people, double* render_ms,
-                      double* view_ms) {
-    auto t0 = Clock::now();
-    const cv::Mat panorama =
-        renderer_.ToPanorama(renderer_.Sensor(pose, CameraPipeline::Input::kRaw, people), pipeline_);
-    if (render_ms) *render_ms += MsSince(t0);
-    t0 = Clock::now();
-    nav::PlaceView v = nav::MakePlaceView(panorama, view_, mask_, clearance_);
-    if (view_ms) *view_ms += MsSince(t0);
-    return v;
-  }
-  const nav::PanoramaModel& panorama() const { return renderer_.panorama_model(); }
-
- private:
-  ViewRenderer renderer_;
-  CameraPipeline pipeline_;
-  nav::PlaceViewOptions view_;
-  cv::Mat mask_;       // the panoramas' mask (empty: none)
-  cv::Mat clearance_;  // its nav::MaskClearance, computed once
-};
-
 double RouteLength(const std::vector<Eigen::Vector2d>& w) {
   double l = 0;
   for (size_t i = 1; i < w.size(); ++i) l += (w[i] - w[i - 1]).norm();
@@ -69,7 +40,7 @@ double RouteLength(const std::vector<Eigen::Vector2d>& w) {
 // What the closed loop needs from the place cells (nullptr members: the odometry-only baseline).
 struct Perception {
   const nav::PlaceCellMemory* memory = nullptr;
-  ViewMaker* maker = nullptr;
+  PlaceViewMaker* maker = nullptr;
   std::vector<int> waypoint_cell;                           // per waypoint: its cell (-1: none close)
   std::vector<std::unique_ptr<nav::LandmarkHomer>> homers;  // per waypoint (null without a cell)
 };
@@ -139,7 +110,7 @@ RouteRun RunClosedLoop(const nav::sim::Scene& scene, const RouteEvalOptions& o, 
     std::optional<nav::PlaceView> view;
     auto ensure_view = [&]() -> const nav::PlaceView& {
       if (!view) {
-        view = perception.maker->Make(truth, crowd.Around(truth), &run.ms_render, &run.ms_view);
+        view = perception.maker->Make(truth, crowd.Around(truth), "", &run.ms_render, &run.ms_view);
         ++run.views;
       }
       return *view;
@@ -400,7 +371,7 @@ RouteEvalResult RunRouteEval(const nav::sim::Scene& scene, const RouteEvalOption
   route.tolerance_m = o.tolerance_m;
 
   // Exploration: the grid (heading 0, like the thesis' databases) and the waypoints.
-  ViewMaker maker(scene, o);
+  PlaceViewMaker maker(scene, o.camera, nav::sim::ImageEffectsOptions{}, o.mask, o.view, o.seed);
   nav::PlaceCellMemory memory(o.view, maker.panorama(), o.vocabulary);
   Crowd crowd(scene, o.drive, o.seed + 5);
   std::vector<nav::Pose2> poses;
@@ -422,7 +393,7 @@ RouteEvalResult RunRouteEval(const nav::sim::Scene& scene, const RouteEvalOption
   double landmarks = 0;
   for (size_t i = 0; i < poses.size(); ++i) {
     for (int k = 0; k < static_cast<int>(std::lround(o.people_dt_s * 10)); ++k) crowd.Advance(0.1);
-    nav::PlaceView v = maker.Make(poses[i], crowd.Around(poses[i]), nullptr, nullptr);
+    nav::PlaceView v = maker.Make(poses[i], crowd.Around(poses[i]));
     landmarks += v.landmarks.size();
     memory.Add(poses[i], static_cast<int64_t>(i) * 2'000'000, std::move(v));
     Say(progress, "exploring: cell " + std::to_string(i + 1) + "/" + std::to_string(poses.size()), true);
