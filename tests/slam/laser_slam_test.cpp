@@ -194,6 +194,53 @@ TEST(PointGridMap, LikelihoodRasterIsTheKernelOfTheNearestPoint) {
   EXPECT_EQ(copy.Likelihood({0.4, 0.01}), raster.Likelihood({0.4, 0.01}));
 }
 
+TEST(PointGridMap, LookupGridHoldsTheThreeNearestPointsOfEveryCell) {
+  // The lookup grid's candidates of a cell are the kLookupCandidates points nearest its centre
+  // within the radius plus half a cell diagonal (by squared distance as a float, the older first
+  // on a tie), however the points came: dense random walls, then points in the open and far ones.
+  // Checked through LookupIndex against that definition computed from all the points.
+  const double cell = 0.05, radius = 0.6, reach = radius + 0.7072 * cell;
+  PointGridMap map(0.05, 0.25, radius, cell);
+  std::srand(11);
+  const auto uniform = [] { return std::rand() / static_cast<double>(RAND_MAX); };
+  for (int wall = 0; wall < 60; ++wall) {
+    const Eigen::Vector2d a(4 * uniform() - 2, 4 * uniform() - 2);
+    const double heading = 6.3 * uniform(), length = 0.3 + uniform();
+    for (double d = 0; d < length; d += 0.02) map.Add(a + d * Eigen::Vector2d(std::cos(heading), std::sin(heading)));
+  }
+  for (int i = 0; i < 300; ++i) map.Add({8 * uniform() - 4, 8 * uniform() - 4});
+  ASSERT_GT(map.points().size(), 1000u);
+  const auto expected = [&](const Eigen::Vector2d& q, double max_distance) {
+    const double cx = std::floor(q.x() * (1.0 / cell)), cy = std::floor(q.y() * (1.0 / cell));
+    std::vector<std::pair<float, int>> near;  // (squared distance from the cell centre, index)
+    for (size_t i = 0; i < map.points().size(); ++i) {
+      const double dx = (cx + 0.5) * cell - map.points()[i].x(), dy = (cy + 0.5) * cell - map.points()[i].y();
+      const double d2 = dx * dx + dy * dy;
+      if (d2 <= reach * reach) near.emplace_back(static_cast<float>(d2), static_cast<int>(i));
+    }
+    std::sort(near.begin(), near.end());
+    int found = -1;
+    double best = max_distance * max_distance;
+    for (size_t k = 0; k < std::min<size_t>(near.size(), PointGridMap::kLookupCandidates); ++k) {
+      const double d = (map.points()[static_cast<size_t>(near[k].second)] - q).squaredNorm();
+      if (d <= best) {
+        best = d;
+        found = near[k].second;
+      }
+    }
+    return found;
+  };
+  int found = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector2d q(9 * uniform() - 4.5, 9 * uniform() - 4.5);
+    const double max_distance = i % 2 ? radius : 0.1;
+    const int want = expected(q, max_distance);
+    EXPECT_EQ(map.LookupIndex(q, max_distance), want) << q.transpose();
+    found += want >= 0;
+  }
+  EXPECT_GT(found, 1000);
+}
+
 TEST(PointGridMap, ShiftedLikelihoodsAreTheSameBitsWithEveryInstructionSet) {
   // Scalar, SSE2 and AVX2 (each where this CPU has it) give the same sums, bit for bit: the search
   // scores, and so the SLAM's trajectory, do not depend on the machine. Points on random
