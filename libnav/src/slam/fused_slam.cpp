@@ -1,14 +1,14 @@
 #include "snapnav/nav/slam/fused_slam.hpp"
 
+#include <Eigen/Dense>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
-#include <Eigen/Dense>
-#include <Eigen/Eigenvalues>
-
 #include "snapnav/nav/covariance.hpp"
+#include "snapnav/nav/slam/cell_key.hpp"
 
 namespace snapnav::nav {
 namespace {
@@ -169,11 +169,7 @@ bool FusedSlam::suspect() const {
   return options_.suspect_after > 0 && consecutive_rejections_ >= options_.suspect_after;
 }
 
-uint64_t FusedSlam::CellKey(const Eigen::Vector2d& p) const {
-  const int64_t ix = static_cast<int64_t>(std::floor(p.x() / options_.map_cell_m));
-  const int64_t iy = static_cast<int64_t>(std::floor(p.y() / options_.map_cell_m));
-  return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
-}
+uint64_t FusedSlam::CellKey(const Eigen::Vector2d& p) const { return nav::CellKey(p, options_.map_cell_m); }
 
 Eigen::Vector2d FusedSlam::CellCenter(const Eigen::Vector2d& p) const {
   const double c = options_.map_cell_m;

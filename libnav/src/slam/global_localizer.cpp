@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include "snapnav/nav/slam/cell_key.hpp"
+
 namespace snapnav::nav {
 
 namespace {
@@ -201,12 +203,11 @@ GlobalSearchResult GlobalLocalizer::Search(const std::vector<Eigen::Vector2d>& p
   // A voxel filter at the search resolution, then every k-th of what is left.
   std::vector<Eigen::Vector2d> points;
   {
-    std::unordered_set<int64_t> seen;
+    std::unordered_set<uint64_t> seen;
     const double r2 = options_.max_range_m * options_.max_range_m;
     for (const Eigen::Vector2d& p : points_robot) {
       if (!p.allFinite() || p.squaredNorm() > r2) continue;
-      const int64_t key = (static_cast<int64_t>(std::floor(p.x() / rg)) << 32) ^ (static_cast<int64_t>(std::floor(p.y() / rg)) & 0xffffffff);
-      if (seen.insert(key).second) points.push_back(p);
+      if (seen.insert(CellKey(p, rg)).second) points.push_back(p);
     }
     if (static_cast<int>(points.size()) > options_.max_points) {
       std::vector<Eigen::Vector2d> thinned;

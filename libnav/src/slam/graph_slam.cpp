@@ -1,12 +1,12 @@
 #include "snapnav/nav/slam/graph_slam.hpp"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include <Eigen/Dense>
-
+#include "snapnav/nav/slam/cell_key.hpp"
 #include "snapnav/nav/slam/map_matcher.hpp"
 
 namespace snapnav::nav {
@@ -562,9 +562,7 @@ GraphSlam::Query GraphSlam::MakeQuery(int kf) const {
   std::unordered_set<uint64_t> taken;
   const double cell = front_options_.map_resolution_m;
   for (size_t i = 0; i < points.size(); ++i) {
-    const auto cx = static_cast<int64_t>(std::floor(points[i].x() / cell));
-    const auto cy = static_cast<int64_t>(std::floor(points[i].y() / cell));
-    if (!taken.insert((static_cast<uint64_t>(cx) << 32) ^ (static_cast<uint64_t>(cy) & 0xffffffffULL)).second) continue;
+    if (!taken.insert(CellKey(points[i], cell)).second) continue;
     q.points.push_back(points[i]);
     q.normals.push_back(normals[i]);
   }
@@ -768,9 +766,7 @@ const std::vector<Eigen::Vector2d>& GraphSlam::Map() const {
     const Pose2& p = graph_.pose(map_keyframes_);
     for (const Eigen::Vector2d& q : keyframes_[static_cast<size_t>(map_keyframes_)]->points) {
       const Eigen::Vector2d w = p.Transform(q);
-      const auto cx = static_cast<int64_t>(std::floor(w.x() / cell));
-      const auto cy = static_cast<int64_t>(std::floor(w.y() / cell));
-      if (map_cells_.insert((static_cast<uint64_t>(cx) << 32) ^ (static_cast<uint64_t>(cy) & 0xffffffffULL)).second) {
+      if (map_cells_.insert(CellKey(w, cell)).second) {
         map_points_.push_back(w);
       }
     }

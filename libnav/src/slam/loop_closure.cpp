@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <unordered_set>
 
+#include "snapnav/nav/slam/cell_key.hpp"
+
 namespace snapnav::nav {
 namespace {
 
@@ -18,10 +20,7 @@ std::vector<Eigen::Vector2d> DecimatePoints(const std::vector<Eigen::Vector2d>& 
   std::unordered_set<uint64_t> taken;
   taken.reserve(points.size() * 2);
   for (const Eigen::Vector2d& p : points) {
-    const auto cx = static_cast<int64_t>(std::floor(p.x() / cell_m));
-    const auto cy = static_cast<int64_t>(std::floor(p.y() / cell_m));
-    const uint64_t key = (static_cast<uint64_t>(cx) << 32) ^ (static_cast<uint64_t>(cy) & 0xffffffffULL);
-    if (taken.insert(key).second) out.push_back(p);
+    if (taken.insert(CellKey(p, cell_m)).second) out.push_back(p);
   }
   return out;
 }

@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "snapnav/nav/covariance.hpp"
+#include "snapnav/nav/slam/cell_key.hpp"
 #include "snapnav/nav/slam/map_matcher.hpp"
 
 namespace snapnav::nav {
@@ -149,11 +150,10 @@ LocalizationUpdate MapLocalizer::Update(const std::vector<Eigen::Vector2d>& poin
   {
     WindowScan w;
     w.odometry = odometry_;
-    std::unordered_set<int64_t> seen;
+    std::unordered_set<uint64_t> seen;
     const double cell = options_.global.resolution_m;
     for (const Eigen::Vector2d& p : points_robot) {
-      const int64_t key = (static_cast<int64_t>(std::floor(p.x() / cell)) << 32) ^ (static_cast<int64_t>(std::floor(p.y() / cell)) & 0xffffffff);
-      if (seen.insert(key).second) w.points.push_back(p);
+      if (seen.insert(CellKey(p, cell)).second) w.points.push_back(p);
     }
     window_.emplace_back(odometry_path_m_, std::move(w));
     while (static_cast<int>(window_.size()) > options_.window_scans ||

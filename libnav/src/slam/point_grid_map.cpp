@@ -163,8 +163,8 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
   for (int64_t tx = x0 >> kTileBits; tx <= x1 >> kTileBits; ++tx) {
     for (int64_t ty = y0 >> kTileBits; ty <= y1 >> kTileBits; ++ty) {
       Tile* tile = TileAt(tx, ty);
-      const int64_t cx0 = std::max(x0, tx << kTileBits), cx1 = std::min(x1, ((tx + 1) << kTileBits) - 1);
-      const int64_t cy0 = std::max(y0, ty << kTileBits), cy1 = std::min(y1, ((ty + 1) << kTileBits) - 1);
+      const int64_t cx0 = std::max(x0, tx * kTile), cx1 = std::min(x1, (tx + 1) * kTile - 1);
+      const int64_t cy0 = std::max(y0, ty * kTile), cy1 = std::min(y1, (ty + 1) * kTile - 1);
       for (int64_t cy = cy0; cy <= cy1; ++cy) {
         const double dy = (static_cast<double>(cy) + 0.5) * lookup_cell_ - p.y();
         const double dy2 = dy * dy;
@@ -174,11 +174,11 @@ void PointGridMap::AddToLookup(const Eigen::Vector2d& p, uint32_t index) {
         const double half = std::sqrt(reach2 - dy2) / lookup_cell_, centre = p.x() / lookup_cell_ - 0.5;
         const int64_t lo = std::max(cx0, static_cast<int64_t>(std::floor(centre - half)) - 1);
         const int64_t hi = std::min(cx1, static_cast<int64_t>(std::floor(centre + half)) + 1);
-        const int row = static_cast<int>(cy - (ty << kTileBits)) << kTileBits;
+        const int row = static_cast<int>(cy - ty * kTile) << kTileBits;
         for (int64_t cx = lo; cx <= hi; ++cx) {
           const double d2 = dx2_at[cx] + dy2;
           if (d2 > reach2) continue;
-          const int c = row + static_cast<int>(cx - (tx << kTileBits));
+          const int c = row + static_cast<int>(cx - tx * kTile);
           // Insert into the cell's candidates, nearest first (mostly it is farther than all three).
           float* dist = tile->d2[c];
           const float f = static_cast<float>(d2);
@@ -226,7 +226,7 @@ void PointGridMap::AddToLikelihood(const Eigen::Vector2d& p) {
   for (int64_t tx = (x0 - kRasterApron) >> kNodeBits; tx <= x1 >> kNodeBits; ++tx) {
     for (int64_t ty = (y0 - kRasterApron) >> kNodeBits; ty <= y1 >> kNodeBits; ++ty) {
       RasterTile& raster = *RasterAt(tx, ty);
-      const int64_t ox = tx << kNodeBits, oy = ty << kNodeBits;  // its first node
+      const int64_t ox = tx * kNodes, oy = ty * kNodes;  // its first node
       const int64_t ix0 = std::max(x0, ox), ix1 = std::min(x1, ox + kRasterRow - 1);
       const int64_t iy0 = std::max(y0, oy), iy1 = std::min(y1, oy + kRasterRow - 1);
       for (int64_t iy = iy0; iy <= iy1; ++iy) {
@@ -521,9 +521,9 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
       // tile (zeros where there is none).
       bool any = false;
       for (int64_t ty = ty0; ty <= ty1; ++ty) {
-        const int64_t y0 = std::max(ly, ty << kNodeBits), y1 = std::min(hy, ((ty + 1) << kNodeBits) - 1);
+        const int64_t y0 = std::max(ly, ty * kNodes), y1 = std::min(hy, (ty + 1) * kNodes - 1);
         for (int64_t tx = tx0; tx <= tx1; ++tx) {
-          const int64_t x0 = std::max(lx, tx << kNodeBits), x1 = std::min(hx, ((tx + 1) << kNodeBits) - 1);
+          const int64_t x0 = std::max(lx, tx * kNodes), x1 = std::min(hx, (tx + 1) * kNodes - 1);
           const size_t len = static_cast<size_t>(x1 - x0 + 1);
           const uint8_t* nodes = nodes_of(tx, ty);
           any = any || nodes;

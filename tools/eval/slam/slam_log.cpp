@@ -5,21 +5,21 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <limits>
 #include <iostream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
 
-
 #include "importers.hpp"
 #include "report_text.hpp"
-#include "snapnav/glue/strings.hpp"
 #include "snapnav/glue/codec.hpp"
 #include "snapnav/glue/conversions.hpp"
 #include "snapnav/glue/log_reader.hpp"
+#include "snapnav/glue/strings.hpp"
 #include "snapnav/laser_scan_t.hpp"
 #include "snapnav/nav/dead_reckoning.hpp"
+#include "snapnav/nav/slam/cell_key.hpp"
 #include "snapnav/nav/slam/point_grid_map.hpp"
 #include "snapnav/odometry_t.hpp"
 #include "snapnav/pose_t.hpp"
@@ -378,7 +378,7 @@ MapConsistency ComputeMapConsistency(const SlamLog& log, const std::vector<std::
     int first_scan, last_scan;
     Eigen::Vector2d first, last;
   };
-  const auto key = [](int64_t cx, int64_t cy) { return (cx << 32) ^ (cy & 0xffffffffLL); };
+  const auto key = [](int64_t cx, int64_t cy) { return static_cast<int64_t>(nav::CellKey(cx, cy)); };
   const auto cell_of = [](double v) { return static_cast<int64_t>(std::floor(v / kCell)); };
   std::unordered_map<int64_t, Cell> grid;
   std::vector<std::vector<Eigen::Vector2d>> world;

@@ -2,13 +2,14 @@
 // The point map of laser SLAM: points on hash grids with a nearest-point lookup grid and a
 // likelihood raster for correlative scan matching.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <optional>
 #include <unordered_map>
 #include <vector>
 
-#include <Eigen/Core>
+#include "snapnav/nav/slam/cell_key.hpp"
 
 namespace snapnav::nav {
 
@@ -103,9 +104,7 @@ class PointGridMap {
   };
   static constexpr size_t kRasterPadding = 8;
   static constexpr uint32_t kNone = 0xffffffffu;
-  static uint64_t Key(int64_t ix, int64_t iy) {
-    return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
-  }
+  static uint64_t Key(int64_t ix, int64_t iy) { return CellKey(ix, iy); }
   // Tile key -> index in tiles_: open addressing with linear probing in a power-of-two table
   // (the lookup's hot path: a multiply and, mostly, one probe).
   struct TileTable {
