@@ -219,8 +219,9 @@ void SimConfig::Validate() const {
   }
   // (No std::abs: a value beyond int64's range arrives as its most negative value, whose negation overflows.)
   constexpr int64_t kDayUs = int64_t{86'400} * 1'000'000;
-  if (clock_offset_us < -kDayUs || clock_offset_us > kDayUs)
+  if (clock_offset_us < -kDayUs || clock_offset_us > kDayUs) {
     throw std::invalid_argument("clock_offset_s must be within a day");
+  }
   if (!publish_raw && !publish_panorama) {
     throw std::invalid_argument("[camera] publish_raw and publish_panorama are both false: publish at least one");
   }

@@ -453,7 +453,6 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
   const bool simd = step_nodes == 2 && level != Simd::kScalar;
   const int groups = (shifts + 3) / 4;
   thread_local std::vector<Lanes> acc4;
-  acc4.assign(simd ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
   const int read_x = simd ? std::max(w, 8 * groups) : w;  // nodes of a block row read (SSE2: 8 at a time)
 #else
   const int read_x = w;
@@ -468,7 +467,13 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
 #if defined(SNAPNAV_X86_AVX2)
   // AVX2 where the CPU has it (8 x-shifts at a time): the same sums, bit for bit.
   const int groups8 = (shifts + 7) / 8;
-  if (fast && level == Simd::kAvx2 && 16 * groups8 <= kRasterApron) {
+  const bool avx2 = fast && level == Simd::kAvx2 && 16 * groups8 <= kRasterApron;
+#else
+  const bool avx2 = false;
+#endif
+  acc4.assign(simd && !avx2 ? static_cast<size_t>(groups * shifts) : 0, Lanes{_mm_setzero_ps()});
+#if defined(SNAPNAV_X86_AVX2)
+  if (avx2) {
     thread_local std::vector<float> acc8;
     acc8.assign(static_cast<size_t>(8 * groups8 * shifts), 0.0f);
     AccumulatePointsAvx2(moving, weights_of, back, shifts, kNodeBits, kRasterRow, nodes_of, acc8.data());
@@ -478,11 +483,9 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
         for (int l = 0; l < 8 && 8 * g + l < shifts; ++l) acc[static_cast<size_t>((8 * g + l) * shifts + b)] = lanes[l];
       }
     }
-    for (int k = 0; k < cells; ++k) sums[k] += acc[static_cast<size_t>(k)] / 255.0;
-    return;
   }
 #endif
-  if (fast) {
+  if (fast && !avx2) {
     // The common case, each point's interpolation set up with SSE2: the same operations as the
     // loop below.
     for (const Eigen::Vector2d& q : moving) {
@@ -565,7 +568,7 @@ void PointGridMap::AddShiftedLikelihoods(const std::vector<Eigen::Vector2d>& mov
     }
   }
 #if defined(__SSE2__)
-  if (simd) {
+  if (simd && !avx2) {
     for (int b = 0; b < shifts; ++b) {
       for (int g = 0; g < groups; ++g) {
         alignas(16) float lanes[4];
